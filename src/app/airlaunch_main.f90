@@ -1,0 +1,3 @@
+program airlaunch
+  implicit none
+end program airlaunch

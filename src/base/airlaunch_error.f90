@@ -1,0 +1,29 @@
+!> Errors as values: library code fills an error_type and returns; only the
+!> programs in src/app report it (tblite's pattern, STYLE.md habit 4).
+module airlaunch_error
+  implicit none
+  private
+  public :: error_type, fatal_error, has_error
+
+  !> An error: a one-line message for the user.
+  type :: error_type
+    character(len=:), allocatable :: message
+  end type error_type
+
+contains
+
+  !> Allocate `error` with `message`.
+  subroutine fatal_error(error, message)
+    type(error_type), allocatable, intent(inout) :: error  !< error to raise
+    character(len=*), intent(in) :: message               !< what went wrong
+    if (allocated(error)) deallocate(error)
+    allocate(error)
+    error%message = message
+  end subroutine fatal_error
+
+  !> True if `error` holds an error.
+  logical pure function has_error(error)
+    type(error_type), allocatable, intent(in) :: error  !< error to test
+    has_error = allocated(error)
+  end function has_error
+end module airlaunch_error

@@ -1,0 +1,71 @@
+!> Small helpers to format numbers into messages.
+module airlaunch_strings
+  use airlaunch_kinds, only: dp
+  implicit none
+  private
+  public :: str, lower
+
+  !> Format a number as a compact string.
+  interface str
+    module procedure str_real, str_int, str_logical
+  end interface str
+
+contains
+
+  !> Real as shortest readable text (general format, trimmed).
+  pure function str_real(x) result(s)
+    real(dp), intent(in) :: x   !< value
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    if (x /= x) then
+      s = "NaN"
+      return
+    end if
+    if (x == 0.0_dp .or. (abs(x) >= 1.0e-3_dp .and. abs(x) < 1.0e7_dp)) then
+      write(buf, '(g0.10)') x
+      s = trim(adjustl(buf))
+      ! strip trailing zeros of a fixed-point rendering (1.500000000 -> 1.5)
+      if (index(s, '.') > 0 .and. index(s, 'E') == 0) then
+        do while (len(s) > 1 .and. s(len(s):len(s)) == '0')
+          s = s(:len(s)-1)
+        end do
+        if (s(len(s):len(s)) == '.') s = s // '0'
+      end if
+    else
+      write(buf, '(es16.8)') x
+      s = trim(adjustl(buf))
+    end if
+  end function str_real
+
+  !> Integer as text.
+  pure function str_int(i) result(s)
+    integer, intent(in) :: i   !< value
+    character(len=:), allocatable :: s
+    character(len=24) :: buf
+    write(buf, '(i0)') i
+    s = trim(buf)
+  end function str_int
+
+  !> Logical as Fortran namelist text.
+  pure function str_logical(l) result(s)
+    logical, intent(in) :: l   !< value
+    character(len=:), allocatable :: s
+    if (l) then
+      s = ".true."
+    else
+      s = ".false."
+    end if
+  end function str_logical
+
+  !> Lower-case copy of a string (ASCII).
+  pure function lower(s) result(t)
+    character(len=*), intent(in) :: s   !< text
+    character(len=len(s)) :: t
+    integer :: i, c
+    t = s
+    do i = 1, len(s)
+      c = iachar(s(i:i))
+      if (c >= iachar('A') .and. c <= iachar('Z')) t(i:i) = achar(c + 32)
+    end do
+  end function lower
+end module airlaunch_strings

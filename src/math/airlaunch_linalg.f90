@@ -1,0 +1,149 @@
+!> Thin LAPACK wrappers: sizes come from the arrays, INFO and the reciprocal
+!> condition number become an error value (STYLE.md habit 5).  No explicit
+!> inverses anywhere in airlaunch: every linear system goes through here.
+module airlaunch_linalg
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  implicit none
+  private
+  public :: solve_general, solve_spd, rcond_limit
+
+  !> Smallest reciprocal condition number (1-norm) accepted: below it the
+  !> solution has fewer than ~2 significant digits in double precision.
+  real(dp), parameter :: rcond_limit = 1.0e-14_dp
+
+  interface
+    subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+      import :: dp
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(dp), intent(inout) :: a(lda, *), b(ldb, *)
+      integer, intent(out) :: ipiv(*), info
+    end subroutine dgesv
+    subroutine dgetrf(m, n, a, lda, ipiv, info)
+      import :: dp
+      integer, intent(in) :: m, n, lda
+      real(dp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: ipiv(*), info
+    end subroutine dgetrf
+    subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+      import :: dp
+      character, intent(in) :: trans
+      integer, intent(in) :: n, nrhs, lda, ldb, ipiv(*)
+      real(dp), intent(in) :: a(lda, *)
+      real(dp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dgetrs
+    subroutine dgecon(norm, n, a, lda, anorm, rcond, work, iwork, info)
+      import :: dp
+      character, intent(in) :: norm
+      integer, intent(in) :: n, lda
+      real(dp), intent(in) :: a(lda, *), anorm
+      real(dp), intent(out) :: rcond, work(*)
+      integer, intent(out) :: iwork(*), info
+    end subroutine dgecon
+    subroutine dpotrf(uplo, n, a, lda, info)
+      import :: dp
+      character, intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(dp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotrf
+    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+      import :: dp
+      character, intent(in) :: uplo
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(dp), intent(in) :: a(lda, *)
+      real(dp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dpotrs
+    subroutine dpocon(uplo, n, a, lda, anorm, rcond, work, iwork, info)
+      import :: dp
+      character, intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(dp), intent(in) :: a(lda, *), anorm
+      real(dp), intent(out) :: rcond, work(*)
+      integer, intent(out) :: iwork(*), info
+    end subroutine dpocon
+  end interface
+
+contains
+
+  !> Solve A X = B for a general square A (LU with partial pivoting, dgetrf/dgetrs).
+  !> A is overwritten by its factors, B by the solution.  A singular pivot or a
+  !> reciprocal condition number below `rcond_limit` is an error naming `what`.
+  subroutine solve_general(a, b, error, what, rcond)
+    real(dp), intent(inout) :: a(:, :)       !< n x n matrix; on exit its LU factors
+    real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    character(len=*), intent(in) :: what     !< name of the system, for the message
+    real(dp), intent(out), optional :: rcond !< reciprocal condition number (1-norm)
+    integer :: n, info, ipiv(size(a, 1)), iwork(size(a, 1))
+    real(dp) :: anorm, rc, work(4*size(a, 1))
+    n = size(a, 1)
+    if (size(a, 2) /= n .or. size(b, 1) /= n) then
+      call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // str(size(a, 2)) &
+        // " and right-hand side has " // str(size(b, 1)) // " rows")
+      return
+    end if
+    anorm = maxval(sum(abs(a), dim=1))
+    call dgetrf(n, n, a, n, ipiv, info)
+    if (info > 0) then
+      call fatal_error(error, what // ": matrix is singular (zero pivot " // str(info) // " of " // str(n) // ")")
+      return
+    else if (info < 0) then
+      call fatal_error(error, what // ": dgetrf illegal argument " // str(-info))
+      return
+    end if
+    call dgecon('1', n, a, n, anorm, rc, work, iwork, info)
+    if (present(rcond)) rcond = rc
+    if (rc < rcond_limit) then
+      call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
+      return
+    end if
+    call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
+    if (info /= 0) call fatal_error(error, what // ": dgetrs illegal argument " // str(-info))
+  end subroutine solve_general
+
+  !> Solve A X = B for a symmetric positive-definite A (Cholesky, dpotrf/dpotrs).
+  !> Only the upper triangle of A is read.  A matrix that is not positive
+  !> definite, or whose reciprocal condition number is below `rcond_limit`, is
+  !> an error naming `what`.
+  subroutine solve_spd(a, b, error, what, rcond)
+    real(dp), intent(inout) :: a(:, :)       !< n x n SPD matrix; on exit its Cholesky factor
+    real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    character(len=*), intent(in) :: what     !< name of the system, for the message
+    real(dp), intent(out), optional :: rcond !< reciprocal condition number (1-norm)
+    integer :: n, info, i, iwork(size(a, 1))
+    real(dp) :: anorm, rc, work(3*size(a, 1))
+    n = size(a, 1)
+    if (size(a, 2) /= n .or. size(b, 1) /= n) then
+      call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // str(size(a, 2)) &
+        // " and right-hand side has " // str(size(b, 1)) // " rows")
+      return
+    end if
+    ! 1-norm of the symmetric matrix from its upper triangle
+    anorm = 0.0_dp
+    do i = 1, n
+      anorm = max(anorm, sum(abs(a(1:i, i))) + sum(abs(a(i, i+1:n))))
+    end do
+    call dpotrf('U', n, a, n, info)
+    if (info > 0) then
+      call fatal_error(error, what // ": matrix is not positive definite (leading minor " &
+        // str(info) // " of " // str(n) // ")")
+      return
+    else if (info < 0) then
+      call fatal_error(error, what // ": dpotrf illegal argument " // str(-info))
+      return
+    end if
+    call dpocon('U', n, a, n, anorm, rc, work, iwork, info)
+    if (present(rcond)) rcond = rc
+    if (rc < rcond_limit) then
+      call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
+      return
+    end if
+    call dpotrs('U', n, size(b, 2), a, n, b, n, info)
+    if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
+  end subroutine solve_spd
+end module airlaunch_linalg

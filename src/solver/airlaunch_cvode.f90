@@ -1,0 +1,376 @@
+!> CVODE (SUNDIALS 6) behind one type that owns the context, the memory, the
+!> vectors, the matrix and the solvers (STYLE.md habit 7).  The system is any
+!> extension of `ode_system`; it reaches the C callbacks through user_data, so
+!> there is no module state and many solvers can run side by side.
+!>
+!> Error output of CVODE is routed to a handler that keeps the last message for
+!> the error value instead of printing it (library code never prints).
+module airlaunch_cvode
+  use, intrinsic :: iso_c_binding
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use fsundials_context_mod
+  use fsundials_nvector_mod
+  use fsundials_matrix_mod
+  use fsundials_linearsolver_mod
+  use fsundials_nonlinearsolver_mod
+  use fnvector_serial_mod
+  use fsunmatrix_dense_mod
+  use fsunmatrix_band_mod
+  use fsunlinsol_dense_mod
+  use fsunlinsol_band_mod
+  use fsunnonlinsol_fixedpoint_mod
+  use fcvode_mod
+  implicit none
+  private
+  public :: cvode_options, cvode_solver, cvode_stats
+
+  !> How to integrate.
+  type :: cvode_options
+    character(len=16) :: method = "bdf"          !< "bdf" (stiff) or "adams"
+    character(len=16) :: linear_solver = "dense" !< "dense", "band" or "none" (fixed point)
+    integer :: upper_bandwidth = 0               !< band solver: upper half-bandwidth
+    integer :: lower_bandwidth = 0               !< band solver: lower half-bandwidth
+    real(dp) :: rtol = 1.0e-6_dp                 !< relative tolerance
+    real(dp) :: atol = 1.0e-8_dp                 !< scalar absolute tolerance
+    real(dp), allocatable :: atol_vector(:)      !< per-component absolute tolerance
+    real(dp) :: max_step = 0.0_dp                !< largest step [s]; 0 = unlimited
+    real(dp) :: initial_step = 0.0_dp            !< first step [s]; 0 = CVODE's estimate
+    integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
+    integer :: max_num_steps = 200000            !< steps allowed between two outputs
+  end type cvode_options
+
+  !> Counters of the integration.
+  type :: cvode_stats
+    integer(c_long) :: steps = 0, rhs_evals = 0, jac_evals = 0, lin_setups = 0
+    integer(c_long) :: err_test_fails = 0, nonlin_iters = 0, nonlin_fails = 0, root_evals = 0
+  end type cvode_stats
+
+  !> What the C callbacks need; lives on the heap so its address is stable.
+  type :: callback_data
+    class(ode_system), pointer :: sys => null()
+    integer :: nroots = 0
+    character(len=:), allocatable :: last_message
+  end type callback_data
+
+  !> A CVODE integrator bound to one system.
+  type :: cvode_solver
+    type(c_ptr) :: ctx = c_null_ptr
+    type(c_ptr) :: mem = c_null_ptr
+    type(N_Vector), pointer :: nv_y => null(), nv_atol => null()
+    type(SUNMatrix), pointer :: mat => null()
+    type(SUNLinearSolver), pointer :: ls => null()
+    type(SUNNonlinearSolver), pointer :: nls => null()
+    !> The state, shared with CVODE's N_Vector (heap, stable address).
+    real(c_double), pointer :: y(:) => null()
+    type(callback_data), pointer :: cb => null()
+    real(dp) :: t = 0.0_dp   !< time of `y`
+  contains
+    procedure :: init => solver_init
+    procedure :: advance => solver_advance
+    procedure :: reinit => solver_reinit
+    procedure :: set_roots => solver_set_roots
+    procedure :: set_stop_time => solver_set_stop_time
+    procedure :: set_max_step => solver_set_max_step
+    procedure :: stats => solver_stats
+    procedure :: free => solver_free
+  end type cvode_solver
+
+contains
+
+  !> Create the integrator for `sys` from state y0 at time t0.
+  subroutine solver_init(self, sys, t0, y0, opts, error)
+    class(cvode_solver), intent(inout) :: self            !< solver (re-initialised)
+    class(ode_system), target, intent(inout) :: sys       !< the system (must outlive the solver)
+    real(dp), intent(in) :: t0                            !< initial time [s]
+    real(dp), intent(in) :: y0(:)                         !< initial state
+    type(cvode_options), intent(in) :: opts               !< method and tolerances
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer(c_int) :: ierr, lmm
+    integer(c_long) :: neq
+    real(c_double), pointer :: atol(:)
+
+    call self%free()
+    neq = int(size(y0), c_long)
+    if (neq < 1) then
+      call fatal_error(error, "CVODE: the system has no state")
+      return
+    end if
+    allocate(self%y(neq))
+    self%y = y0
+    self%t = t0
+    allocate(self%cb)
+    self%cb%sys => sys
+
+    ierr = FSUNContext_Create(c_null_ptr, self%ctx)
+    if (ierr /= 0) then
+      call fatal_error(error, "CVODE: cannot create the SUNDIALS context")
+      return
+    end if
+    self%nv_y => FN_VMake_Serial(neq, self%y, self%ctx)
+    select case (opts%method)
+    case ("bdf")
+      lmm = CV_BDF
+    case ("adams")
+      lmm = CV_ADAMS
+    case default
+      call fatal_error(error, "CVODE: unknown method '" // trim(opts%method) // "' (allowed: bdf, adams)")
+      return
+    end select
+    self%mem = FCVodeCreate(lmm, self%ctx)
+    if (.not. c_associated(self%mem)) then
+      call fatal_error(error, "CVODE: FCVodeCreate failed")
+      return
+    end if
+    ierr = FCVodeSetErrHandlerFn(self%mem, c_funloc(error_handler), c_loc(self%cb))
+    ierr = FCVodeInit(self%mem, c_funloc(rhs_callback), real(t0, c_double), self%nv_y)
+    if (ierr /= 0) then
+      call fatal_error(error, "CVODE: FCVodeInit failed (flag " // str(int(ierr)) // ")")
+      return
+    end if
+    ierr = FCVodeSetUserData(self%mem, c_loc(self%cb))
+    if (allocated(opts%atol_vector)) then
+      if (size(opts%atol_vector) /= neq) then
+        call fatal_error(error, "CVODE: atol_vector has " // str(size(opts%atol_vector)) // &
+          " entries for " // str(int(neq)) // " states")
+        return
+      end if
+      self%nv_atol => FN_VNew_Serial(neq, self%ctx)
+      atol => FN_VGetArrayPointer(self%nv_atol)
+      atol = opts%atol_vector
+      ierr = FCVodeSVtolerances(self%mem, real(opts%rtol, c_double), self%nv_atol)
+    else
+      ierr = FCVodeSStolerances(self%mem, real(opts%rtol, c_double), real(opts%atol, c_double))
+    end if
+    if (ierr /= 0) then
+      call fatal_error(error, "CVODE: tolerances rejected (rtol = " // str(opts%rtol) // ")")
+      return
+    end if
+
+    select case (opts%linear_solver)
+    case ("dense")
+      self%mat => FSUNDenseMatrix(neq, neq, self%ctx)
+      self%ls => FSUNLinSol_Dense(self%nv_y, self%mat, self%ctx)
+      ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
+    case ("band")
+      self%mat => FSUNBandMatrix(neq, int(opts%upper_bandwidth, c_long), &
+        int(opts%lower_bandwidth, c_long), self%ctx)
+      self%ls => FSUNLinSol_Band(self%nv_y, self%mat, self%ctx)
+      ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
+    case ("none")
+      self%nls => FSUNNonlinSol_FixedPoint(self%nv_y, 0, self%ctx)
+      ierr = FCVodeSetNonlinearSolver(self%mem, self%nls)
+    case default
+      call fatal_error(error, "CVODE: unknown linear solver '" // trim(opts%linear_solver) // &
+        "' (allowed: dense, band, none)")
+      return
+    end select
+    if (ierr /= 0) then
+      call fatal_error(error, "CVODE: cannot attach the " // trim(opts%linear_solver) // " solver")
+      return
+    end if
+    ierr = FCVodeSetMaxNumSteps(self%mem, int(opts%max_num_steps, c_long))
+    if (opts%max_step > 0.0_dp) ierr = FCVodeSetMaxStep(self%mem, real(opts%max_step, c_double))
+    if (opts%initial_step > 0.0_dp) ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
+    if (opts%max_order > 0) ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
+    ierr = FCVodeSetMaxHnilWarns(self%mem, -1_c_int)
+    call self%set_roots(sys%nroots(), error)
+  end subroutine solver_init
+
+  !> Change the number of event functions (0 switches root finding off).
+  subroutine solver_set_roots(self, n, error)
+    class(cvode_solver), intent(inout) :: self            !< solver
+    integer, intent(in) :: n                              !< number of event functions
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer(c_int) :: ierr
+    self%cb%nroots = n
+    if (n > 0) then
+      ierr = FCVodeRootInit(self%mem, int(n, c_int), c_funloc(root_callback))
+      if (ierr == 0) ierr = FCVodeSetNoInactiveRootWarn(self%mem)
+    else
+      ierr = FCVodeRootInit(self%mem, 0_c_int, c_null_funptr)
+    end if
+    if (ierr /= 0) call fatal_error(error, "CVODE: root finding set-up failed")
+  end subroutine solver_set_roots
+
+  !> Integrate towards tout.  On return self%t and self%y hold the reached
+  !> state: tout, or the time of an event (then `event` is true and `which`
+  !> holds +-1 for the functions that crossed, with the direction).
+  subroutine solver_advance(self, tout, error, event, which)
+    class(cvode_solver), intent(inout) :: self            !< solver
+    real(dp), intent(in) :: tout                          !< target time [s]
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    logical, intent(out), optional :: event               !< an event stopped the step
+    integer, intent(out), optional :: which(:)            !< CVodeGetRootInfo
+    integer(c_int) :: ierr, info(max(1, self%cb%nroots))
+    real(c_double) :: tret(1)
+    if (present(event)) event = .false.
+    ierr = FCVode(self%mem, real(tout, c_double), self%nv_y, tret, CV_NORMAL)
+    self%t = tret(1)
+    if (ierr < 0) then
+      call fatal_error(error, failure_message(self, ierr))
+      return
+    end if
+    if (ierr == CV_ROOT_RETURN) then
+      if (present(event)) event = .true.
+      if (present(which)) then
+        ierr = FCVodeGetRootInfo(self%mem, info)
+        which = 0
+        which(1:min(size(which), self%cb%nroots)) = info(1:min(size(which), self%cb%nroots))
+      end if
+    end if
+  end subroutine solver_advance
+
+  !> Restart from a changed state (after an event); tolerances, linear solver
+  !> and event functions are kept.
+  subroutine solver_reinit(self, t, y, error)
+    class(cvode_solver), intent(inout) :: self            !< solver
+    real(dp), intent(in) :: t                             !< time [s]
+    real(dp), intent(in) :: y(:)                          !< new state
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer(c_int) :: ierr
+    self%y = y
+    self%t = t
+    ierr = FCVodeReInit(self%mem, real(t, c_double), self%nv_y)
+    if (ierr /= 0) call fatal_error(error, "CVODE: re-initialisation failed at t = " // str(t) // " s")
+  end subroutine solver_reinit
+
+  !> Do not step past tstop (for discontinuities known in advance).
+  subroutine solver_set_stop_time(self, tstop)
+    class(cvode_solver), intent(inout) :: self  !< solver
+    real(dp), intent(in) :: tstop               !< stop time [s]
+    integer(c_int) :: ierr
+    ierr = FCVodeSetStopTime(self%mem, real(tstop, c_double))
+  end subroutine solver_set_stop_time
+
+  !> Change the largest step (0 = unlimited).
+  subroutine solver_set_max_step(self, hmax)
+    class(cvode_solver), intent(inout) :: self  !< solver
+    real(dp), intent(in) :: hmax                !< largest step [s]
+    integer(c_int) :: ierr
+    ierr = FCVodeSetMaxStep(self%mem, real(hmax, c_double))
+  end subroutine solver_set_max_step
+
+  !> Integration counters so far.
+  function solver_stats(self) result(s)
+    class(cvode_solver), intent(in) :: self  !< solver
+    type(cvode_stats) :: s
+    integer(c_int) :: ierr
+    integer(c_long) :: n(1)
+    if (.not. c_associated(self%mem)) return
+    ierr = FCVodeGetNumSteps(self%mem, n); s%steps = n(1)
+    ierr = FCVodeGetNumRhsEvals(self%mem, n); s%rhs_evals = n(1)
+    ierr = FCVodeGetNumLinSolvSetups(self%mem, n); s%lin_setups = n(1)
+    ierr = FCVodeGetNumErrTestFails(self%mem, n); s%err_test_fails = n(1)
+    ierr = FCVodeGetNumNonlinSolvIters(self%mem, n); s%nonlin_iters = n(1)
+    ierr = FCVodeGetNumNonlinSolvConvFails(self%mem, n); s%nonlin_fails = n(1)
+    ierr = FCVodeGetNumGEvals(self%mem, n); s%root_evals = n(1)
+    if (associated(self%mat)) then
+      ierr = FCVodeGetNumJacEvals(self%mem, n); s%jac_evals = n(1)
+    end if
+  end function solver_stats
+
+  !> Release every SUNDIALS object (safe to call twice).
+  subroutine solver_free(self)
+    class(cvode_solver), intent(inout) :: self  !< solver
+    integer(c_int) :: ierr
+    if (c_associated(self%mem)) call FCVodeFree(self%mem)
+    self%mem = c_null_ptr
+    if (associated(self%ls)) ierr = FSUNLinSolFree(self%ls)
+    if (associated(self%nls)) ierr = FSUNNonlinSolFree(self%nls)
+    if (associated(self%mat)) call FSUNMatDestroy(self%mat)
+    if (associated(self%nv_y)) call FN_VDestroy(self%nv_y)
+    if (associated(self%nv_atol)) call FN_VDestroy(self%nv_atol)
+    nullify(self%ls, self%nls, self%mat, self%nv_y, self%nv_atol)
+    if (c_associated(self%ctx)) ierr = FSUNContext_Free(self%ctx)
+    self%ctx = c_null_ptr
+    if (associated(self%y)) deallocate(self%y)
+    if (associated(self%cb)) deallocate(self%cb)
+  end subroutine solver_free
+
+  !> One line that says when and why CVODE stopped.
+  function failure_message(self, flag) result(msg)
+    type(cvode_solver), intent(in) :: self
+    integer(c_int), intent(in) :: flag
+    character(len=:), allocatable :: msg
+    character(len=:), allocatable :: why
+    select case (flag)
+    case (CV_TOO_MUCH_WORK)
+      why = "too many steps (CV_TOO_MUCH_WORK): the problem is stiffer or faster than expected"
+    case (CV_TOO_MUCH_ACC)
+      why = "tolerances too tight for double precision (CV_TOO_MUCH_ACC)"
+    case (CV_ERR_FAILURE)
+      why = "error test failed repeatedly or at the minimum step (CV_ERR_FAILURE)"
+    case (CV_CONV_FAILURE)
+      why = "nonlinear solver failed to converge repeatedly (CV_CONV_FAILURE)"
+    case (CV_LSETUP_FAIL, CV_LSOLVE_FAIL)
+      why = "linear solver failed (singular iteration matrix)"
+    case (CV_RHSFUNC_FAIL, CV_UNREC_RHSFUNC_ERR, CV_FIRST_RHSFUNC_ERR, CV_REPTD_RHSFUNC_ERR)
+      why = "right-hand side failed"
+    case (CV_RTFUNC_FAIL)
+      why = "event function failed"
+    case default
+      why = "CVODE flag " // str(int(flag))
+    end select
+    msg = "integration failed at t = " // str(self%t) // " s: " // why
+    if (allocated(self%cb%sys%failure)) then
+      if (len(self%cb%sys%failure) > 0) msg = msg // ": " // self%cb%sys%failure
+    end if
+    if (allocated(self%cb%last_message)) msg = msg // " [CVODE: " // self%cb%last_message // "]"
+
+  end function failure_message
+
+  !> CVODE right-hand side callback.
+  integer(c_int) function rhs_callback(t, nv_y, nv_ydot, user_data) result(ierr) bind(C)
+    real(c_double), value :: t
+    type(N_Vector) :: nv_y, nv_ydot
+    type(c_ptr), value :: user_data
+    type(callback_data), pointer :: cb
+    real(c_double), pointer :: y(:), ydot(:)
+    integer :: status
+    call c_f_pointer(user_data, cb)
+    y => FN_VGetArrayPointer(nv_y)
+    ydot => FN_VGetArrayPointer(nv_ydot)
+    call cb%sys%rhs(t, y, ydot, status)
+    ierr = int(status, c_int)
+  end function rhs_callback
+
+  !> CVODE event-function callback.
+  integer(c_int) function root_callback(t, nv_y, gout, user_data) result(ierr) bind(C)
+    real(c_double), value :: t
+    type(N_Vector) :: nv_y
+    real(c_double) :: gout(*)
+    type(c_ptr), value :: user_data
+    type(callback_data), pointer :: cb
+    real(c_double), pointer :: y(:)
+    integer :: status
+    call c_f_pointer(user_data, cb)
+    y => FN_VGetArrayPointer(nv_y)
+    call cb%sys%roots(t, y, gout(1:cb%nroots), status)
+    ierr = 0
+    if (status == rhs_fatal) ierr = -1
+    if (status /= rhs_ok .and. status /= rhs_fatal) ierr = -1
+  end function root_callback
+
+  !> CVODE error handler: keep the message, print nothing.
+  subroutine error_handler(code, module, function, msg, user_data) bind(C)
+    integer(c_int), value :: code
+    type(c_ptr), value :: module, function, msg, user_data
+    type(callback_data), pointer :: cb
+    character(kind=c_char), pointer :: chars(:)
+    integer :: n
+    if (.not. c_associated(user_data) .or. .not. c_associated(msg)) return
+    if (code == 0 .and. c_associated(module) .and. c_associated(function)) continue
+    call c_f_pointer(user_data, cb)
+    call c_f_pointer(msg, chars, [1024])
+    n = 0
+    do while (n < 1024)
+      if (chars(n+1) == c_null_char) exit
+      n = n + 1
+    end do
+    allocate(character(len=n) :: cb%last_message)
+    cb%last_message = transfer(chars(1:n), cb%last_message)
+  end subroutine error_handler
+end module airlaunch_cvode

@@ -1,0 +1,58 @@
+!> Minimal assertion helpers for the unit-test programs: each check prints one
+!> line with the compared values and the tolerance, and `finish` ends the
+!> program with a nonzero status if any check failed.
+module testing
+  use airlaunch_kinds, only: dp
+  use airlaunch_strings, only: str
+  implicit none
+  private
+  public :: check, check_close, finish, section
+
+  integer, save :: n_pass = 0, n_fail = 0
+
+contains
+
+  !> Print a heading.
+  subroutine section(name)
+    character(len=*), intent(in) :: name
+    write(*, '(a)') "== " // name
+  end subroutine section
+
+  !> Assert a condition.
+  subroutine check(cond, what)
+    logical, intent(in) :: cond
+    character(len=*), intent(in) :: what
+    if (cond) then
+      n_pass = n_pass + 1
+      write(*, '(a)') "  ok    " // what
+    else
+      n_fail = n_fail + 1
+      write(*, '(a)') "  FAIL  " // what
+    end if
+  end subroutine check
+
+  !> Assert |actual - expected| <= max(abs_tol, rel_tol*|expected|).
+  subroutine check_close(actual, expected, what, rel, abs)
+    real(dp), intent(in) :: actual, expected
+    character(len=*), intent(in) :: what
+    real(dp), intent(in), optional :: rel, abs
+    real(dp) :: tol, r, a
+    r = 0.0_dp; a = 0.0_dp
+    if (present(rel)) r = rel
+    if (present(abs)) a = abs
+    tol = max(a, r*abs_(expected))
+    call check(abs_(actual - expected) <= tol .and. actual == actual, what // ": got " // str(actual) &
+      // ", expected " // str(expected) // " (tol " // str(tol) // ")")
+  contains
+    pure real(dp) function abs_(x)
+      real(dp), intent(in) :: x
+      abs_ = merge(x, -x, x >= 0.0_dp)
+    end function abs_
+  end subroutine check_close
+
+  !> Summary line; nonzero exit if anything failed.
+  subroutine finish()
+    write(*, '(a)') str(n_pass) // " passed, " // str(n_fail) // " failed"
+    if (n_fail > 0) error stop 1
+  end subroutine finish
+end module testing
