@@ -1,3 +1,92 @@
+!> airlaunch: run one namelist-driven scenario.
+!>
+!>   airlaunch SCENARIO.nml [--output FILE]
+!>
+!> Exit status 0 on success, 2 for bad input (one line on stderr naming file,
+!> group, variable, value and what is allowed), 3 for a numerical failure (the
+!> output written so far is kept, with status="failed").
 program airlaunch
+  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use airlaunch_error, only: error_type
+  use airlaunch_version, only: code_version
+  use airlaunch_namelist, only: nml_file
+  use airlaunch_run_config, only: run_config, read_run_config
+  use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   implicit none
+  type(nml_file) :: f
+  type(run_config) :: run
+  type(error_type), allocatable :: error
+  character(len=:), allocatable :: path, echo, summary, output_override
+  character(len=1024) :: arg
+  integer :: i, nargs
+
+  nargs = command_argument_count()
+  path = ""
+  output_override = ""
+  i = 1
+  do while (i <= nargs)
+    call get_command_argument(i, arg)
+    select case (trim(arg))
+    case ("-h", "--help")
+      call usage()
+      stop
+    case ("-V", "--version")
+      write(output_unit, '(a)') "airlaunch " // code_version
+      stop
+    case ("-o", "--output")
+      i = i + 1
+      if (i > nargs) call fail_input("airlaunch: --output needs a file name")
+      call get_command_argument(i, arg)
+      output_override = trim(arg)
+    case default
+      if (arg(1:1) == "-") call fail_input("airlaunch: unknown option " // trim(arg) // " (see airlaunch --help)")
+      if (len(path) > 0) call fail_input("airlaunch: more than one scenario file given")
+      path = trim(arg)
+    end select
+    i = i + 1
+  end do
+  if (len(path) == 0) then
+    call usage()
+    call fail_input("airlaunch: no scenario file given")
+  end if
+
+  call f%load(path, error)
+  if (.not. allocated(error)) call read_run_config(f, run, echo, error)
+  if (allocated(error)) call fail_input(error%message)
+  if (len(output_override) > 0) run%output = output_override
+
+  select case (trim(run%scene))
+  case ("drop")
+    block
+      type(drop_config) :: cfg
+      call f%check_groups([character(len=16) :: "run", "store"], error)
+      if (.not. allocated(error)) call read_drop_config(f, cfg, echo, error)
+      if (allocated(error)) call fail_input(error%message)
+      call run_drop(run, cfg, echo, summary, error)
+    end block
+  case default
+    call fail_input(path // ": &run: scene = '" // trim(run%scene) // "' is not available in this build")
+  end select
+
+  if (allocated(error)) then
+    write(error_unit, '(a)') "airlaunch: error: " // error%message
+    if (allocated(summary)) write(error_unit, '(a)') summary
+    write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
+    stop 3, quiet=.true.
+  end if
+  write(output_unit, '(a)') summary
+  write(output_unit, '(a)') "output: " // trim(run%output)
+
+contains
+
+  subroutine usage()
+    write(output_unit, '(a)') "usage: airlaunch SCENARIO.nml [--output FILE]"
+    write(output_unit, '(a)') "  runs the scenario of the namelist file; see docs/input.md"
+  end subroutine usage
+
+  subroutine fail_input(msg)
+    character(len=*), intent(in) :: msg
+    write(error_unit, '(a)') "airlaunch: error: " // msg
+    stop 2, quiet=.true.
+  end subroutine fail_input
 end program airlaunch

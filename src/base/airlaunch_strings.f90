@@ -22,15 +22,15 @@ contains
       return
     end if
     if (x == 0.0_dp .or. (abs(x) >= 1.0e-3_dp .and. abs(x) < 1.0e7_dp)) then
-      write(buf, '(g0.10)') x
+      write(buf, '(f0.9)') x
       s = trim(adjustl(buf))
-      ! strip trailing zeros of a fixed-point rendering (1.500000000 -> 1.5)
-      if (index(s, '.') > 0 .and. index(s, 'E') == 0) then
-        do while (len(s) > 1 .and. s(len(s):len(s)) == '0')
-          s = s(:len(s)-1)
-        end do
-        if (s(len(s):len(s)) == '.') s = s // '0'
-      end if
+      ! strip trailing zeros of the fixed-point rendering (1.500000000 -> 1.5)
+      do while (len(s) > 1 .and. s(len(s):len(s)) == '0')
+        s = s(:len(s)-1)
+      end do
+      if (s(len(s):len(s)) == '.') s = s // '0'
+      if (s(1:1) == '.') s = '0' // s
+      if (s(1:2) == '-.') s = '-0' // s(2:)
     else
       write(buf, '(es16.8)') x
       s = trim(adjustl(buf))

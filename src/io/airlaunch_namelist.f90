@@ -1,0 +1,561 @@
+!> Namelist input with validation that names file, group, variable, value and
+!> what is allowed, in one line.
+!>
+!> The Fortran runtime reads the values (`read(unit, nml=...)`); before that,
+!> `nml_file%load` scans the text itself so that unknown groups and misspelled
+!> variables are reported by name (the runtime's own messages do not name
+!> them), and `diagnose` finds which value of a group failed to read.
+!> Group readers (one per scene concept, e.g. src/scene/airlaunch_drop_scene.f90)
+!> follow the pattern: set defaults; `call f%check_group(...)`; `call
+!> f%position(group, unit, present)`; `read(unit, nml=...)`; on failure `call
+!> f%diagnose(...)`; then range checks with `require_*`.
+module airlaunch_namelist
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str, lower
+  implicit none
+  private
+  public :: nml_file, nml_var, unset_real, unset_int
+  public :: require_positive, require_nonnegative, require_range, require_choice, require_set
+  public :: require_int_range
+
+  !> Sentinel of a required real/integer value that the file did not set.
+  real(dp), parameter :: unset_real = -huge(1.0_dp)
+  integer, parameter :: unset_int = -huge(1)
+
+  !> One `name = value` assignment found in the file.
+  type :: nml_assignment
+    character(len=:), allocatable :: group   !< lower-case group name
+    character(len=:), allocatable :: name    !< lower-case variable name (without index)
+    character(len=:), allocatable :: value   !< value text as written
+    integer :: line = 0                      !< line of the file
+  end type nml_assignment
+
+  !> Expected name and type of a variable, for diagnosis: kind is one of
+  !> "real", "integer", "logical", "string", "real_list".
+  type :: nml_var
+    character(len=32) :: name = ""
+    character(len=16) :: kind = "real"
+  end type nml_var
+
+  !> A scanned namelist file.
+  type :: nml_file
+    character(len=:), allocatable :: path
+    type(nml_assignment), allocatable :: items(:)
+    character(len=32), allocatable :: groups(:)   !< groups present (lower case)
+    integer, allocatable :: group_lines(:)
+  contains
+    procedure :: load => nml_load
+    procedure :: check_groups => nml_check_groups
+    procedure :: check_group => nml_check_group
+    procedure :: has_group => nml_has_group
+    procedure :: is_set => nml_is_set
+    procedure :: position => nml_position
+    procedure :: diagnose => nml_diagnose
+    procedure :: where => nml_where
+  end type nml_file
+
+contains
+
+  !> Read and scan `path`.  A missing or unreadable file, an unterminated
+  !> group or an unterminated string is an error.
+  subroutine nml_load(self, path, error)
+    class(nml_file), intent(inout) :: self
+    character(len=*), intent(in) :: path                  !< file to read
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer :: unit, ios, lineno
+    character(len=4096) :: buf
+    character(len=:), allocatable :: text, group
+    integer, allocatable :: line_of(:)
+    logical :: exists
+
+    self%path = path
+    allocate(self%items(0), self%groups(0), self%group_lines(0))
+    inquire(file=path, exist=exists)
+    if (.not. exists) then
+      call fatal_error(error, path // ": file does not exist (give the path of a namelist scenario file)")
+      return
+    end if
+    open(newunit=unit, file=path, status="old", action="read", iostat=ios)
+    if (ios /= 0) then
+      call fatal_error(error, path // ": cannot open the file for reading")
+      return
+    end if
+    ! The whole file as one string (comments removed), with the line of each character.
+    text = ""
+    allocate(line_of(0))
+    lineno = 0
+    do
+      read(unit, '(a)', iostat=ios) buf
+      if (ios /= 0) exit
+      lineno = lineno + 1
+      buf = strip_comment(buf)
+      text = text // trim(buf) // " "
+      line_of = [line_of, spread(lineno, 1, len_trim(buf) + 1)]
+    end do
+    close(unit)
+    group = ""
+    call scan_text(self, text, line_of, error)
+  end subroutine nml_load
+
+  !> Scan the comment-free text into groups and assignments.
+  subroutine scan_text(self, text, line_of, error)
+    type(nml_file), intent(inout) :: self
+    character(len=*), intent(in) :: text
+    integer, intent(in) :: line_of(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: i, n, j, k, vstart, gline
+    character(len=:), allocatable :: group, name
+    logical :: in_group
+    character :: quote
+    type(nml_assignment) :: item
+
+    n = len(text)
+    i = 1
+    in_group = .false.
+    vstart = 0
+    gline = 0
+    do while (i <= n)
+      if (.not. in_group) then
+        if (text(i:i) == "&" .or. text(i:i) == "$") then
+          j = i + 1
+          do while (j <= n)
+            if (.not. is_name_char(text(j:j))) exit
+            j = j + 1
+          end do
+          group = lower(text(i+1:j-1))
+          if (group == "end") then
+            i = j
+            cycle
+          end if
+          in_group = .true.
+          gline = line_of(i)
+          self%groups = [character(len=32) :: self%groups, group]
+          self%group_lines = [self%group_lines, gline]
+          vstart = 0
+          i = j
+          cycle
+        else if (text(i:i) /= " ") then
+          call fatal_error(error, self%path // ":" // str(line_of(i)) // ": text outside a namelist group: '" &
+            // trim(text(i:min(n, i+20))) // "' (groups start with &name and end with /)")
+          return
+        end if
+        i = i + 1
+      else
+        select case (text(i:i))
+        case ("'", '"')
+          quote = text(i:i)
+          j = index(text(i+1:), quote)
+          if (j == 0) then
+            call fatal_error(error, self%path // ":" // str(line_of(i)) // ": &" // group // &
+              ": unterminated string " // text(i:min(n, i+20)))
+            return
+          end if
+          i = i + j + 1
+        case ("/")
+          if (vstart > 0) call close_item(i - 1)
+          in_group = .false.
+          vstart = 0
+          i = i + 1
+        case ("&")
+          if (lower(text(i:min(n, i+3))) == "&end") then
+            if (vstart > 0) call close_item(i - 1)
+            in_group = .false.
+            vstart = 0
+            i = i + 4
+          else
+            call fatal_error(error, self%path // ":" // str(line_of(i)) // ": group &" // group // &
+              " is not closed with / before the next group")
+            return
+          end if
+        case default
+          if (is_name_start(text(i:i)) .and. (i == 1 .or. is_sep(text(max(1, i-1):max(1, i-1))))) then
+            ! a name followed (after an optional index and blanks) by '=' starts an assignment
+            j = i
+            do while (j <= n)
+              if (.not. (is_name_char(text(j:j)) .or. text(j:j) == "%")) exit
+              j = j + 1
+            end do
+            k = j
+            if (k <= n) then
+              if (text(k:k) == "(") then
+                k = index(text(k:), ")") + k
+              end if
+            end if
+            do while (k <= n)
+              if (text(k:k) /= " ") exit
+              k = k + 1
+            end do
+            if (k <= n) then
+              if (text(k:k) == "=") then
+                if (vstart > 0) call close_item(i - 1)
+                name = lower(text(i:j-1))
+                item%group = group
+                item%name = name
+                item%line = line_of(i)
+                vstart = k + 1
+                i = k + 1
+                cycle
+              end if
+            end if
+            i = j
+          else
+            i = i + 1
+          end if
+        end select
+      end if
+    end do
+    if (in_group) then
+      call fatal_error(error, self%path // ":" // str(gline) // ": group &" // group // &
+        " is not closed (end it with /)")
+    end if
+  contains
+    subroutine close_item(last)
+      integer, intent(in) :: last
+      character(len=:), allocatable :: v
+      v = trim(adjustl(text(vstart:last)))
+      if (len(v) > 0) then
+        if (v(len(v):len(v)) == ",") v = trim(v(:len(v)-1))
+      end if
+      item%value = v
+      self%items = [self%items, item]
+      vstart = 0
+    end subroutine close_item
+  end subroutine scan_text
+
+  !> Every group in the file must be one of `allowed`.
+  subroutine nml_check_groups(self, allowed, error)
+    class(nml_file), intent(in) :: self
+    character(len=*), intent(in) :: allowed(:)            !< known group names
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer :: i, j
+    do i = 1, size(self%groups)
+      if (.not. any([(lower(trim(allowed(j))) == trim(self%groups(i)), j = 1, size(allowed))])) then
+        call fatal_error(error, self%path // ":" // str(self%group_lines(i)) // ": unknown group &" // &
+          trim(self%groups(i)) // " (allowed: " // join(allowed) // ")")
+        return
+      end if
+      do j = 1, i - 1
+        if (self%groups(j) == self%groups(i)) then
+          call fatal_error(error, self%path // ":" // str(self%group_lines(i)) // ": group &" // &
+            trim(self%groups(i)) // " appears twice (allowed once)")
+          return
+        end if
+      end do
+    end do
+  end subroutine nml_check_groups
+
+  !> Every variable written in `group` must be one of `vars`.
+  subroutine nml_check_group(self, group, vars, error)
+    class(nml_file), intent(in) :: self
+    character(len=*), intent(in) :: group                 !< group name
+    type(nml_var), intent(in) :: vars(:)                  !< its variables
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer :: i, j
+    logical :: known
+    do i = 1, size(self%items)
+      if (self%items(i)%group /= lower(group)) cycle
+      known = .false.
+      do j = 1, size(vars)
+        if (lower(trim(vars(j)%name)) == self%items(i)%name) known = .true.
+      end do
+      if (.not. known) then
+        call fatal_error(error, self%where(self%items(i)) // "unknown variable '" // &
+          self%items(i)%name // "' = " // self%items(i)%value // closest(self%items(i)%name, vars) // &
+          " (allowed: " // join(vars%name) // ")")
+        return
+      end if
+    end do
+  end subroutine nml_check_group
+
+  !> "file:line: &group: " prefix of a message about an assignment.
+  function nml_where(self, item) result(s)
+    class(nml_file), intent(in) :: self
+    type(nml_assignment), intent(in) :: item
+    character(len=:), allocatable :: s
+    s = self%path // ":" // str(item%line) // ": &" // item%group // ": "
+  end function nml_where
+
+  !> True if the file has the group.
+  logical function nml_has_group(self, group)
+    class(nml_file), intent(in) :: self
+    character(len=*), intent(in) :: group   !< group name
+    nml_has_group = any(self%groups == lower(group))
+  end function nml_has_group
+
+  !> True if the file assigns `name` in `group`.
+  logical function nml_is_set(self, group, name)
+    class(nml_file), intent(in) :: self
+    character(len=*), intent(in) :: group, name   !< group and variable
+    integer :: i
+    nml_is_set = .false.
+    do i = 1, size(self%items)
+      if (self%items(i)%group == lower(group) .and. self%items(i)%name == lower(name)) nml_is_set = .true.
+    end do
+  end function nml_is_set
+
+  !> Open the file on a new unit for `read(unit, nml=...)` of `group`;
+  !> `present` is false (and the unit closed) if the file lacks the group.
+  subroutine nml_position(self, group, unit, present)
+    class(nml_file), intent(in) :: self
+    character(len=*), intent(in) :: group   !< group name
+    integer, intent(out) :: unit            !< unit to read from (closed by the caller)
+    logical, intent(out) :: present         !< the group is in the file
+    present = self%has_group(group)
+    unit = -1
+    if (present) open(newunit=unit, file=self%path, status="old", action="read")
+  end subroutine nml_position
+
+  !> After a failed namelist read of `group`: find the value that does not
+  !> parse as its variable's type and report it; otherwise report the
+  !> runtime's message.
+  subroutine nml_diagnose(self, group, vars, iomsg, error)
+    class(nml_file), intent(in) :: self
+    character(len=*), intent(in) :: group                 !< group name
+    type(nml_var), intent(in) :: vars(:)                  !< its variables
+    character(len=*), intent(in) :: iomsg                 !< message of the failed read
+    type(error_type), allocatable, intent(inout) :: error !< set
+    integer :: i, j, ios
+    real(dp) :: r, rl(1000)
+    integer :: k
+    logical :: l
+    character(len=:), allocatable :: v, expected
+    do i = 1, size(self%items)
+      if (self%items(i)%group /= lower(group)) cycle
+      v = self%items(i)%value
+      do j = 1, size(vars)
+        if (lower(trim(vars(j)%name)) /= self%items(i)%name) cycle
+        select case (vars(j)%kind)
+        case ("real")
+          read(v, *, iostat=ios) r
+          if (ios == 0) ios = merge(0, 1, is_number(v))
+          expected = "a real number"
+        case ("integer")
+          read(v, *, iostat=ios) k
+          if (ios == 0) ios = merge(0, 1, is_number(v) .and. verify(trim(v), "+-0123456789") == 0)
+          expected = "an integer"
+        case ("logical")
+          read(v, *, iostat=ios) l
+          expected = ".true. or .false."
+        case ("string")
+          ios = 0
+          if (len(v) > 0) then
+            if (v(1:1) /= "'" .and. v(1:1) /= '"') ios = 1
+          end if
+          expected = "a quoted string"
+        case ("real_list")
+          rl = 0
+          read(v, *, iostat=ios) rl(1:count_items(v))
+          expected = "a list of real numbers"
+        case default
+          ios = 0
+          expected = ""
+        end select
+        if (ios /= 0 .or. len(v) == 0) then
+          call fatal_error(error, self%where(self%items(i)) // "variable '" // self%items(i)%name // &
+            "' = " // v // " is not " // expected)
+          return
+        end if
+      end do
+    end do
+    call fatal_error(error, self%path // ": &" // lower(group) // ": cannot read the group: " // trim(iomsg))
+  end subroutine nml_diagnose
+
+  ! ---------------------------------------------------------------------
+  ! Range checks: one line naming file, group, variable, value, allowed.
+  ! ---------------------------------------------------------------------
+
+  !> x > 0 required.
+  subroutine require_positive(f, group, name, x, unit, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name, unit
+    real(dp), intent(in) :: x
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call require_set(f, group, name, x, unit, error)
+    if (allocated(error)) return
+    if (.not. (x > 0.0_dp)) call fatal_error(error, f%path // ": &" // group // ": " // name // &
+      " = " // str(x) // " is not allowed (must be > 0 " // unit // ")")
+  end subroutine require_positive
+
+  !> x >= 0 required.
+  subroutine require_nonnegative(f, group, name, x, unit, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name, unit
+    real(dp), intent(in) :: x
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call require_set(f, group, name, x, unit, error)
+    if (allocated(error)) return
+    if (.not. (x >= 0.0_dp)) call fatal_error(error, f%path // ": &" // group // ": " // name // &
+      " = " // str(x) // " is not allowed (must be >= 0 " // unit // ")")
+  end subroutine require_nonnegative
+
+  !> lo <= x <= hi required.
+  subroutine require_range(f, group, name, x, lo, hi, unit, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name, unit
+    real(dp), intent(in) :: x, lo, hi
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call require_set(f, group, name, x, unit, error)
+    if (allocated(error)) return
+    if (.not. (x >= lo .and. x <= hi)) call fatal_error(error, f%path // ": &" // group // ": " // &
+      name // " = " // str(x) // " is not allowed (must be in [" // str(lo) // ", " // str(hi) // &
+      "] " // unit // ")")
+  end subroutine require_range
+
+  !> lo <= i <= hi required.
+  subroutine require_int_range(f, group, name, i, lo, hi, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name
+    integer, intent(in) :: i, lo, hi
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    if (i == unset_int) then
+      call fatal_error(error, f%path // ": &" // group // ": missing required value " // name // &
+        " (an integer in [" // str(lo) // ", " // str(hi) // "])")
+    else if (i < lo .or. i > hi) then
+      call fatal_error(error, f%path // ": &" // group // ": " // name // " = " // str(i) // &
+        " is not allowed (must be an integer in [" // str(lo) // ", " // str(hi) // "])")
+    end if
+  end subroutine require_int_range
+
+  !> s must be one of `choices`.
+  subroutine require_choice(f, group, name, s, choices, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name, s
+    character(len=*), intent(in) :: choices(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: j
+    if (allocated(error)) return
+    if (.not. any([(trim(choices(j)) == trim(s), j = 1, size(choices))])) then
+      call fatal_error(error, f%path // ": &" // group // ": " // name // " = '" // trim(s) // &
+        "' is not allowed (one of: " // join(choices) // ")")
+    end if
+  end subroutine require_choice
+
+  !> A required value must have been set in the file.
+  subroutine require_set(f, group, name, x, unit, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name, unit
+    real(dp), intent(in) :: x
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    if (x == unset_real) call fatal_error(error, f%path // ": &" // group // &
+      ": missing required value " // name // " (" // unit // ")")
+  end subroutine require_set
+
+  ! ---------------------------------------------------------------------
+  ! Text helpers
+  ! ---------------------------------------------------------------------
+
+  !> Line without its '!' comment (quotes respected).
+  pure function strip_comment(line) result(s)
+    character(len=*), intent(in) :: line
+    character(len=len(line)) :: s
+    integer :: i
+    character :: quote
+    s = line
+    quote = " "
+    do i = 1, len(line)
+      if (quote /= " ") then
+        if (line(i:i) == quote) quote = " "
+      else if (line(i:i) == "'" .or. line(i:i) == '"') then
+        quote = line(i:i)
+      else if (line(i:i) == "!") then
+        s = line(:i-1)
+        return
+      end if
+    end do
+  end function strip_comment
+
+  pure logical function is_name_start(c)
+    character, intent(in) :: c
+    is_name_start = (c >= "a" .and. c <= "z") .or. (c >= "A" .and. c <= "Z")
+  end function is_name_start
+
+  pure logical function is_name_char(c)
+    character, intent(in) :: c
+    is_name_char = is_name_start(c) .or. (c >= "0" .and. c <= "9") .or. c == "_"
+  end function is_name_char
+
+  pure logical function is_sep(c)
+    character, intent(in) :: c
+    is_sep = c == " " .or. c == "," .or. c == "&"
+  end function is_sep
+
+  !> The value looks like a number (not a logical or a string read as one).
+  pure logical function is_number(v)
+    character(len=*), intent(in) :: v
+    is_number = len_trim(v) > 0 .and. verify(trim(v), "+-.0123456789eEdD") == 0 .and. &
+      scan(v, "0123456789") > 0
+  end function is_number
+
+  !> Number of comma/blank separated items in a list value.
+  pure integer function count_items(v)
+    character(len=*), intent(in) :: v
+    integer :: i
+    logical :: in_item
+    count_items = 0
+    in_item = .false.
+    do i = 1, len(v)
+      if (v(i:i) == "," .or. v(i:i) == " ") then
+        in_item = .false.
+      else if (.not. in_item) then
+        in_item = .true.
+        count_items = count_items + 1
+      end if
+    end do
+    count_items = min(max(count_items, 1), 1000)
+  end function count_items
+
+  !> Comma-separated list of names.
+  pure function join(names) result(s)
+    character(len=*), intent(in) :: names(:)
+    character(len=:), allocatable :: s
+    integer :: i
+    s = ""
+    do i = 1, size(names)
+      if (i > 1) s = s // ", "
+      s = s // lower(trim(names(i)))
+    end do
+  end function join
+
+  !> " (did you mean 'x'?)" for the nearest known name by edit distance <= 2.
+  function closest(name, vars) result(s)
+    character(len=*), intent(in) :: name
+    type(nml_var), intent(in) :: vars(:)
+    character(len=:), allocatable :: s
+    integer :: j, d, best, jbest
+    s = ""
+    best = 3
+    jbest = 0
+    do j = 1, size(vars)
+      d = edit_distance(name, lower(trim(vars(j)%name)))
+      if (d < best) then
+        best = d
+        jbest = j
+      end if
+    end do
+    if (jbest > 0) s = " (did you mean '" // lower(trim(vars(jbest)%name)) // "'?)"
+  end function closest
+
+  !> Levenshtein distance.
+  pure integer function edit_distance(a, b) result(d)
+    character(len=*), intent(in) :: a, b
+    integer :: m(0:len(a), 0:len(b)), i, j
+    do i = 0, len(a)
+      m(i, 0) = i
+    end do
+    do j = 0, len(b)
+      m(0, j) = j
+    end do
+    do j = 1, len(b)
+      do i = 1, len(a)
+        m(i, j) = min(m(i-1, j) + 1, m(i, j-1) + 1, m(i-1, j-1) + merge(0, 1, a(i:i) == b(j:j)))
+      end do
+    end do
+    d = m(len(a), len(b))
+  end function edit_distance
+end module airlaunch_namelist

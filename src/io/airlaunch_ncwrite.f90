@@ -1,0 +1,258 @@
+!> netCDF-4 files written through HDF5 (parallel build, used serially here).
+!>
+!> A netCDF-4 file is an HDF5 file whose dimensions are HDF5 dimension scales;
+!> every dimension here has a coordinate variable of the same name, so
+!> `xarray.open_dataset(path)` reads the file directly, with units and long
+!> names.  Arrays are given in Fortran order (fastest index first); xarray
+!> shows the dimensions reversed, e.g. Fortran position(xyz, time) reads as
+!> position(time, xyz).
+!>
+!> The file is written under `<path>.part` and renamed to `<path>` by
+!> `commit`, so a crash never leaves a truncated file under the final name.
+module airlaunch_ncwrite
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use hdf5
+  use h5lt
+  use h5ds
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  implicit none
+  private
+  public :: nc_writer
+
+  interface
+    integer(c_int) function c_rename(old, new) bind(C, name="rename")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: old(*), new(*)
+    end function c_rename
+  end interface
+
+  !> An open output file.
+  type :: nc_writer
+    integer(hid_t) :: fid = -1
+    character(len=:), allocatable :: path, tmp_path
+    character(len=32), allocatable :: dim_names(:)
+    integer(hsize_t), allocatable :: dim_sizes(:)
+  contains
+    procedure :: create => nc_create
+    procedure :: add_dim => nc_add_dim
+    procedure :: add_var_1d => nc_add_var_1d
+    procedure :: add_var_2d => nc_add_var_2d
+    procedure :: add_var_3d => nc_add_var_3d
+    procedure :: add_int_var_1d => nc_add_int_var_1d
+    procedure :: add_text_att => nc_add_text_att
+    procedure :: add_real_att => nc_add_real_att
+    procedure :: commit => nc_commit
+    procedure :: abort => nc_abort
+  end type nc_writer
+
+contains
+
+  !> Create `<path>.part`, empty.
+  subroutine nc_create(self, path, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: path                  !< final file name
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer :: hdferr
+    integer(hid_t) :: fcpl
+    self%path = trim(path)
+    self%tmp_path = trim(path) // ".part"
+    allocate(self%dim_names(0), self%dim_sizes(0))
+    call h5open_f(hdferr)
+    ! netCDF-4 tracks link and attribute creation order; set it the same way.
+    call h5pcreate_f(H5P_FILE_CREATE_F, fcpl, hdferr)
+    call h5pset_link_creation_order_f(fcpl, ior(H5P_CRT_ORDER_TRACKED_F, H5P_CRT_ORDER_INDEXED_F), hdferr)
+    call h5pset_attr_creation_order_f(fcpl, ior(H5P_CRT_ORDER_TRACKED_F, H5P_CRT_ORDER_INDEXED_F), hdferr)
+    call h5fcreate_f(self%tmp_path, H5F_ACC_TRUNC_F, self%fid, hdferr, creation_prp=fcpl)
+    call h5pclose_f(fcpl, hdferr)
+    if (hdferr /= 0) then
+      call fatal_error(error, self%tmp_path // ": cannot create the output file (directory missing or not writable?)")
+      self%fid = -1
+    end if
+  end subroutine nc_create
+
+  !> A dimension with its coordinate variable (values, units, long name).
+  subroutine nc_add_dim(self, name, values, units, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name  !< dimension name and metadata
+    real(dp), intent(in) :: values(:)                       !< coordinate values
+    type(error_type), allocatable, intent(inout) :: error   !< set on failure
+    integer :: hdferr
+    integer(hid_t) :: did
+    if (allocated(error)) return
+    call make_dataset(self, name, [size(values, kind=hsize_t)], values, error)
+    if (allocated(error)) return
+    call h5dopen_f(self%fid, name, did, hdferr)
+    call h5dsset_scale_f(did, hdferr, name)
+    call h5dclose_f(did, hdferr)
+    call describe(self, name, units, long_name, error)
+    self%dim_names = [character(len=32) :: self%dim_names, name]
+    self%dim_sizes = [self%dim_sizes, size(values, kind=hsize_t)]
+  end subroutine nc_add_dim
+
+  !> A variable over one dimension.
+  subroutine nc_add_var_1d(self, name, dims, data, units, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    character(len=*), intent(in) :: dims(1)
+    real(dp), intent(in) :: data(:)
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call make_dataset(self, name, shape(data, kind=hsize_t), data, error)
+    call finish_var(self, name, dims, shape(data, kind=hsize_t), units, long_name, error)
+  end subroutine nc_add_var_1d
+
+  !> A variable over two dimensions (Fortran order).
+  subroutine nc_add_var_2d(self, name, dims, data, units, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    character(len=*), intent(in) :: dims(2)
+    real(dp), intent(in) :: data(:, :)
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call make_dataset(self, name, shape(data, kind=hsize_t), data, error)
+    call finish_var(self, name, dims, shape(data, kind=hsize_t), units, long_name, error)
+  end subroutine nc_add_var_2d
+
+  !> A variable over three dimensions (Fortran order).
+  subroutine nc_add_var_3d(self, name, dims, data, units, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    character(len=*), intent(in) :: dims(3)
+    real(dp), intent(in) :: data(:, :, :)
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call make_dataset(self, name, shape(data, kind=hsize_t), data, error)
+    call finish_var(self, name, dims, shape(data, kind=hsize_t), units, long_name, error)
+  end subroutine nc_add_var_3d
+
+  !> An integer variable over one dimension.
+  subroutine nc_add_int_var_1d(self, name, dims, data, units, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    character(len=*), intent(in) :: dims(1)
+    integer, intent(in) :: data(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    if (allocated(error)) return
+    call h5ltmake_dataset_int_f(self%fid, name, 1, shape(data, kind=hsize_t), data, hdferr)
+    if (hdferr /= 0) then
+      call fatal_error(error, self%tmp_path // ": cannot write variable " // name)
+      return
+    end if
+    call finish_var(self, name, dims, shape(data, kind=hsize_t), units, long_name, error)
+  end subroutine nc_add_int_var_1d
+
+  !> A text attribute of a variable, or of the file if `var` is "/".
+  subroutine nc_add_text_att(self, var, name, value, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: var, name, value
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    if (allocated(error)) return
+    if (len(value) == 0) then
+      call h5ltset_attribute_string_f(self%fid, var, name, " ", hdferr)
+    else
+      call h5ltset_attribute_string_f(self%fid, var, name, value, hdferr)
+    end if
+    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write attribute " // name // " of " // var)
+  end subroutine nc_add_text_att
+
+  !> A real attribute of a variable, or of the file if `var` is "/".
+  subroutine nc_add_real_att(self, var, name, value, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: var, name
+    real(dp), intent(in) :: value
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    real(dp) :: buf(1)
+    if (allocated(error)) return
+    buf(1) = value
+    call h5ltset_attribute_double_f(self%fid, var, name, buf, 1_size_t, hdferr)
+    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write attribute " // name // " of " // var)
+  end subroutine nc_add_real_att
+
+  !> Close the file and rename it to its final name.
+  subroutine nc_commit(self, error)
+    class(nc_writer), intent(inout) :: self
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    if (self%fid < 0) return
+    call h5fclose_f(self%fid, hdferr)
+    self%fid = -1
+    if (hdferr /= 0) then
+      call fatal_error(error, self%tmp_path // ": cannot close the output file")
+      return
+    end if
+    if (c_rename(self%tmp_path // c_null_char, self%path // c_null_char) /= 0) &
+      call fatal_error(error, self%path // ": cannot rename " // self%tmp_path // " to it")
+  end subroutine nc_commit
+
+  !> Close and delete the temporary file (nothing is left under any name).
+  subroutine nc_abort(self)
+    class(nc_writer), intent(inout) :: self
+    integer :: hdferr, unit, ios
+    if (self%fid < 0) return
+    call h5fclose_f(self%fid, hdferr)
+    self%fid = -1
+    open(newunit=unit, file=self%tmp_path, status="old", iostat=ios)
+    if (ios == 0) close(unit, status="delete")
+  end subroutine nc_abort
+
+  ! ---------------------------------------------------------------------
+
+  subroutine make_dataset(self, name, dims, data, error)
+    type(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    integer(hsize_t), intent(in) :: dims(:)
+    real(dp), intent(in) :: data(*)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    if (self%fid < 0) then
+      call fatal_error(error, "output file is not open")
+      return
+    end if
+    call h5ltmake_dataset_double_f(self%fid, name, size(dims), dims, data, hdferr)
+    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write variable " // name)
+  end subroutine make_dataset
+
+  !> Attach dimension scales and write units/long_name.
+  subroutine finish_var(self, name, dims, shp, units, long_name, error)
+    type(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    character(len=*), intent(in) :: dims(:)
+    integer(hsize_t), intent(in) :: shp(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: k, j, hdferr, r
+    integer(hid_t) :: did, sid
+    if (allocated(error)) return
+    r = size(dims)
+    call h5dopen_f(self%fid, name, did, hdferr)
+    do k = 1, r
+      j = findloc(self%dim_names, dims(k), dim=1)
+      if (j == 0) then
+        call fatal_error(error, "output variable " // name // ": unknown dimension " // dims(k))
+        exit
+      end if
+      if (self%dim_sizes(j) /= shp(k)) then
+        call fatal_error(error, "output variable " // name // ": size does not match dimension " // dims(k))
+        exit
+      end if
+      call h5dopen_f(self%fid, trim(dims(k)), sid, hdferr)
+      ! h5dsattach_scale_f takes the dimension in C order (1-based): the
+      ! Fortran dimension k of a rank-r dataset is C dimension r - k + 1.
+      call h5dsattach_scale_f(did, sid, r - k + 1, hdferr)
+      call h5dclose_f(sid, hdferr)
+    end do
+    call h5dclose_f(did, hdferr)
+    call describe(self, name, units, long_name, error)
+  end subroutine finish_var
+
+  subroutine describe(self, name, units, long_name, error)
+    type(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    type(error_type), allocatable, intent(inout) :: error
+    call self%add_text_att(name, "units", units, error)
+    call self%add_text_att(name, "long_name", long_name, error)
+  end subroutine describe
+end module airlaunch_ncwrite

@@ -1,0 +1,32 @@
+!> Global attributes every airlaunch output file carries: the code version,
+!> the scene and the fully resolved input (defaults included).
+module airlaunch_output_meta
+  use airlaunch_error, only: error_type
+  use airlaunch_ncwrite, only: nc_writer
+  use airlaunch_version, only: code_version
+  implicit none
+  private
+  public :: write_run_metadata
+
+contains
+
+  !> Write the common global attributes.
+  subroutine write_run_metadata(w, scene, title, echo, error)
+    type(nc_writer), intent(inout) :: w                   !< open output
+    character(len=*), intent(in) :: scene                 !< scene name
+    character(len=*), intent(in) :: title                 !< one-line description
+    character(len=*), intent(in) :: echo                  !< resolved namelist text
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    character(len=32) :: stamp
+    integer :: v(8)
+    call date_and_time(values=v)
+    write(stamp, '(i4.4,"-",i2.2,"-",i2.2,"T",i2.2,":",i2.2,":",i2.2)') v(1), v(2), v(3), v(5), v(6), v(7)
+    call w%add_text_att("/", "title", title, error)
+    call w%add_text_att("/", "scene", scene, error)
+    call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
+    call w%add_text_att("/", "created", trim(stamp), error)
+    call w%add_text_att("/", "input_namelist", echo, error)
+    call w%add_text_att("/", "frames", "earth: x forward, y up, z right; body: x nose, y up, z right; " // &
+      "Euler yaw about y, pitch about z, roll about x (Zheng & Zhang 2018, Eqs. (49)-(50))", error)
+  end subroutine write_run_metadata
+end module airlaunch_output_meta

@@ -1,0 +1,118 @@
+!> The &run group, common to every scene: which scene, how long, how often to
+!> write, where, and the integrator's tolerances.
+module airlaunch_run_config
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_namelist
+  implicit none
+  private
+  public :: run_config, read_run_config, echo_namelist_unit, scene_names
+
+  !> Scenes the main program knows.
+  character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
+
+  !> Settings of one run.
+  type :: run_config
+    character(len=16) :: scene = "airlaunch"   !< which simulation
+    real(dp) :: t_end = 15.0_dp                !< simulated time [s]
+    real(dp) :: output_dt = 0.01_dp            !< output cadence [s]
+    character(len=256) :: output = "output/airlaunch.nc"  !< output file
+    real(dp) :: rtol = 1.0e-6_dp               !< CVODE relative tolerance
+    real(dp) :: atol = 1.0e-8_dp               !< CVODE absolute tolerance (scaled per state)
+    logical :: trajectory = .true.             !< write the time history (false: summary only)
+  end type run_config
+
+contains
+
+  !> Read and validate &run from `f`; `echo` receives the resolved group.
+  subroutine read_run_config(f, cfg, echo, error)
+    type(nml_file), intent(in) :: f                       !< scanned input
+    type(run_config), intent(out) :: cfg                  !< resolved settings
+    character(len=:), allocatable, intent(inout) :: echo  !< resolved input text
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    character(len=16) :: scene
+    real(dp) :: t_end, output_dt, rtol, atol
+    character(len=256) :: output
+    logical :: trajectory, present
+    integer :: unit, ios
+    character(len=256) :: msg
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory
+    type(nml_var), parameter :: vars(7) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
+      nml_var("output_dt", "real"), nml_var("output", "string"), nml_var("rtol", "real"), &
+      nml_var("atol", "real"), nml_var("trajectory", "logical")]
+
+    scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
+    rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory
+    call f%check_group("run", vars, error)
+    if (allocated(error)) return
+    call f%position("run", unit, present)
+    if (present) then
+      read(unit, nml=run, iostat=ios, iomsg=msg)
+      close(unit)
+      if (ios /= 0) then
+        call f%diagnose("run", vars, msg, error)
+        return
+      end if
+    end if
+    call require_choice(f, "run", "scene", scene, scene_names, error)
+    call require_positive(f, "run", "t_end", t_end, "s", error)
+    call require_positive(f, "run", "output_dt", output_dt, "s", error)
+    call require_range(f, "run", "rtol", rtol, 1.0e-14_dp, 1.0e-1_dp, "", error)
+    call require_range(f, "run", "atol", atol, 1.0e-16_dp, 1.0_dp, "", error)
+    if (allocated(error)) return
+    if (len_trim(output) == 0) then
+      call fatal_error(error, f%path // ": &run: output = '' is not allowed (a file name, e.g. 'output/run.nc')")
+      return
+    end if
+    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory)
+    block
+      integer :: u
+      open(newunit=u, status="scratch", action="readwrite")
+      write(u, nml=run)
+      call echo_namelist_unit(u, echo)
+    end block
+  end subroutine read_run_config
+
+  !> Append the text written to scratch unit `u` to `echo`, and close `u`.
+  subroutine echo_namelist_unit(u, echo)
+    integer, intent(in) :: u                              !< scratch unit, written
+    character(len=:), allocatable, intent(inout) :: echo  !< text so far
+    character(len=1024) :: line
+    integer :: ios
+    if (.not. allocated(echo)) echo = ""
+    rewind(u)
+    do
+      read(u, '(a)', iostat=ios) line
+      if (ios /= 0) exit
+      echo = echo // squeeze_string_padding(trim(line)) // new_line("a")
+    end do
+    close(u)
+  end subroutine echo_namelist_unit
+
+  !> Remove the blank padding the runtime writes inside quoted strings
+  !> ("drop      " -> "drop").
+  pure function squeeze_string_padding(line) result(s)
+    character(len=*), intent(in) :: line
+    character(len=:), allocatable :: s
+    integer :: i, j
+    logical :: in_string
+    s = ""
+    in_string = .false.
+    i = 1
+    do while (i <= len(line))
+      if (line(i:i) == '"') then
+        in_string = .not. in_string
+      else if (in_string .and. line(i:i) == " ") then
+        j = verify(line(i:), " ")
+        if (j > 0) then
+          if (line(i+j-1:i+j-1) == '"') then
+            i = i + j - 1
+            cycle
+          end if
+        end if
+      end if
+      s = s // line(i:i)
+      i = i + 1
+    end do
+  end function squeeze_string_padding
+end module airlaunch_run_config
