@@ -14,7 +14,7 @@ module airlaunch_rotation
   public :: skew, quat_mul, quat_conj, quat_normalize, quat_to_dcm, dcm_to_quat
   public :: quat_from_euler, quat_to_euler, euler_to_dcm, dcm_to_euler
   public :: quat_rate, quat_rotate, quat_rotate_inv, euler_rate_matrix
-  public :: rot_x, rot_y, rot_z, nose_elevation
+  public :: rot_x, rot_y, rot_z, nose_elevation, cross
 
 contains
 
@@ -26,6 +26,13 @@ contains
     s(:, 2) = [-a(3), 0.0_dp, a(1)]
     s(:, 3) = [a(2), -a(1), 0.0_dp]
   end function skew
+
+  !> Cross product a x b.
+  pure function cross(a, b) result(c)
+    real(dp), intent(in) :: a(3), b(3)   !< vectors
+    real(dp) :: c(3)
+    c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
+  end function cross
 
   !> Active rotation about x by angle a [rad].
   pure function rot_x(a) result(r)

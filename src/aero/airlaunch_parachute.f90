@@ -1,0 +1,68 @@
+!> Parachute canopy as a point mass with drag and apparent (added) mass.
+!>
+!> Drag: F = -1/2 rho (Cd S)(t) |v| v along the air-relative velocity.
+!> Inflation (Knacke, Parachute Recovery Systems Design Manual, NWC TP 6575,
+!> 1991, ch. 5): filling time t_f = n D0 / V at the deployment speed, with
+!> the canopy fill constant n (about 8 for a solid flat circular canopy), and
+!>   (Cd S)(t) = (Cd S)_0 + ((Cd S) - (Cd S)_0) ((t - t_d)/t_f)^j,  t_d <= t <= t_d + t_f,
+!> j the inflation exponent (1 linear, 2 quadratic growth of the drag area).
+!> Apparent mass of the enclosed and entrained air (Knacke ch. 6; Lingard):
+!>   m_a = k_a rho (pi/6) D_p^3, D_p = 0.7 D0 (inflated projected diameter),
+!> added to the canopy mass in translation (m + m_a) a = F; scaled with the
+!> inflation like the drag area.
+module airlaunch_parachute
+  use airlaunch_kinds, only: dp, pi
+  implicit none
+  private
+  public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter
+
+  !> Canopy data.
+  type :: parachute
+    real(dp) :: mass = 1.798_dp          !< canopy + suspension-line mass [kg]
+    real(dp) :: drag_area = 10.0_dp      !< Cd S fully open [m^2]
+    real(dp) :: cd0 = 0.75_dp            !< drag coefficient on the nominal area S0 (flat circular)
+    real(dp) :: deploy_time = -1.0_dp    !< start of inflation [s]; < 0: open from the start
+    real(dp) :: fill_constant = 8.0_dp   !< n of t_f = n D0 / V
+    real(dp) :: inflation_exponent = 2.0_dp !< j
+    real(dp) :: packed_drag_area = 0.05_dp  !< Cd S of the packed/streaming canopy [m^2]
+    real(dp) :: added_mass_factor = 1.0_dp  !< k_a
+    real(dp) :: fill_time = 0.0_dp       !< t_f [s], set from the deployment speed
+  end type parachute
+
+contains
+
+  !> Nominal diameter D0 = sqrt(4 S0 / pi), S0 = Cd S / Cd0.
+  pure real(dp) function parachute_nominal_diameter(p) result(d0)
+    type(parachute), intent(in) :: p
+    d0 = sqrt(4*p%drag_area/(pi*p%cd0))
+  end function parachute_nominal_diameter
+
+  !> Fraction of the inflation reached at time t, in [0, 1].
+  pure real(dp) function inflation(p, t) result(f)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: t
+    if (p%deploy_time < 0.0_dp .or. p%fill_time <= 0.0_dp) then
+      f = 1.0_dp
+    else if (t <= p%deploy_time) then
+      f = 0.0_dp
+    else
+      f = min(1.0_dp, (t - p%deploy_time)/p%fill_time)**p%inflation_exponent
+    end if
+  end function inflation
+
+  !> Drag area at time t [m^2].
+  pure real(dp) function parachute_drag_area(p, t) result(cds)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: t
+    cds = p%packed_drag_area + (p%drag_area - p%packed_drag_area)*inflation(p, t)
+  end function parachute_drag_area
+
+  !> Apparent mass at time t in air of density rho [kg].
+  pure real(dp) function parachute_added_mass(p, rho, t) result(ma)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: rho, t
+    real(dp) :: dp_
+    dp_ = 0.7_dp*parachute_nominal_diameter(p)
+    ma = p%added_mass_factor*rho*pi/6*dp_**3*inflation(p, t)
+  end function parachute_added_mass
+end module airlaunch_parachute

@@ -1,0 +1,103 @@
+!> Aerodynamics of a slender rocket (no fins by default) up to and beyond
+!> 90 deg angle of attack, by the Allen-Perkins / Jorgensen model:
+!>
+!>   C_N = sin(2 a) cos(a/2)            (potential, slender-body theory; acts
+!>                                        near the nose: unstable)
+!>       + eta C_dn (S_p/S_ref) sin^2 a (viscous cross-flow; acts along the body)
+!>
+!> (L. H. Jorgensen, "Prediction of static aerodynamic characteristics for
+!> slender bodies alone and with lifting surfaces to very high angles of
+!> attack", NASA TR R-474, 1977; H. J. Allen & E. W. Perkins, NACA TR 1048,
+!> 1951).  The cross-flow part is integrated over `n_strips` strips with the
+!> local velocity v + w x r, so the same term gives the static force at any
+!> angle and the pitch/yaw damping of a rotating body.  Strips ahead of
+!> `x_shield` (body x) are shielded (inside the cargo bay) and feel no air; the
+!> potential and axial terms are scaled by the exposed fraction of the length
+!> (a simple shielding model for a rocket that leaves the bay tail first).
+!> Axial force: -1/2 rho |u| u S_ref C_A.  Optional fins (a documented
+!> configuration choice) add C_N,fin = cn_alpha_fin sin(a_local) at x_fin.
+!>
+!> Body frame: x along the axis towards the nose, origin at the CG.
+module airlaunch_rocket_aero
+  use airlaunch_kinds, only: dp, pi
+  implicit none
+  private
+  public :: rocket_aero, rocket_aero_eval
+
+  !> Geometry and coefficients of the rocket.
+  type :: rocket_aero
+    real(dp) :: length = 18.5_dp          !< [m]
+    real(dp) :: diameter = 1.6_dp         !< [m]
+    real(dp) :: cg_from_nose = 9.25_dp    !< [m]
+    real(dp) :: cp_pot_from_nose = 2.0_dp !< centre of the potential normal force [m] (~ half the nose length)
+    real(dp) :: c_axial = 0.35_dp         !< axial force coefficient (subsonic, blunt base)
+    real(dp) :: c_dn = 1.2_dp             !< cross-flow drag coefficient of a circular cylinder (subcritical)
+    real(dp) :: eta = 0.7_dp              !< finite-length factor of the cross-flow drag (L/d ~ 11)
+    real(dp) :: cn_alpha_fin = 0.0_dp     !< fin normal-force slope on S_ref [1/rad]; 0 = no fins
+    real(dp) :: x_fin_from_nose = 17.5_dp !< fin centre of pressure [m]
+    integer :: n_strips = 16              !< strips of the cross-flow integral
+  end type rocket_aero
+
+contains
+
+  !> Force (body frame) and moment about the CG (body frame) for air-relative
+  !> CG velocity v_b and body rates w_b.  Strips with body x > x_shield are
+  !> shielded (x measured from the CG, towards the nose); pass a large value
+  !> for a fully exposed rocket.
+  pure subroutine rocket_aero_eval(p, rho, v_b, w_b, x_shield, force, moment)
+    type(rocket_aero), intent(in) :: p
+    real(dp), intent(in) :: rho, v_b(3), w_b(3), x_shield
+    real(dp), intent(out) :: force(3), moment(3)
+    real(dp) :: s_ref, dx, x, v_loc(3), vp(3), vpn, f(3), v, alpha, exposed, x_nose, x_tail
+    real(dp) :: x_lo, x_hi
+    integer :: i
+    force = 0; moment = 0
+    s_ref = pi*p%diameter**2/4
+    x_nose = p%cg_from_nose
+    x_tail = p%cg_from_nose - p%length
+    exposed = max(0.0_dp, min(1.0_dp, (x_shield - x_tail)/p%length))
+    if (exposed <= 0.0_dp) return
+    v = norm2(v_b)
+    ! axial force, scaled by the exposed fraction
+    force(1) = -0.5_dp*rho*abs(v_b(1))*v_b(1)*s_ref*p%c_axial*exposed
+    ! viscous cross-flow, strip by strip with the local velocity
+    dx = p%length/p%n_strips
+    do i = 1, p%n_strips
+      x_lo = x_tail + (i - 1)*dx
+      x_hi = min(x_lo + dx, x_shield)
+      if (x_hi <= x_lo) cycle
+      x = 0.5_dp*(x_lo + x_hi)
+      v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]   ! v + w x (x, 0, 0)
+      vp = [0.0_dp, v_loc(2), v_loc(3)]
+      vpn = norm2(vp)
+      f = -0.5_dp*rho*p%eta*p%c_dn*p%diameter*(x_hi - x_lo)*vpn*vp
+      force = force + f
+      moment = moment + [0.0_dp, -x*f(3), x*f(2)]    ! (x,0,0) x f
+    end do
+    if (v <= 0.0_dp) return
+    vp = [0.0_dp, v_b(2), v_b(3)]
+    vpn = norm2(vp)
+    if (vpn <= 0.0_dp) return
+    alpha = acos(max(-1.0_dp, min(1.0_dp, v_b(1)/v)))
+    ! potential (slender-body) normal force near the nose, opposite to the
+    ! cross-flow velocity of the body; scaled by the exposed fraction
+    f = -0.5_dp*rho*v*v*s_ref*sin(2*alpha)*cos(alpha/2)*exposed*vp/vpn
+    force = force + f
+    x = x_nose - p%cp_pot_from_nose
+    moment = moment + [0.0_dp, -x*f(3), x*f(2)]
+    if (p%cn_alpha_fin > 0.0_dp) then
+      x = x_nose - p%x_fin_from_nose
+      if (x <= x_shield) then
+        v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]
+        vp = [0.0_dp, v_loc(2), v_loc(3)]
+        vpn = norm2(vp)
+        if (vpn > 0.0_dp) then
+          ! fin normal force ~ cn_alpha sin(local angle), opposite to the local cross-flow
+          f = -0.5_dp*rho*norm2(v_loc)*s_ref*p%cn_alpha_fin*vp
+          force = force + f
+          moment = moment + [0.0_dp, -x*f(3), x*f(2)]
+        end if
+      end if
+    end if
+  end subroutine rocket_aero_eval
+end module airlaunch_rocket_aero
