@@ -67,11 +67,11 @@ program test_rotation
   call finish()
 
 contains
-  pure function cross(x, y) result(z)
+  pure function cross_ref(x, y) result(z)
     real(dp), intent(in) :: x(3), y(3)
     real(dp) :: z(3)
     z = [x(2)*y(3) - x(3)*y(2), x(3)*y(1) - x(1)*y(3), x(1)*y(2) - x(2)*y(1)]
-  end function cross
+  end function cross_ref
   pure function eye() result(m)
     real(dp) :: m(3, 3)
     m = 0; m(1, 1) = 1; m(2, 2) = 1; m(3, 3) = 1
