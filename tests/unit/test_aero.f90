@@ -1,0 +1,111 @@
+!> Aerodynamic models against independent references: wind-axis projections
+!> of the aircraft force, stability-derivative signs, the cross-flow integral
+!> of the rocket in closed form, the inflation law, and a trim consistency check
+!> (calibrate at the paper's angle of attack, then fly: same angle, zero elevator).
+program test_aero
+  use airlaunch_kinds, only: dp, pi, deg2rad, g0
+  use airlaunch_error, only: error_type
+  use airlaunch_aircraft_aero
+  use airlaunch_rocket_aero
+  use airlaunch_parachute
+  use airlaunch_trim
+  use airlaunch_atmosphere
+  use testing
+  implicit none
+  type(aircraft_aero) :: ac
+  type(aircraft_aero_out) :: o
+  type(rocket_aero) :: rk
+  type(parachute) :: pc
+  type(trim_problem) :: tp
+  type(trim_result) :: tr, tr2
+  type(error_type), allocatable :: error
+  type(air_state) :: air
+  real(dp) :: v, alpha, vb(3), qs, f(3), m(3), expected, rho, w, l
+
+  call section("aircraft: lift normal to and drag along the relative wind")
+  ac%cl0 = 0.3_dp
+  v = 200.0_dp; alpha = 4*deg2rad; rho = 0.4
+  vb = v*[cos(alpha), -sin(alpha), 0.0_dp]
+  o = aircraft_aero_eval(ac, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 0.0_dp)
+  qs = 0.5_dp*rho*v*v*ac%wing_area
+  call check_close(o%alpha, alpha, "alpha from the body velocity", abs=1e-14_dp)
+  call check_close(-dot_product(o%force, vb/v), qs*(ac%cd0 + ac%k_induced*o%cl**2), "force along -V = qS CD", rel=1e-12_dp)
+  call check_close(o%cl, ac%cl0 + ac%cl_alpha*alpha, "CL = CL0 + CLa alpha", rel=1e-14_dp)
+  call check_close(norm2(o%force - dot_product(o%force, vb/v)*vb/v), qs*o%cl, "|force normal to V| = qS CL", rel=1e-12_dp)
+  call check(abs(o%force(3)) + abs(o%moment(1)) + abs(o%moment(2)) == 0.0_dp, "symmetric flight: no lateral force or moment")
+
+  call section("aircraft: signs of the stability derivatives")
+  o = aircraft_aero_eval(ac, rho, [v, 0.0_dp, 10.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], 0.0_dp)
+  call check(o%moment(2) < 0.0_dp, "weathercock: wind from the right turns the nose right (-y moment)")
+  call check(o%force(3) < 0.0_dp, "side force opposes sideslip")
+  o = aircraft_aero_eval(ac, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, 0.1_dp], 0.0_dp)
+  call check(o%moment(3) < ac%cm0*qs*ac%chord, "pitch damping opposes a nose-up rate")
+  ac%attitude_hold = .true.; ac%theta_ref = 0.0_dp
+  o = aircraft_aero_eval(ac, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], 2*deg2rad)
+  call check(o%delta_e > 0.0_dp .and. o%moment(3) < qs*ac%chord*ac%cm0, "attitude hold: nose above reference -> nose-down elevator")
+  ac%attitude_hold = .false.
+
+  call section("rocket: cross-flow force at 90 deg in closed form")
+  rho = 0.41351_dp; v = 50.0_dp
+  call rocket_aero_eval(rk, rho, [0.0_dp, -v, 0.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+  expected = 0.5_dp*rho*v*v*rk%eta*rk%c_dn*rk%diameter*rk%length
+  ! at alpha = 90 deg the potential term sin(2 alpha) vanishes; the strip sum of a uniform load is exact
+  call check_close(f(2), expected, "F_y = 1/2 rho V^2 eta Cdn d L", rel=1e-12_dp)
+  call check_close(m(3), expected*(rk%length/2 - rk%cg_from_nose), "moment of a uniform load about the CG", abs=1e-6_dp*expected)
+
+  call section("rocket: pitch damping of a pure rotation")
+  rk%n_strips = 400
+  w = 0.8_dp
+  call rocket_aero_eval(rk, rho, [0.0_dp, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
+  ! M = -1/2 rho eta Cdn d w|w| int |x| x^2 dx over [-L/2, L/2] (CG at mid-length);
+  ! midpoint rule with 400 strips: relative error ~ (dx/L)^2 ~ 1e-5
+  l = rk%length/2
+  expected = -0.5_dp*rho*rk%eta*rk%c_dn*rk%diameter*w*abs(w)*2*l**4/4
+  call check_close(m(3), expected, "damping moment", rel=1e-4_dp)
+  call check(abs(f(2)) < 1e-9_dp*abs(expected), "no net force for a rotation about the mid-point")
+  rk%n_strips = 16
+
+  call section("rocket: static stability")
+  alpha = 2*deg2rad; v = 194.7_dp
+  vb = v*[cos(alpha), -sin(alpha), 0.0_dp]
+  call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+  call check(m(3) > 0.0_dp .and. f(2) > 0.0_dp, "without fins the centre of pressure is ahead of the CG (unstable)")
+  rk%cn_alpha_fin = 20.0_dp
+  call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+  call check(m(3) < 0.0_dp, "large fins move it aft of the CG (stable)")
+  rk%cn_alpha_fin = 0.0_dp
+  call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], rk%cg_from_nose - rk%length - 0.1_dp, f, m)
+  call check(all(f == 0.0_dp) .and. all(m == 0.0_dp), "fully shielded inside the bay: no load")
+
+  call section("parachute: inflation law and apparent mass")
+  pc%deploy_time = 1.0_dp; pc%fill_time = 0.4_dp
+  call check_close(parachute_drag_area(pc, 0.5_dp), pc%packed_drag_area, "packed before deployment", rel=1e-15_dp)
+  call check_close(parachute_drag_area(pc, 1.2_dp), pc%packed_drag_area + (pc%drag_area - pc%packed_drag_area)*0.25_dp, &
+    "quadratic growth: half the fill time gives a quarter", rel=1e-14_dp)
+  call check_close(parachute_drag_area(pc, 2.0_dp), pc%drag_area, "fully open after the fill time", rel=1e-15_dp)
+  call check_close(parachute_added_mass(pc, 0.41351_dp, 2.0_dp), &
+    0.41351_dp*pi/6*(0.7_dp*sqrt(4*10.0_dp/(pi*0.75_dp)))**3, "m_a = rho pi/6 (0.7 D0)^3", rel=1e-14_dp)
+  call check(parachute_added_mass(pc, 0.41351_dp, 2.0_dp) > 2*pc%mass, "apparent mass at 10 km exceeds the canopy mass")
+
+  call section("trim: calibrate at the paper's alpha, then fly")
+  air = isa(10000.0_dp)
+  ac = aircraft_aero()
+  tp = trim_problem(aircraft_mass=89000.0_dp, rocket_mass=28000.0_dp, r_rocket=[0.0_dp, -1.5_dp, 0.0_dp], &
+    r_tie=[9.25_dp, -1.5_dp, 0.0_dp], pull=0.5_dp*air%density*(0.65_dp*air%sound_speed)**2*10.0_dp, &
+    density=air%density, speed=0.65_dp*air%sound_speed, mode="calibrate", alpha_target=1.2174_dp*deg2rad)
+  call trim_case0(tp, ac, tr, error)
+  call check(.not. allocated(error), "calibration converges")
+  tp%mode = "fly"
+  call trim_case0(tp, ac, tr2, error)
+  call check(.not. allocated(error), "trim converges")
+  call check_close(tr2%alpha/deg2rad, 1.2174_dp, "trimmed alpha [deg]", abs=1e-6_dp)
+  call check_close(tr2%delta_e, 0.0_dp, "trimmed elevator [rad]", abs=1e-8_dp)
+  call check_close(tr2%thrust, tr%thrust, "thrust agrees", rel=1e-8_dp)
+  ! lift carries the weight to within the thrust and drag components (sin alpha ~ 2 %)
+  call check_close((tr%cl0 + ac%cl_alpha*1.2174_dp*deg2rad)*tp%density*tp%speed**2/2*ac%wing_area, &
+    117000.0_dp*g0, "lift ~ weight", rel=2e-2_dp)
+  ! thrust balances aircraft drag + parachute pull (cos alpha ~ 1)
+  call check_close(tr%thrust, tp%pull + (ac%cd0 + ac%k_induced*(117000*g0/(tp%density*tp%speed**2/2*ac%wing_area))**2) &
+    *tp%density*tp%speed**2/2*ac%wing_area, "thrust ~ drag + pull", rel=2e-2_dp)
+  call finish()
+end program test_aero
