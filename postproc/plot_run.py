@@ -29,7 +29,50 @@ def plot_drop(ds, fig):
     ax2.grid(True)
 
 
-PLOTTERS = {"drop": plot_drop}
+def _phase_lines(ax, ds):
+    for key, label in (("release_time_s", "release"), ("edge_time_s", "Case 1->2"),
+                       ("separation_time_s", "separation")):
+        t = float(ds.attrs.get(key, -1.0))
+        if t >= 0:
+            ax.axvline(t, color="0.5", ls="--", lw=0.8)
+            ax.text(t, ax.get_ylim()[1], " " + label, rotation=90, va="top", fontsize=7, color="0.3")
+
+
+def plot_airlaunch(ds, fig):
+    """Analogues of the paper's Figs. 9-11: rocket pitch and pitch rate with the
+    phase changes; 3-D track and 2-D (x-y) track of aircraft, rocket, parachute."""
+    t = ds["time"]
+    ax1 = fig.add_subplot(1, 3, 1)
+    ax1.plot(t, ds["rocket_euler_deg"].sel(angle=1), label="Euler pitch [deg]")
+    if "rocket_nose_elevation_deg" in ds:
+        ax1.plot(t, ds["rocket_nose_elevation_deg"], ":", label="nose elevation [deg]")
+    ax1.plot(t, ds["rocket_pitch_rate_deg_s"], label="pitch rate [deg/s]")
+    ax1.set_xlabel("time [s]")
+    ax1.set_title("rocket pitch (Fig. 9)")
+    ax1.grid(True)
+    ax1.legend(fontsize=7)
+    _phase_lines(ax1, ds)
+    ax2 = fig.add_subplot(1, 3, 2, projection="3d")
+    for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):
+        p = ds[f"{name}_position"]
+        ax2.plot(p.sel(xyz=0), p.sel(xyz=2), p.sel(xyz=1), style, label=name)
+    ax2.set_xlabel("x [m]")
+    ax2.set_ylabel("z [m]")
+    ax2.set_zlabel("y [m]")
+    ax2.set_title("3-D track (Fig. 10)")
+    ax2.legend(fontsize=7)
+    ax3 = fig.add_subplot(1, 3, 3)
+    for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):
+        p = ds[f"{name}_position"]
+        ax3.plot(p.sel(xyz=0), p.sel(xyz=1), style, label=name)
+    ax3.set_xlabel("x [m]")
+    ax3.set_ylabel("altitude y [m]")
+    ax3.set_title("2-D track (Fig. 11)")
+    ax3.grid(True)
+    ax3.legend(fontsize=7)
+
+
+PLOTTERS = {"drop": plot_drop, "airlaunch": plot_airlaunch}
 
 
 def main(argv):
@@ -44,7 +87,7 @@ def main(argv):
         if plotter is None:
             print(f"plot_run: no figure for scene '{scene}'", file=sys.stderr)
             return 0
-        fig = plt.figure(figsize=(11, 4.5))
+        fig = plt.figure(figsize=(16, 5) if scene == "airlaunch" else (11, 4.5))
         plotter(ds, fig)
         fig.suptitle(f"{ds.attrs.get('title', scene)} ({ds.attrs.get('status', '')})")
         fig.tight_layout()

@@ -1,0 +1,439 @@
+!> Inputs of the air-launch scene (the paper's scenario, §5.2): namelist groups
+!> &flight, &aircraft, &bay, &rocket, &parachute, &line (see docs/input.md).
+!> Values the paper gives are the defaults; values it does not give are
+!> documented choices in input/airlaunch_paper.nml.
+module airlaunch_scenario_config
+  use airlaunch_kinds, only: dp, deg2rad, rad2deg
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_namelist
+  use airlaunch_run_config, only: echo_namelist_unit
+  use airlaunch_atmosphere, only: isa_max_altitude
+  use airlaunch_aircraft_aero, only: aircraft_aero
+  use airlaunch_rocket_aero, only: rocket_aero
+  use airlaunch_parachute, only: parachute
+  implicit none
+  private
+  public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config
+  public :: read_scenario_config, scenario_groups
+
+  !> Groups of the air-launch scene.
+  character(len=16), parameter :: scenario_groups(7) = [character(len=16) :: "run", "flight", &
+    "aircraft", "bay", "rocket", "parachute", "line"]
+
+  !> Flight condition and trim.
+  type :: flight_config
+    real(dp) :: altitude = 10000.0_dp        !< [m] geometric
+    real(dp) :: mach = 0.65_dp
+    character(len=16) :: trim_mode = "calibrate"  !< "calibrate" (CL0, Cm0 from trim_alpha) or "fly"
+    real(dp) :: trim_alpha = 1.2174_dp*deg2rad    !< [rad]
+  end type flight_config
+
+  !> Carrier aircraft.
+  type :: aircraft_config
+    real(dp) :: mass = 89000.0_dp
+    real(dp) :: inertia(3) = [540740.0_dp, 737480.0_dp, 117030.0_dp]  !< Ixx, Iyy, Izz [kg m^2]
+    character(len=16) :: dynamics = "free"       !< "free" (Newton-Euler) or "prescribed" (trimmed level flight)
+    character(len=16) :: control = "attitude_hold"  !< "stick_fixed" or "attitude_hold"
+    type(aircraft_aero) :: aero
+  end type aircraft_config
+
+  !> Cargo bay geometry in the aircraft body frame (origin at the aircraft CG).
+  type :: bay_config
+    real(dp) :: ramp_edge_x = -12.0_dp   !< x of the ramp edge [m]
+    real(dp) :: floor_y = -1.5_dp        !< y of the cargo floor / rail surface [m]
+    real(dp) :: length = 24.5_dp         !< usable length ahead of the ramp edge [m]
+    real(dp) :: width = 3.46_dp          !< [m]
+    real(dp) :: height = 3.4_dp          !< [m]
+    real(dp) :: friction = 0.005_dp      !< rail friction coefficient
+    real(dp) :: release_time = 0.5_dp    !< t0 [s]: end of Case 0
+    real(dp) :: l0 = 10.0_dp             !< rocket CG ahead of the ramp edge at release [m]
+  end type bay_config
+
+  !> Rocket (payload).
+  type :: rocket_config
+    real(dp) :: mass = 28000.0_dp
+    real(dp) :: inertia(3) = [7870.0_dp, 545000.0_dp, 545000.0_dp]
+    real(dp) :: tie_down_from_nose = 0.0_dp   !< line attachment, aft of the nose tip on the axis [m]
+    type(rocket_aero) :: aero
+  end type rocket_config
+
+  !> Flexible line (riser) between the rocket's tie-down and the parachute.
+  type :: line_config
+    real(dp) :: length = 60.0_dp
+    integer :: n_seg = 60
+    real(dp) :: ea = 1.0e6_dp               !< axial stiffness [N]
+    real(dp) :: mass_per_length = 0.5_dp    !< [kg/m]
+    real(dp) :: damping = 0.0_dp            !< axial damping coefficient [N s]
+    real(dp) :: diameter = 0.025_dp         !< [m]
+    real(dp) :: cd_normal = 1.2_dp
+    real(dp) :: cd_tangential = 0.01_dp
+    character(len=16) :: coupling = "direct"  !< "direct" (nodes with the bodies)
+  end type line_config
+
+  !> Everything the air-launch scene reads.
+  type :: scenario_config
+    type(flight_config) :: flight
+    type(aircraft_config) :: aircraft
+    type(bay_config) :: bay
+    type(rocket_config) :: rocket
+    type(parachute) :: chute
+    type(line_config) :: line
+  end type scenario_config
+
+contains
+
+  !> Read and validate all groups; `echo` receives the resolved input.
+  subroutine read_scenario_config(f, cfg, echo, error)
+    type(nml_file), intent(in) :: f
+    type(scenario_config), intent(out) :: cfg
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    call f%check_groups(scenario_groups, error)
+    if (.not. allocated(error)) call read_flight(f, cfg%flight, echo, error)
+    if (.not. allocated(error)) call read_aircraft(f, cfg%aircraft, echo, error)
+    if (.not. allocated(error)) call read_bay(f, cfg%bay, echo, error)
+    if (.not. allocated(error)) call read_rocket(f, cfg%rocket, echo, error)
+    if (.not. allocated(error)) call read_parachute(f, cfg%chute, echo, error)
+    if (.not. allocated(error)) call read_line(f, cfg%line, echo, error)
+    if (.not. allocated(error)) call check_geometry(f, cfg, error)
+  end subroutine read_scenario_config
+
+  !> Read one group: check names, read, diagnose.  `present` false: defaults.
+  subroutine open_group(f, group, vars, unit, present, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group
+    type(nml_var), intent(in) :: vars(:)
+    integer, intent(out) :: unit
+    logical, intent(out) :: present
+    type(error_type), allocatable, intent(inout) :: error
+    call f%check_group(group, vars, error)
+    present = .false.
+    unit = -1
+    if (allocated(error)) return
+    call f%position(group, unit, present)
+  end subroutine open_group
+
+  subroutine read_flight(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(flight_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: altitude, mach, trim_alpha_deg
+    character(len=16) :: trim_mode
+    integer :: u, ios
+    logical :: present
+    character(len=256) :: msg
+    namelist /flight/ altitude, mach, trim_mode, trim_alpha_deg
+    type(nml_var), parameter :: vars(4) = [nml_var("altitude", "real"), nml_var("mach", "real"), &
+      nml_var("trim_mode", "string"), nml_var("trim_alpha_deg", "real")]
+    altitude = c%altitude; mach = c%mach; trim_mode = c%trim_mode; trim_alpha_deg = c%trim_alpha*rad2deg
+    call open_group(f, "flight", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=flight, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("flight", vars, msg, error)
+        return
+      end if
+    end if
+    call require_range(f, "flight", "altitude", altitude, 0.0_dp, 20000.0_dp, "m", error)
+    call require_range(f, "flight", "mach", mach, 0.05_dp, 0.95_dp, "", error)
+    call require_choice(f, "flight", "trim_mode", trim_mode, [character(len=16) :: "calibrate", "fly"], error)
+    call require_range(f, "flight", "trim_alpha_deg", trim_alpha_deg, -5.0_dp, 15.0_dp, "deg", error)
+    if (allocated(error)) return
+    c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad)
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=flight)
+    call echo_namelist_unit(u, echo)
+    if (.false.) altitude = isa_max_altitude
+  end subroutine read_flight
+
+  subroutine read_aircraft(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(aircraft_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, k_induced
+    real(dp) :: cm0, cm_alpha, cm_q, cm_de, k_theta, k_q, delta_e_max_deg
+    character(len=16) :: dynamics, control
+    integer :: u, ios
+    logical :: present
+    character(len=256) :: msg
+    namelist /aircraft/ mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, &
+      k_induced, cm0, cm_alpha, cm_q, cm_de, dynamics, control, k_theta, k_q, delta_e_max_deg
+    type(nml_var), parameter :: vars(21) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
+      nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("wing_area", "real"), nml_var("span", "real"), &
+      nml_var("chord", "real"), nml_var("cl0", "real"), nml_var("cl_alpha", "real"), nml_var("cl_de", "real"), &
+      nml_var("cd0", "real"), nml_var("k_induced", "real"), nml_var("cm0", "real"), &
+      nml_var("cm_alpha", "real"), nml_var("cm_q", "real"), nml_var("cm_de", "real"), &
+      nml_var("dynamics", "string"), nml_var("control", "string"), nml_var("k_theta", "real"), &
+      nml_var("k_q", "real"), nml_var("delta_e_max_deg", "real")]
+    associate(a => c%aero)
+      mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
+      wing_area = a%wing_area; span = a%span; chord = a%chord; cl0 = a%cl0; cl_alpha = a%cl_alpha
+      cl_de = a%cl_de; cd0 = a%cd0; k_induced = a%k_induced; cm0 = a%cm0; cm_alpha = a%cm_alpha
+      cm_q = a%cm_q; cm_de = a%cm_de; dynamics = c%dynamics; control = c%control
+      k_theta = a%k_theta; k_q = a%k_q; delta_e_max_deg = a%delta_e_max*rad2deg
+    end associate
+    call open_group(f, "aircraft", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=aircraft, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("aircraft", vars, msg, error)
+        return
+      end if
+    end if
+    call require_positive(f, "aircraft", "mass", mass, "kg", error)
+    call require_positive(f, "aircraft", "ixx", ixx, "kg m^2", error)
+    call require_positive(f, "aircraft", "iyy", iyy, "kg m^2", error)
+    call require_positive(f, "aircraft", "izz", izz, "kg m^2", error)
+    call require_positive(f, "aircraft", "wing_area", wing_area, "m^2", error)
+    call require_positive(f, "aircraft", "span", span, "m", error)
+    call require_positive(f, "aircraft", "chord", chord, "m", error)
+    call require_positive(f, "aircraft", "cl_alpha", cl_alpha, "1/rad", error)
+    call require_nonnegative(f, "aircraft", "cd0", cd0, "", error)
+    call require_nonnegative(f, "aircraft", "k_induced", k_induced, "", error)
+    call require_range(f, "aircraft", "cm_alpha", cm_alpha, -50.0_dp, 0.0_dp, "1/rad (statically stable)", error)
+    call require_range(f, "aircraft", "cm_q", cm_q, -200.0_dp, 0.0_dp, "1/rad", error)
+    call require_range(f, "aircraft", "cm_de", cm_de, -10.0_dp, -1.0e-3_dp, "1/rad", error)
+    call require_choice(f, "aircraft", "dynamics", dynamics, [character(len=16) :: "free", "prescribed"], error)
+    call require_choice(f, "aircraft", "control", control, [character(len=16) :: "stick_fixed", "attitude_hold"], error)
+    call require_nonnegative(f, "aircraft", "k_theta", k_theta, "rad/rad", error)
+    call require_nonnegative(f, "aircraft", "k_q", k_q, "rad s/rad", error)
+    call require_range(f, "aircraft", "delta_e_max_deg", delta_e_max_deg, 1.0_dp, 45.0_dp, "deg", error)
+    if (allocated(error)) return
+    c%mass = mass; c%inertia = [ixx, iyy, izz]; c%dynamics = dynamics; c%control = control
+    c%aero%wing_area = wing_area; c%aero%span = span; c%aero%chord = chord; c%aero%cl0 = cl0
+    c%aero%cl_alpha = cl_alpha; c%aero%cl_de = cl_de; c%aero%cd0 = cd0; c%aero%k_induced = k_induced
+    c%aero%cm0 = cm0; c%aero%cm_alpha = cm_alpha; c%aero%cm_q = cm_q; c%aero%cm_de = cm_de
+    c%aero%k_theta = k_theta; c%aero%k_q = k_q; c%aero%delta_e_max = delta_e_max_deg*deg2rad
+    c%aero%attitude_hold = control == "attitude_hold"
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=aircraft)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_aircraft
+
+  subroutine read_bay(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(bay_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0
+    integer :: u, ios
+    logical :: present
+    character(len=256) :: msg
+    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0
+    type(nml_var), parameter :: vars(8) = [nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
+      nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
+      nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real")]
+    ramp_edge_x = c%ramp_edge_x; floor_y = c%floor_y; length = c%length; width = c%width
+    height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0
+    call open_group(f, "bay", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=bay, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("bay", vars, msg, error)
+        return
+      end if
+    end if
+    call require_positive(f, "bay", "length", length, "m", error)
+    call require_positive(f, "bay", "width", width, "m", error)
+    call require_positive(f, "bay", "height", height, "m", error)
+    call require_range(f, "bay", "friction", friction, 0.0_dp, 1.0_dp, "", error)
+    call require_nonnegative(f, "bay", "release_time", release_time, "s", error)
+    call require_positive(f, "bay", "l0", l0, "m", error)
+    if (allocated(error)) return
+    c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0)
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=bay)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_bay
+
+  subroutine read_rocket(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(rocket_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose
+    real(dp) :: cp_pot_from_nose, c_axial, c_dn, eta, cn_alpha_fin, x_fin_from_nose
+    integer :: n_strips, u, ios
+    logical :: present
+    character(len=256) :: msg
+    namelist /rocket/ mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose, &
+      cp_pot_from_nose, c_axial, c_dn, eta, cn_alpha_fin, x_fin_from_nose, n_strips
+    type(nml_var), parameter :: vars(15) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
+      nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("length", "real"), &
+      nml_var("diameter", "real"), nml_var("cg_from_nose", "real"), nml_var("tie_down_from_nose", "real"), &
+      nml_var("cp_pot_from_nose", "real"), nml_var("c_axial", "real"), nml_var("c_dn", "real"), &
+      nml_var("eta", "real"), nml_var("cn_alpha_fin", "real"), nml_var("x_fin_from_nose", "real"), &
+      nml_var("n_strips", "integer")]
+    associate(a => c%aero)
+      mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
+      length = a%length; diameter = a%diameter; cg_from_nose = a%cg_from_nose
+      tie_down_from_nose = c%tie_down_from_nose; cp_pot_from_nose = a%cp_pot_from_nose
+      c_axial = a%c_axial; c_dn = a%c_dn; eta = a%eta; cn_alpha_fin = a%cn_alpha_fin
+      x_fin_from_nose = a%x_fin_from_nose; n_strips = a%n_strips
+    end associate
+    call open_group(f, "rocket", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=rocket, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("rocket", vars, msg, error)
+        return
+      end if
+    end if
+    call require_positive(f, "rocket", "mass", mass, "kg", error)
+    call require_positive(f, "rocket", "ixx", ixx, "kg m^2", error)
+    call require_positive(f, "rocket", "iyy", iyy, "kg m^2", error)
+    call require_positive(f, "rocket", "izz", izz, "kg m^2", error)
+    call require_positive(f, "rocket", "length", length, "m", error)
+    call require_positive(f, "rocket", "diameter", diameter, "m", error)
+    call require_range(f, "rocket", "cg_from_nose", cg_from_nose, 0.0_dp, length, "m (inside the rocket)", error)
+    call require_range(f, "rocket", "tie_down_from_nose", tie_down_from_nose, 0.0_dp, length, &
+      "m (inside the rocket)", error)
+    call require_range(f, "rocket", "cp_pot_from_nose", cp_pot_from_nose, 0.0_dp, length, "m", error)
+    call require_nonnegative(f, "rocket", "c_axial", c_axial, "", error)
+    call require_nonnegative(f, "rocket", "c_dn", c_dn, "", error)
+    call require_range(f, "rocket", "eta", eta, 0.0_dp, 1.0_dp, "", error)
+    call require_nonnegative(f, "rocket", "cn_alpha_fin", cn_alpha_fin, "1/rad", error)
+    call require_range(f, "rocket", "x_fin_from_nose", x_fin_from_nose, 0.0_dp, length, "m", error)
+    call require_int_range(f, "rocket", "n_strips", n_strips, 1, 1000, error)
+    if (allocated(error)) return
+    c%mass = mass; c%inertia = [ixx, iyy, izz]; c%tie_down_from_nose = tie_down_from_nose
+    c%aero = rocket_aero(length, diameter, cg_from_nose, cp_pot_from_nose, c_axial, c_dn, eta, &
+      cn_alpha_fin, x_fin_from_nose, n_strips)
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=rocket)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_rocket
+
+  subroutine read_parachute(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(parachute), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: mass, drag_area, cd0, deploy_time, fill_constant, inflation_exponent
+    real(dp) :: packed_drag_area, added_mass_factor
+    integer :: u, ios
+    logical :: present
+    character(len=256) :: msg
+    namelist /parachute/ mass, drag_area, cd0, deploy_time, fill_constant, inflation_exponent, &
+      packed_drag_area, added_mass_factor
+    type(nml_var), parameter :: vars(8) = [nml_var("mass", "real"), nml_var("drag_area", "real"), &
+      nml_var("cd0", "real"), nml_var("deploy_time", "real"), nml_var("fill_constant", "real"), &
+      nml_var("inflation_exponent", "real"), nml_var("packed_drag_area", "real"), &
+      nml_var("added_mass_factor", "real")]
+    mass = c%mass; drag_area = c%drag_area; cd0 = c%cd0; deploy_time = c%deploy_time
+    fill_constant = c%fill_constant; inflation_exponent = c%inflation_exponent
+    packed_drag_area = c%packed_drag_area; added_mass_factor = c%added_mass_factor
+    call open_group(f, "parachute", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=parachute, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("parachute", vars, msg, error)
+        return
+      end if
+    end if
+    call require_positive(f, "parachute", "mass", mass, "kg", error)
+    call require_positive(f, "parachute", "drag_area", drag_area, "m^2 (a parachute that never inflates cannot extract)", error)
+    call require_range(f, "parachute", "cd0", cd0, 0.1_dp, 2.0_dp, "", error)
+    call require_positive(f, "parachute", "fill_constant", fill_constant, "", error)
+    call require_range(f, "parachute", "inflation_exponent", inflation_exponent, 0.25_dp, 8.0_dp, "", error)
+    call require_nonnegative(f, "parachute", "packed_drag_area", packed_drag_area, "m^2", error)
+    call require_nonnegative(f, "parachute", "added_mass_factor", added_mass_factor, "", error)
+    if (allocated(error)) return
+    if (packed_drag_area >= drag_area) then
+      call fatal_error(error, f%path // ": &parachute: packed_drag_area = " // str(packed_drag_area) // &
+        " is not allowed (must be < drag_area = " // str(drag_area) // " m^2)")
+      return
+    end if
+    c%mass = mass; c%drag_area = drag_area; c%cd0 = cd0; c%deploy_time = deploy_time
+    c%fill_constant = fill_constant; c%inflation_exponent = inflation_exponent
+    c%packed_drag_area = packed_drag_area; c%added_mass_factor = added_mass_factor
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=parachute)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_parachute
+
+  subroutine read_line(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(line_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
+    integer :: n_seg, u, ios
+    character(len=16) :: coupling
+    logical :: present
+    character(len=256) :: msg
+    namelist /line/ length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling
+    type(nml_var), parameter :: vars(9) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
+      nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
+      nml_var("diameter", "real"), nml_var("cd_normal", "real"), nml_var("cd_tangential", "real"), &
+      nml_var("coupling", "string")]
+    length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
+    damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
+    cd_tangential = c%cd_tangential; coupling = c%coupling
+    call open_group(f, "line", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=line, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("line", vars, msg, error)
+        return
+      end if
+    end if
+    call require_positive(f, "line", "length", length, "m", error)
+    call require_int_range(f, "line", "n_seg", n_seg, 1, 1000, error)
+    call require_positive(f, "line", "ea", ea, "N", error)
+    call require_positive(f, "line", "mass_per_length", mass_per_length, "kg/m", error)
+    call require_nonnegative(f, "line", "damping", damping, "N s", error)
+    call require_positive(f, "line", "diameter", diameter, "m", error)
+    call require_nonnegative(f, "line", "cd_normal", cd_normal, "", error)
+    call require_nonnegative(f, "line", "cd_tangential", cd_tangential, "", error)
+    call require_choice(f, "line", "coupling", coupling, [character(len=16) :: "direct"], error)
+    if (allocated(error)) return
+    c = line_config(length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling)
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=line)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_line
+
+  !> Geometry that cannot work: rocket not fitting the bay, line shorter than
+  !> the way out, tie-down or CG outside the rocket.
+  subroutine check_geometry(f, cfg, error)
+    type(nml_file), intent(in) :: f
+    type(scenario_config), intent(in) :: cfg
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: nose_ahead, tail_ahead
+    associate(b => cfg%bay, r => cfg%rocket%aero)
+      nose_ahead = b%l0 + r%cg_from_nose          ! nose ahead of the ramp edge at release
+      tail_ahead = b%l0 - (r%length - r%cg_from_nose)
+      if (tail_ahead < 0.0_dp) then
+        call fatal_error(error, f%path // ": &bay: l0 = " // str(b%l0) // " is not allowed (the rocket's tail, " // &
+          str(r%length - r%cg_from_nose) // " m aft of its CG, would be outside the bay: need l0 >= " // &
+          str(r%length - r%cg_from_nose) // " m)")
+      else if (nose_ahead > b%length) then
+        call fatal_error(error, f%path // ": &bay: the rocket does not fit the bay: its nose is " // &
+          str(nose_ahead) // " m ahead of the ramp edge, the bay is length = " // str(b%length) // " m")
+      else if (r%diameter > min(b%width, b%height)) then
+        call fatal_error(error, f%path // ": &rocket: diameter = " // str(r%diameter) // &
+          " is not allowed (the bay is " // str(b%width) // " m wide and " // str(b%height) // " m high)")
+      else if (cfg%line%length <= nose_ahead - cfg%rocket%tie_down_from_nose) then
+        call fatal_error(error, f%path // ": &line: length = " // str(cfg%line%length) // &
+          " is not allowed (shorter than the " // str(nose_ahead - cfg%rocket%tie_down_from_nose) // &
+          " m from the tie-down point to the ramp edge)")
+      end if
+    end associate
+  end subroutine check_geometry
+end module airlaunch_scenario_config
