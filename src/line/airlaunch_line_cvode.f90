@@ -1,0 +1,275 @@
+!> Default line integrator: the lumped-mass line (airlaunch_line_model) as a
+!> first-order ODE system integrated by CVODE BDF with the band linear solver.
+!>
+!> State.  Only the nodes that are not kinematic are states (a fixed,
+!> prescribed or body end is given by its motion).  The free nodes
+!> first..last are stored node by node, y = [x_first, v_first, x_first+1, ...],
+!> six entries per node, so that the Jacobian is banded: the acceleration of
+!> node k depends on the positions and velocities of nodes k-1, k, k+1 only.
+!> With the entries of node j at 6j+1..6j+6 (x at +1..+3, v at +4..+6):
+!>   - row 6j+4..6j+6 (v_k') reaches columns 6(j-1)+1 .. 6(j+1)+6:
+!>     lower half-bandwidth (6j+6) - (6j-5) = 11, upper (6j+12) - (6j+4) = 8;
+!>   - row 6j+1..6j+3 (x_k' = v_k) reaches columns 6j+4..6j+6 only (upper 3..5).
+!> Hence mu = 8, ml = 11: CVODE's difference-quotient band Jacobian costs
+!> mu + ml + 1 = 20 force evaluations however long the line, and the band LU
+!> costs O(n ml (ml + mu)) for n = 6 (number of free nodes) states.
+!> A point-mass end adds its mass to the end node and its weight and drag to
+!> the node's load (the end body is lumped with the node: the limit the paper's
+!> far-end iteration converges to).
+module airlaunch_line_cvode
+  use airlaunch_kinds, only: dp, i8, g0
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_line_model, only: line_model, line_energy
+  use airlaunch_line_ends, only: line_end, end_point_mass
+  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
+  implicit none
+  private
+  public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower
+
+  !> Upper and lower half-bandwidths of the line Jacobian (see the header).
+  integer, parameter :: line_band_upper = 8
+  integer, parameter :: line_band_lower = 11
+
+  !> The discretized line with its two ends as an ODE system y' = f(t, y).
+  type, extends(ode_system) :: line_system
+    type(line_model) :: model                  !< the line
+    type(line_end) :: ends(2)                  !< end at node 0, end at node N
+    integer :: first = 0                       !< first state node
+    integer :: last = -1                       !< last state node
+    real(dp), allocatable :: x(:, :)           !< work: positions (3, 0:N)
+    real(dp), allocatable :: v(:, :)           !< work: velocities (3, 0:N)
+    real(dp), allocatable :: f(:, :)           !< work: node forces (3, 0:N)
+    real(dp), allocatable :: tension(:)        !< work: segment tensions (N)
+    real(dp), allocatable :: inv_mass(:)       !< 1/(node mass + end point mass), (0:N)
+    integer(i8) :: n_forces = 0                !< force evaluations
+  contains
+    procedure :: rhs => system_rhs
+    procedure :: setup => system_setup
+    procedure :: n_state => system_n_state
+    procedure :: pack => system_pack
+    procedure :: unpack => system_unpack
+    procedure :: energy => system_energy
+  end type line_system
+
+  !> The default scheme: CVODE BDF + band solver on a `line_system`.
+  type, extends(line_scheme) :: line_cvode
+    type(line_system), pointer :: sys => null()   !< on the heap: CVODE keeps its address
+    type(cvode_solver) :: solver                  !< the integrator
+    type(cvode_options) :: opts                   !< its options
+  contains
+    procedure :: advance => cvode_advance
+    procedure :: get_state => cvode_get_state
+    procedure :: stats => cvode_scheme_stats
+    procedure :: set_body_motion => cvode_set_body_motion
+    procedure :: free => cvode_free
+  end type line_cvode
+
+contains
+
+  !> Build the system for `model` with ends `end_a` (node 0) and `end_b` (node N).
+  subroutine system_setup(self, model, end_a, end_b)
+    class(line_system), intent(inout) :: self   !< system (re-initialised)
+    type(line_model), intent(in) :: model       !< the line
+    type(line_end), intent(in) :: end_a, end_b  !< ends at node 0 and node N
+    integer :: n
+    self%model = model
+    self%ends = [end_a, end_b]
+    n = model%n
+    self%first = 0
+    if (end_a%is_kinematic()) self%first = 1
+    self%last = n
+    if (end_b%is_kinematic()) self%last = n - 1
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass)
+    allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n))
+    self%x = 0.0_dp; self%v = 0.0_dp
+    self%inv_mass = 1.0_dp/model%node_mass
+    if (end_a%kind == end_point_mass) self%inv_mass(0) = 1.0_dp/(model%node_mass(0) + end_a%mass)
+    if (end_b%kind == end_point_mass) self%inv_mass(n) = 1.0_dp/(model%node_mass(n) + end_b%mass)
+  end subroutine system_setup
+
+  !> Number of states: 6 per non-kinematic node.
+  pure integer function system_n_state(self) result(n)
+    class(line_system), intent(in) :: self   !< system
+    n = 6*max(0, self%last - self%first + 1)
+  end function system_n_state
+
+  !> State vector of node positions x(3,0:N) and velocities v(3,0:N).
+  pure subroutine system_pack(self, x, v, y)
+    class(line_system), intent(in) :: self   !< system
+    real(dp), intent(in) :: x(:, 0:), v(:, 0:)
+    real(dp), intent(out) :: y(:)            !< state (n_state)
+    integer :: k, j
+    do k = self%first, self%last
+      j = 6*(k - self%first)
+      y(j+1:j+3) = x(:, k)
+      y(j+4:j+6) = v(:, k)
+    end do
+  end subroutine system_pack
+
+  !> Fill the work arrays x, v from the state y at time t (kinematic ends from
+  !> their motion).
+  subroutine system_unpack(self, t, y)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    integer :: k, j, n
+    n = self%model%n
+    if (self%first == 1) call self%ends(1)%motion(t, self%x(:, 0), self%v(:, 0))
+    if (self%last == n - 1) call self%ends(2)%motion(t, self%x(:, n), self%v(:, n))
+    do k = self%first, self%last
+      j = 6*(k - self%first)
+      self%x(:, k) = y(j+1:j+3)
+      self%v(:, k) = y(j+4:j+6)
+    end do
+  end subroutine system_unpack
+
+  !> y' = f(t, y): node velocities and accelerations (Eq. (8) lumped).
+  !> No allocation except for the failure message.
+  subroutine system_rhs(self, t, y, ydot, status)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    real(dp), intent(out) :: ydot(:)            !< derivative
+    integer, intent(out) :: status              !< rhs_ok or rhs_fatal
+    integer :: k, j, n, st
+    n = self%model%n
+    call self%unpack(t, y)
+    call self%model%forces(self%x, self%v, self%f, self%tension, st)
+    self%n_forces = self%n_forces + 1
+    if (st /= 0) then
+      self%failure = "a line tension is not finite (NaN or overflow): the line state diverged"
+      status = rhs_fatal
+      return
+    end if
+    if (self%first == 0 .and. self%ends(1)%kind == end_point_mass) self%f(:, 0) = self%f(:, 0) + &
+      self%ends(1)%external_load(self%x(:, 0), self%v(:, 0), self%model%p%gravity, self%model%p%air, &
+      self%model%p%wind, self%model%p%air_density)
+    if (self%last == n .and. self%ends(2)%kind == end_point_mass) self%f(:, n) = self%f(:, n) + &
+      self%ends(2)%external_load(self%x(:, n), self%v(:, n), self%model%p%gravity, self%model%p%air, &
+      self%model%p%wind, self%model%p%air_density)
+    do k = self%first, self%last
+      j = 6*(k - self%first)
+      ydot(j+1:j+3) = self%v(:, k)
+      ydot(j+4:j+6) = self%f(:, k)*self%inv_mass(k)
+    end do
+    status = rhs_ok
+  end subroutine system_rhs
+
+  !> Mechanical energy of line and point-mass ends at time t, state y [J]:
+  !> kinetic + elastic + gravitational (the work of kinematic ends is not in it).
+  function system_energy(self, t, y) result(e)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    type(line_energy) :: e
+    integer :: i, k
+    call self%unpack(t, y)
+    e = self%model%energy(self%x, self%v)
+    do i = 1, 2
+      if (self%ends(i)%kind /= end_point_mass) cycle
+      k = merge(0, self%model%n, i == 1)
+      e%kinetic = e%kinetic + 0.5_dp*self%ends(i)%mass*dot_product(self%v(:, k), self%v(:, k))
+      if (self%model%p%gravity) e%potential = e%potential + self%ends(i)%mass*g0*self%x(2, k)
+    end do
+  end function system_energy
+
+  !> Create the default scheme from the initial node state x0, v0 at time t0.
+  subroutine new_line_cvode(scheme, model, end_a, end_b, x0, v0, t0, opts, error)
+    type(line_cvode), intent(inout) :: scheme               !< the scheme (re-initialised)
+    type(line_model), intent(in) :: model                   !< the line
+    type(line_end), intent(in) :: end_a, end_b              !< ends at node 0 and node N
+    real(dp), intent(in) :: x0(:, 0:), v0(:, 0:)            !< initial node state
+    real(dp), intent(in) :: t0                              !< initial time [s]
+    type(line_scheme_options), intent(in) :: opts           !< tolerances
+    type(error_type), allocatable, intent(inout) :: error   !< set on failure
+    real(dp), allocatable :: y0(:)
+    call scheme%free()
+    allocate(scheme%sys)
+    call scheme%sys%setup(model, end_a, end_b)
+    scheme%t = t0
+    scheme%sys%x = x0
+    scheme%sys%v = v0
+    scheme%opts = cvode_options(method="bdf", linear_solver="band", upper_bandwidth=line_band_upper, &
+      lower_bandwidth=line_band_lower, rtol=opts%rtol, atol=opts%atol, max_step=opts%max_step, &
+      max_order=opts%max_order, max_num_steps=1000000)
+    if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends
+    allocate(y0(scheme%sys%n_state()))
+    call scheme%sys%pack(x0, v0, y0)
+    call scheme%solver%init(scheme%sys, t0, y0, scheme%opts, error)
+  end subroutine new_line_cvode
+
+  !> Integrate to t_out.
+  subroutine cvode_advance(self, t_out, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    real(dp), intent(in) :: t_out                          !< output time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    if (self%sys%n_state() == 0) then
+      self%t = t_out
+      return
+    end if
+    call self%solver%advance(t_out, error)
+    self%t = self%solver%t
+    if (allocated(error)) error%message = "line (cvode): " // error%message
+  end subroutine cvode_advance
+
+  !> Node state at the current time.
+  subroutine cvode_get_state(self, x, v)
+    class(line_cvode), intent(inout) :: self   !< scheme
+    real(dp), intent(out) :: x(:, 0:), v(:, 0:)
+    if (self%sys%n_state() > 0) then
+      call self%sys%unpack(self%t, self%solver%y)
+    else
+      call self%sys%unpack(self%t, [real(dp) ::])
+    end if
+    x = self%sys%x
+    v = self%sys%v
+  end subroutine cvode_get_state
+
+  !> Work counters.
+  function cvode_scheme_stats(self) result(s)
+    class(line_cvode), intent(in) :: self   !< scheme
+    type(line_scheme_stats) :: s
+    type(cvode_stats) :: c
+    if (.not. associated(self%sys)) return
+    s%rhs_evals = self%sys%n_forces
+    if (self%sys%n_state() == 0) return
+    c = self%solver%stats()
+    s%steps = c%steps
+    s%jac_evals = c%jac_evals
+    s%failures = c%err_test_fails + c%nonlin_fails
+  end function cvode_scheme_stats
+
+  !> Make end `which` a body end with the owner's samples and restart CVODE
+  !> there (the end motion may change its derivative at t1).
+  subroutine cvode_set_body_motion(self, which, t1, x1, v1, t2, x2, v2, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    integer, intent(in) :: which                           !< 1 = node 0, 2 = node N
+    real(dp), intent(in) :: t1, t2, x1(3), v1(3), x2(3), v2(3)
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    real(dp), allocatable :: y(:)
+    if (which < 1 .or. which > 2) then
+      call fatal_error(error, "line: end index " // str(which) // " is not allowed: 1 (node 0) or 2 (node N)")
+      return
+    end if
+    if (.not. self%sys%ends(which)%is_kinematic()) then
+      call fatal_error(error, "line: end " // str(which) // " is not kinematic: a body end must be " // &
+        "declared kinematic (body) when the scheme is built")
+      return
+    end if
+    call self%sys%ends(which)%set_body_motion(t1, x1, v1, t2, x2, v2)
+    if (self%sys%n_state() == 0) return
+    y = self%solver%y
+    call self%solver%reinit(self%t, y, error)
+  end subroutine cvode_set_body_motion
+
+  !> Release CVODE and the system.
+  subroutine cvode_free(self)
+    class(line_cvode), intent(inout) :: self   !< scheme
+    call self%solver%free()
+    if (associated(self%sys)) deallocate(self%sys)
+    nullify(self%sys)
+  end subroutine cvode_free
+end module airlaunch_line_cvode

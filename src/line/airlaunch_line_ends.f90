@@ -1,0 +1,231 @@
+!> End conditions of a flexible line (issue 3, item 2).
+!>
+!> Each end of the line (node 0 = end "a", node N = end "b") is one of:
+!>  - fixed:       held at `position`;
+!>  - prescribed:  moved on a given path (kinematic):
+!>                   x(t) = position + velocity*tau + amplitude*(sin(w tau + phi) - sin(phi)),
+!>                   tau = t - t_start >= 0, w = 2 pi frequency, phi = phase_deg;
+!>                 before t_start the end rests at `position`.  The velocity
+!>                 jumps at t_start (a "sudden" start, as in the axial-wave test);
+!>  - free:        the end node moves under the line's forces only;
+!>  - point_mass:  the end node carries an extra `mass` [kg] with its weight
+!>                 (when gravity is on) and a drag `drag_area` = Cd*S [m^2]
+!>                 from the air velocity relative to it (a crude parachute);
+!>  - body:        kinematic, moved by an outside owner (a rigid body of the
+!>                 full simulation) through `set_body_motion`: cubic Hermite
+!>                 interpolation between two (t, x, v) samples, linear
+!>                 extrapolation outside them.  The line returns the end force
+!>                 (see airlaunch_line_model) for the owner to apply to the body.
+!> fixed, prescribed and body ends are kinematic: their node is not a state.
+module airlaunch_line_ends
+  use airlaunch_kinds, only: dp, pi, deg2rad, g0
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_atmosphere, only: isa, air_state
+  implicit none
+  private
+  public :: line_end, end_kind_code, end_kind_name
+  public :: end_fixed, end_prescribed, end_free, end_point_mass, end_body
+
+  integer, parameter :: end_fixed = 1       !< held at `position`
+  integer, parameter :: end_prescribed = 2  !< moved on a given path
+  integer, parameter :: end_free = 3        !< free end
+  integer, parameter :: end_point_mass = 4  !< end carries a point mass
+  integer, parameter :: end_body = 5        !< moved by an outside owner
+
+  !> One end of a line.
+  type :: line_end
+    integer :: kind = end_fixed             !< end_fixed ... end_body
+    real(dp) :: position(3) = 0.0_dp        !< fixed / initial position (earth frame) [m]
+    real(dp) :: velocity(3) = 0.0_dp        !< prescribed: constant velocity; free, point mass: initial velocity [m/s]
+    real(dp) :: amplitude(3) = 0.0_dp       !< prescribed: sinusoid amplitude [m]
+    real(dp) :: frequency = 0.0_dp          !< prescribed: sinusoid frequency [Hz]
+    real(dp) :: phase_deg = 0.0_dp          !< prescribed: sinusoid phase [deg]
+    real(dp) :: t_start = 0.0_dp            !< prescribed: time the motion starts [s]
+    real(dp) :: mass = 0.0_dp               !< point mass [kg]
+    real(dp) :: drag_area = 0.0_dp          !< point mass drag area Cd*S [m^2]
+    ! body ends: the owner's two samples
+    real(dp) :: body_t(2) = [0.0_dp, 1.0_dp]  !< sample times [s]
+    real(dp) :: body_x(3, 2) = 0.0_dp         !< sample positions [m]
+    real(dp) :: body_v(3, 2) = 0.0_dp         !< sample velocities [m/s]
+  contains
+    procedure :: is_kinematic => end_is_kinematic
+    procedure :: motion => end_motion
+    procedure :: external_load => end_external_load
+    procedure :: set_body_motion => end_set_body_motion
+    procedure :: check => end_check
+  end type line_end
+
+contains
+
+  !> Code of an end kind name ("fixed", "prescribed", "free", "point_mass",
+  !> "body"); 0 if unknown.
+  pure integer function end_kind_code(name) result(code)
+    character(len=*), intent(in) :: name   !< kind name
+    select case (trim(adjustl(name)))
+    case ("fixed")
+      code = end_fixed
+    case ("prescribed")
+      code = end_prescribed
+    case ("free")
+      code = end_free
+    case ("point_mass")
+      code = end_point_mass
+    case ("body")
+      code = end_body
+    case default
+      code = 0
+    end select
+  end function end_kind_code
+
+  !> Name of an end kind code.
+  pure function end_kind_name(code) result(name)
+    integer, intent(in) :: code   !< kind code
+    character(len=:), allocatable :: name
+    select case (code)
+    case (end_fixed)
+      name = "fixed"
+    case (end_prescribed)
+      name = "prescribed"
+    case (end_free)
+      name = "free"
+    case (end_point_mass)
+      name = "point_mass"
+    case (end_body)
+      name = "body"
+    case default
+      name = "unknown"
+    end select
+  end function end_kind_name
+
+  !> True if the end's motion is given (fixed, prescribed, body).
+  elemental logical function end_is_kinematic(self)
+    class(line_end), intent(in) :: self   !< end
+    end_is_kinematic = self%kind == end_fixed .or. self%kind == end_prescribed .or. self%kind == end_body
+  end function end_is_kinematic
+
+  !> Position, velocity and acceleration of a kinematic end at time t.
+  !> For free and point-mass ends it returns the initial position and velocity.
+  pure subroutine end_motion(self, t, x, v, a)
+    class(line_end), intent(in) :: self      !< end
+    real(dp), intent(in) :: t                !< time [s]
+    real(dp), intent(out) :: x(3)            !< position [m]
+    real(dp), intent(out) :: v(3)            !< velocity [m/s]
+    real(dp), intent(out), optional :: a(3)  !< acceleration [m/s^2]
+    real(dp) :: tau, w, phi, acc(3)
+    acc = 0.0_dp
+    select case (self%kind)
+    case (end_prescribed)
+      tau = t - self%t_start
+      if (tau < 0.0_dp) then
+        x = self%position
+        v = 0.0_dp
+      else
+        w = 2.0_dp*pi*self%frequency
+        phi = self%phase_deg*deg2rad
+        x = self%position + self%velocity*tau + self%amplitude*(sin(w*tau + phi) - sin(phi))
+        v = self%velocity + self%amplitude*w*cos(w*tau + phi)
+        acc = -self%amplitude*w**2*sin(w*tau + phi)
+      end if
+    case (end_body)
+      call hermite(self, t, x, v, acc)
+    case (end_fixed)
+      x = self%position
+      v = 0.0_dp
+    case default
+      x = self%position
+      v = self%velocity
+    end select
+    if (present(a)) a = acc
+  end subroutine end_motion
+
+  !> Cubic Hermite interpolation of the owner's two samples (linear
+  !> extrapolation with the end velocity outside them).
+  pure subroutine hermite(self, t, x, v, a)
+    type(line_end), intent(in) :: self   !< body end
+    real(dp), intent(in) :: t            !< time [s]
+    real(dp), intent(out) :: x(3), v(3), a(3)
+    real(dp) :: h, s, h00, h10, h01, h11, d00, d10, d01, d11, e00, e10, e01, e11
+    h = self%body_t(2) - self%body_t(1)
+    a = 0.0_dp
+    if (t <= self%body_t(1) .or. h <= 0.0_dp) then
+      x = self%body_x(:, 1) + self%body_v(:, 1)*(t - self%body_t(1))
+      v = self%body_v(:, 1)
+      return
+    else if (t >= self%body_t(2)) then
+      x = self%body_x(:, 2) + self%body_v(:, 2)*(t - self%body_t(2))
+      v = self%body_v(:, 2)
+      return
+    end if
+    s = (t - self%body_t(1))/h
+    h00 = 2*s**3 - 3*s**2 + 1;  h10 = s**3 - 2*s**2 + s
+    h01 = -2*s**3 + 3*s**2;     h11 = s**3 - s**2
+    d00 = 6*s**2 - 6*s;         d10 = 3*s**2 - 4*s + 1
+    d01 = -6*s**2 + 6*s;        d11 = 3*s**2 - 2*s
+    e00 = 12*s - 6;             e10 = 6*s - 4
+    e01 = -12*s + 6;            e11 = 6*s - 2
+    x = h00*self%body_x(:, 1) + h10*h*self%body_v(:, 1) + h01*self%body_x(:, 2) + h11*h*self%body_v(:, 2)
+    v = (d00*self%body_x(:, 1) + d01*self%body_x(:, 2))/h + d10*self%body_v(:, 1) + d11*self%body_v(:, 2)
+    a = (e00*self%body_x(:, 1) + e01*self%body_x(:, 2))/h**2 + (e10*self%body_v(:, 1) + e11*self%body_v(:, 2))/h
+  end subroutine hermite
+
+  !> Set the motion of a body end from two samples (t1, x1, v1), (t2, x2, v2)
+  !> of the owner's body (e.g. the start and end of an outer step).
+  pure subroutine end_set_body_motion(self, t1, x1, v1, t2, x2, v2)
+    class(line_end), intent(inout) :: self   !< end (becomes a body end)
+    real(dp), intent(in) :: t1, t2           !< sample times [s]
+    real(dp), intent(in) :: x1(3), v1(3)     !< position, velocity at t1
+    real(dp), intent(in) :: x2(3), v2(3)     !< position, velocity at t2
+    self%kind = end_body
+    self%body_t = [t1, t2]
+    self%body_x(:, 1) = x1; self%body_x(:, 2) = x2
+    self%body_v(:, 1) = v1; self%body_v(:, 2) = v2
+  end subroutine end_set_body_motion
+
+  !> External load on a point-mass end at position x, velocity v [N]: its
+  !> weight (if gravity) and its drag 1/2 rho CdS |u| u, u = wind - v (if air).
+  !> Zero for the other kinds.
+  function end_external_load(self, x, v, gravity, air, wind, air_density) result(f)
+    class(line_end), intent(in) :: self    !< end
+    real(dp), intent(in) :: x(3), v(3)     !< end position [m], velocity [m/s]
+    logical, intent(in) :: gravity, air    !< loads switched on
+    real(dp), intent(in) :: wind(3)        !< air velocity [m/s]
+    real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
+    real(dp) :: f(3), u(3), rho
+    type(air_state) :: air_here
+    f = 0.0_dp
+    if (self%kind /= end_point_mass) return
+    if (gravity) f(2) = -self%mass*g0
+    if (air .and. self%drag_area > 0.0_dp) then
+      rho = air_density
+      if (rho <= 0.0_dp) then
+        air_here = isa(x(2))
+        rho = air_here%density
+      end if
+      u = wind - v
+      f = f + 0.5_dp*rho*self%drag_area*norm2(u)*u
+    end if
+  end function end_external_load
+
+  !> Validate an end; `name` ("end_a", "end_b") prefixes the message.
+  subroutine end_check(self, name, error)
+    class(line_end), intent(in) :: self                    !< end
+    character(len=*), intent(in) :: name                   !< which end, for the message
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    if (self%kind < end_fixed .or. self%kind > end_body) then
+      call fatal_error(error, name // ": kind code " // str(self%kind) // " is not allowed: use fixed, " // &
+        "prescribed, free, point_mass or body")
+    else if (any(self%position /= self%position) .or. any(self%velocity /= self%velocity)) then
+      call fatal_error(error, name // ": position and velocity must be finite")
+    else if (self%kind == end_point_mass .and. .not. (self%mass > 0.0_dp)) then
+      call fatal_error(error, name // ": mass = " // str(self%mass) // " kg is not allowed for a " // &
+        "point_mass end: must be > 0")
+    else if (.not. (self%drag_area >= 0.0_dp)) then
+      call fatal_error(error, name // ": drag_area = " // str(self%drag_area) // " m^2 is not allowed: " // &
+        "must be >= 0")
+    else if (.not. (self%frequency >= 0.0_dp)) then
+      call fatal_error(error, name // ": frequency = " // str(self%frequency) // " Hz is not allowed: " // &
+        "must be >= 0")
+    end if
+  end subroutine end_check
+end module airlaunch_line_ends

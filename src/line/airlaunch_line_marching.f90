@@ -1,0 +1,336 @@
+!> The paper's explicit marching scheme with the end-force iteration
+!> (Zheng & Zhang 2018, §2.3, Eqs. (12)–(17), Steps 1–5), as a selectable
+!> fixed-step integrator of the same lumped-mass line as the default scheme.
+!>
+!> What the paper does.  The state Y of every segment is advanced explicitly by
+!> Eq. (15), Y(n) = M^-1 (F - K dY/ds) dt + Y(n-1) (forward Euler of Eq. (14)),
+!> the velocities along the line follow from the segment-to-segment recursion
+!> Eq. (12) started at the end whose motion is known, and the force F(N) that
+!> this gives at the far end is compared with the far-end boundary condition
+!> F_N (Eq. (16)); Steps 2–5 repeat until |e| = |F_N - F(N)| < e0.
+!>
+!> What we do and why.  Eq. (13) is garbled in the source, so the spatial
+!> difference is re-derived from Eq. (12) and the compatibility Eq. (10) on the
+!> lumped-mass discretization of airlaunch_line_model, whose nodal forces
+!> already are the discrete M^-1 (F - K dY/ds) of Eq. (14) (tension differences
+!> plus loads).  One step of size h from t to t+h:
+!>  Step 1  boundary data at t+h: the near ("known") end's position from its
+!>          motion; the far end's condition (free: F_N = 0; point mass M:
+!>          F_N = M g + D(v) - M a; kinematic: the far node must land on its
+!>          prescribed position, the force being the reaction).
+!>  Step 2  Eq. (15): every node except the near kinematic one and the far one
+!>          gets v^{n+1} = v^n + h f(x^n, v^n)/m (forces at the old level:
+!>          explicit, tension-only, with the same loads as the default scheme).
+!>  Step 3  Eq. (12), the recursion along the line from the near end: the
+!>          segment vector is advanced by the relative velocity of its nodes
+!>          (Eq. (10) integrated), dx_k^{n+1} = dx_k^n + h (v_k^{n+1} - v_{k-1}^{n+1}),
+!>          and x_k^{n+1} = x_{k-1}^{n+1} + dx_k^{n+1}, k = near+1 .. far.  The
+!>          near kinematic end enters with its discrete velocity
+!>          (x_0^{n+1} - x_0^n)/h, so the march reproduces its path exactly.
+!>          The far node is advanced with a trial end force F:
+!>          v_N^{n+1} = v_N^n + h (f_N + F)/m_N, and the far end's condition gives
+!>          the force F(N) it would exert for that motion.
+!>  Step 4  e = F - F(N)  (Eq. (16)).
+!>  Step 5  Newton on F with a 3x3 finite-difference Jacobian (LAPACK) until
+!>          |e| <= e0 (`force_tol`, or the round-off level of e if larger),
+!>          warm-started from the previous step's force.
+!> Stripped of notation this is the semi-implicit (symplectic) Euler method on
+!> the lumped-mass semi-discretization, with the far end coupled implicitly
+!> through its force: first order in time and conditionally stable,
+!> h <= (2/w)(sqrt(1+zeta^2) - zeta) with w = 2c/l0 (line_model%stable_step);
+!> a larger step is refused.  Because the interior update is explicit, the far
+!> residual is affine in F for free, kinematic and drag-free point-mass ends and
+!> Newton converges in one correction; a point mass with quadratic drag takes a
+!> few.  Only the far node depends on F, so each iteration costs O(1), the
+!> march O(N).  If the node-0 end is not kinematic but the node-N end is, the
+!> march starts from node N.  A point mass at the near (non-kinematic) end is
+!> lumped with its node.
+module airlaunch_line_marching
+  use airlaunch_kinds, only: dp, i8
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_linalg, only: solve_general
+  use airlaunch_line_model, only: line_model
+  use airlaunch_line_ends, only: line_end, end_point_mass
+  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
+  implicit none
+  private
+  public :: line_marching, new_line_marching
+
+  !> The paper's explicit marching scheme on one line.
+  type, extends(line_scheme) :: line_marching
+    type(line_model) :: model                 !< the line
+    type(line_end) :: ends(2)                 !< end at node 0, end at node N
+    real(dp) :: dt = 0.0_dp                   !< largest step [s]
+    real(dp) :: force_tol = 0.0_dp            !< e0 [N]
+    integer :: max_iter = 20                  !< Newton iterations per step
+    integer :: near = 0                       !< node the march starts from
+    integer :: far = 0                        !< node of the iterated end force
+    integer :: dir = 1                        !< +1 (0 -> N) or -1 (N -> 0)
+    real(dp), allocatable :: x(:, :), v(:, :)        !< state (3, 0:N)
+    real(dp), allocatable :: xn(:, :), vn(:, :)      !< new level (3, 0:N)
+    real(dp), allocatable :: f(:, :), tension(:)     !< node forces, tensions
+    real(dp), allocatable :: inv_mass(:)             !< 1/m (near point mass lumped)
+    real(dp) :: far_force(3) = 0.0_dp         !< converged force of the far end on the far node [N]
+    real(dp) :: v_prev(3) = 0.0_dp            !< march velocity of the node before the far one
+    real(dp) :: x_target(3) = 0.0_dp          !< kinematic far end: position at t+h
+    integer(i8) :: n_steps = 0, n_iter = 0, n_forces = 0
+  contains
+    procedure :: advance => marching_advance
+    procedure :: step => marching_step
+    procedure :: get_state => marching_get_state
+    procedure :: stats => marching_stats
+    procedure :: set_body_motion => marching_set_body_motion
+    procedure :: free => marching_free
+  end type line_marching
+
+contains
+
+  !> Create the marching scheme from the initial node state x0, v0 at time t0.
+  !> A step above the stability limit is an error.
+  subroutine new_line_marching(scheme, model, end_a, end_b, x0, v0, t0, opts, error)
+    type(line_marching), intent(inout) :: scheme            !< the scheme (re-initialised)
+    type(line_model), intent(in) :: model                   !< the line
+    type(line_end), intent(in) :: end_a, end_b              !< ends at node 0 and node N
+    real(dp), intent(in) :: x0(:, 0:), v0(:, 0:)            !< initial node state
+    real(dp), intent(in) :: t0                              !< initial time [s]
+    type(line_scheme_options), intent(in) :: opts           !< dt, force_tol, max_iterations
+    type(error_type), allocatable, intent(inout) :: error   !< set on bad input
+    integer :: n
+    real(dp) :: h_max
+    n = model%n
+    h_max = model%stable_step()
+    if (opts%dt > h_max) then
+      call fatal_error(error, "line_scene: dt = " // str(opts%dt) // " s is not allowed for the marching " // &
+        "scheme: above its stability limit " // str(h_max) // " s (2/w (sqrt(1+zeta^2) - zeta), w = 2c/l0, " // &
+        "c = " // str(model%wave_speed()) // " m/s, l0 = " // str(model%l0) // " m); use dt <= that")
+      return
+    end if
+    call scheme%free()
+    scheme%model = model
+    scheme%ends = [end_a, end_b]
+    scheme%dt = opts%dt
+    scheme%force_tol = opts%force_tol
+    scheme%max_iter = opts%max_iterations
+    scheme%t = t0
+    if (.not. end_a%is_kinematic() .and. end_b%is_kinematic()) then
+      scheme%near = n; scheme%far = 0; scheme%dir = -1
+    else
+      scheme%near = 0; scheme%far = n; scheme%dir = 1
+    end if
+    allocate(scheme%x(3, 0:n), scheme%v(3, 0:n), scheme%xn(3, 0:n), scheme%vn(3, 0:n), &
+      scheme%f(3, 0:n), scheme%tension(n), scheme%inv_mass(0:n))
+    scheme%x = x0
+    scheme%v = v0
+    scheme%xn = x0
+    scheme%vn = v0
+    scheme%inv_mass = 1.0_dp/model%node_mass
+    associate (e => scheme%ends(near_end(scheme)))
+      if (e%kind == end_point_mass) scheme%inv_mass(scheme%near) = &
+        1.0_dp/(model%node_mass(scheme%near) + e%mass)
+    end associate
+    scheme%far_force = 0.0_dp
+  end subroutine new_line_marching
+
+  !> Index (1 or 2) of the end at the near node.
+  pure integer function near_end(self)
+    type(line_marching), intent(in) :: self
+    near_end = merge(1, 2, self%near == 0)
+  end function near_end
+
+  !> Index (1 or 2) of the end at the far node.
+  pure integer function far_end(self)
+    type(line_marching), intent(in) :: self
+    far_end = merge(2, 1, self%near == 0)
+  end function far_end
+
+  !> March to t_out with equal steps no larger than dt.
+  subroutine marching_advance(self, t_out, error)
+    class(line_marching), intent(inout) :: self            !< scheme
+    real(dp), intent(in) :: t_out                          !< output time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    integer :: i, n_sub
+    real(dp) :: h, t0
+    if (t_out <= self%t) return
+    t0 = self%t
+    n_sub = max(1, ceiling((t_out - t0)/self%dt - 1.0e-9_dp))
+    h = (t_out - t0)/n_sub
+    do i = 1, n_sub
+      call self%step(h, error)
+      if (allocated(error)) return
+    end do
+    self%t = t_out
+  end subroutine marching_advance
+
+  !> One step of size h (Steps 1–5 of the paper, see the module header).
+  subroutine marching_step(self, h, error)
+    class(line_marching), intent(inout) :: self            !< scheme
+    real(dp), intent(in) :: h                              !< step [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    integer :: k, st, it, j, fe, ne
+    real(dp) :: t1, vm_near(3), v_exact(3), force(3), e(3), e1(3), jac(3, 3), rhs(3, 1), delta, e_floor
+    real(dp) :: x_far(3), v_far(3), dummy(3)
+
+    t1 = self%t + h
+    ne = near_end(self)
+    fe = far_end(self)
+    ! forces at the old level (explicit right-hand side of Eq. (15))
+    call self%model%forces(self%x, self%v, self%f, self%tension, st)
+    self%n_forces = self%n_forces + 1
+    if (st /= 0) then
+      call fatal_error(error, "line (marching): a line tension is not finite at t = " // str(self%t) // &
+        " s: the state diverged")
+      return
+    end if
+    if (self%ends(ne)%kind == end_point_mass) self%f(:, self%near) = self%f(:, self%near) + &
+      point_load(self, ne, self%x(:, self%near), self%v(:, self%near))
+
+    ! Step 2, Eq. (15): explicit velocity update of all nodes but the far one
+    do k = 0, self%model%n
+      if (k == self%far) cycle
+      if (k == self%near .and. self%ends(ne)%is_kinematic()) cycle
+      self%vn(:, k) = self%v(:, k) + h*self%f(:, k)*self%inv_mass(k)
+    end do
+
+    ! Step 1/3: the known end, then the recursion (12) along the line
+    if (self%ends(ne)%is_kinematic()) then
+      call self%ends(ne)%motion(t1, self%xn(:, self%near), v_exact)
+      vm_near = (self%xn(:, self%near) - self%x(:, self%near))/h
+      self%vn(:, self%near) = v_exact
+    else
+      self%xn(:, self%near) = self%x(:, self%near) + h*self%vn(:, self%near)
+      vm_near = self%vn(:, self%near)
+    end if
+    self%v_prev = vm_near
+    k = self%near + self%dir
+    do while (k /= self%far)
+      self%xn(:, k) = self%xn(:, k - self%dir) + (self%x(:, k) - self%x(:, k - self%dir)) &
+        + h*(self%vn(:, k) - self%v_prev)
+      self%v_prev = self%vn(:, k)
+      k = k + self%dir
+    end do
+    if (self%ends(fe)%is_kinematic()) call self%ends(fe)%motion(t1, self%x_target, dummy)
+
+    ! Steps 3-5: iterate on the far-end force, Eq. (16)
+    force = self%far_force
+    call far_residual(self, h, force, e, x_far, v_far)
+    it = 0
+    do
+      e_floor = 64*epsilon(1.0_dp)*(norm2(force) + norm2(self%f(:, self%far)) + &
+        norm2(self%x(:, self%far))/(h*h*self%inv_mass(self%far)) + &
+        (self%ends(fe)%mass + 1.0_dp/self%inv_mass(self%far))*norm2(v_far)/h)
+      if (norm2(e) <= max(self%force_tol, e_floor)) exit
+      if (it >= self%max_iter) then
+        call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
+          str(t1) // " s: |e| = " // str(norm2(e)) // " N > e0 = " // str(self%force_tol) // " N after " // &
+          str(it) // " iterations")
+        return
+      end if
+      delta = 1.0e-6_dp*max(1.0_dp, norm2(force), norm2(e))
+      do j = 1, 3
+        rhs(:, 1) = force
+        rhs(j, 1) = rhs(j, 1) + delta
+        call far_residual(self, h, rhs(:, 1), e1, x_far, v_far)
+        jac(:, j) = (e1 - e)/delta
+      end do
+      rhs(:, 1) = -e
+      call solve_general(jac, rhs, error, "line (marching): far-end force Jacobian")
+      if (allocated(error)) return
+      force = force + rhs(:, 1)
+      call far_residual(self, h, force, e, x_far, v_far)
+      it = it + 1
+    end do
+    self%n_iter = self%n_iter + it
+    self%far_force = force
+    self%xn(:, self%far) = x_far
+    self%vn(:, self%far) = v_far
+    if (self%ends(fe)%is_kinematic()) then
+      call self%ends(fe)%motion(t1, self%xn(:, self%far), self%vn(:, self%far))
+    end if
+    self%x = self%xn
+    self%v = self%vn
+    self%t = t1
+    self%n_steps = self%n_steps + 1
+  end subroutine marching_step
+
+  !> Far node advanced with the trial end force `force`, and the residual
+  !> e = F - F(N) of Eq. (16) of its end condition.
+  subroutine far_residual(self, h, force, e, x_far, v_far)
+    type(line_marching), intent(in) :: self   !< scheme (after the march)
+    real(dp), intent(in) :: h                 !< step [s]
+    real(dp), intent(in) :: force(3)          !< trial force F of the end on the far node [N]
+    real(dp), intent(out) :: e(3)             !< residual [N]
+    real(dp), intent(out) :: x_far(3), v_far(3)  !< far node at t+h
+    integer :: kf, kb, fe
+    real(dp) :: fn(3)
+    kf = self%far
+    kb = kf - self%dir
+    fe = far_end(self)
+    v_far = self%v(:, kf) + h*(self%f(:, kf) + force)*self%inv_mass(kf)
+    x_far = self%xn(:, kb) + (self%x(:, kf) - self%x(:, kb)) + h*(v_far - self%v_prev)
+    associate (en => self%ends(fe))
+      if (en%is_kinematic()) then
+        ! the reaction that puts the far node on its prescribed position
+        fn = force + (self%x_target - x_far)/(h*h*self%inv_mass(kf))
+      else if (en%kind == end_point_mass) then
+        ! Newton's law of the end mass with the backward-difference acceleration
+        fn = point_load(self, fe, x_far, v_far) - en%mass*(v_far - self%v(:, kf))/h
+      else
+        fn = 0.0_dp   ! free end: no force
+      end if
+    end associate
+    e = force - fn
+  end subroutine far_residual
+
+  !> Weight and drag of a point-mass end.
+  function point_load(self, which, x, v) result(f)
+    type(line_marching), intent(in) :: self   !< scheme
+    integer, intent(in) :: which              !< end index
+    real(dp), intent(in) :: x(3), v(3)        !< end position, velocity
+    real(dp) :: f(3)
+    f = self%ends(which)%external_load(x, v, self%model%p%gravity, self%model%p%air, &
+      self%model%p%wind, self%model%p%air_density)
+  end function point_load
+
+  !> Node state at the current time.
+  subroutine marching_get_state(self, x, v)
+    class(line_marching), intent(inout) :: self   !< scheme
+    real(dp), intent(out) :: x(:, 0:), v(:, 0:)
+    x = self%x
+    v = self%v
+  end subroutine marching_get_state
+
+  !> Work counters.
+  function marching_stats(self) result(s)
+    class(line_marching), intent(in) :: self   !< scheme
+    type(line_scheme_stats) :: s
+    s%steps = self%n_steps
+    s%rhs_evals = self%n_forces
+    s%iterations = self%n_iter
+  end function marching_stats
+
+  !> Make end `which` a body end moved by the owner's samples.
+  subroutine marching_set_body_motion(self, which, t1, x1, v1, t2, x2, v2, error)
+    class(line_marching), intent(inout) :: self            !< scheme
+    integer, intent(in) :: which                           !< 1 = node 0, 2 = node N
+    real(dp), intent(in) :: t1, t2, x1(3), v1(3), x2(3), v2(3)
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    if (which < 1 .or. which > 2) then
+      call fatal_error(error, "line: end index " // str(which) // " is not allowed: 1 (node 0) or 2 (node N)")
+      return
+    end if
+    if (.not. self%ends(which)%is_kinematic()) then
+      call fatal_error(error, "line: end " // str(which) // " is not kinematic: a body end must be " // &
+        "declared kinematic (body) when the scheme is built")
+      return
+    end if
+    call self%ends(which)%set_body_motion(t1, x1, v1, t2, x2, v2)
+  end subroutine marching_set_body_motion
+
+  !> Release the work arrays.
+  subroutine marching_free(self)
+    class(line_marching), intent(inout) :: self   !< scheme
+    if (allocated(self%x)) deallocate(self%x, self%v, self%xn, self%vn, self%f, self%tension, self%inv_mass)
+    self%n_steps = 0; self%n_iter = 0; self%n_forces = 0
+  end subroutine marching_free
+end module airlaunch_line_marching

@@ -1,0 +1,321 @@
+!> The flexible line (suspension line, body B2) of Zheng & Zhang (2018) §2.1–2.2
+!> as a lumped-mass semi-discretization of the continuum Eqs. (3), (5), (8), (10).
+!>
+!> Discretization.  The unstretched line (length L, material coordinate s) is cut
+!> into N equal segments of unstretched length l0 = L/N between nodes 0..N.
+!> Mass is conserved per material element (Eq. (5): rho* ds1 = rho ds), so each
+!> segment carries rho*l0 whatever its stretch; half of it is lumped at each end
+!> node (node masses rho*l0/2 at nodes 0 and N, rho*l0 inside).  Segment k joins
+!> nodes k-1 and k; its stretched vector is dx_k = x_k - x_{k-1}, length
+!> ell_k = |dx_k|, tangent t_k = dx_k/ell_k (Eq. (2)), strain eps_k = ell_k/l0 - 1
+!> and strain rate epsdot_k = t_k . (v_k - v_{k-1}) / l0.
+!>
+!> Constitutive law (Eq. (3) with internal damping, tension only):
+!>     T_k = max(0, EA eps_k + c_d epsdot_k)   if eps_k > 0,
+!>     T_k = 0                                 if eps_k <= 0 (slack),
+!> so the line never carries compression.  c_d [N s] is an axial (Kelvin–Voigt)
+!> damping coefficient: a segment dashpot of c_d/l0 [N s/m].  It damps the axial
+!> mode of circular frequency w with damping ratio zeta = w c_d / (2 EA).  When
+!> c_d > 0 the tension jumps by c_d*epsdot at the instant a segment goes taut
+!> (a slack line cannot carry the dashpot force); with c_d = 0 the tension is a
+!> continuous function of the state and the elastic energy 1/2 EA l0 eps^2 is C^1.
+!>
+!> Momentum (Eq. (8)) at node k:  m_k a_k = T_{k+1} t_{k+1} - T_k t_k + f_k,
+!> where f_k lumps half of the distributed load f of each adjacent segment:
+!>  - weight rho l0 g (earth frame: y up, so g = (0, -g0, 0)),
+!>  - aerodynamic drag from the air velocity relative to the segment midpoint,
+!>    u = wind - (v_{k-1}+v_k)/2, split into its tangential part u_t = (u.t)t and
+!>    cross-flow part u_n = u - u_t (the independence principle):
+!>        D = 1/2 rho_air ell [ Cd_n d |u_n| u_n + Cd_t pi d |u_t| u_t ],
+!>    i.e. cross-flow drag on the projected area d*ell and skin friction on the
+!>    wetted area pi*d*ell (MoorDyn's convention).  rho_air is the ISA density
+!>    at the segment midpoint altitude y (see `air_density_fit`), or a fixed value.
+!>  - optionally a settling aid: a linear damper to the earth frame,
+!>    -alpha m_k v_k (mass-proportional "Rayleigh" damping, alpha [1/s]), used
+!>    only to let static problems (catenary) settle; zero by default.
+!> The compatibility Eq. (10) d/dt((1+eps) t) = dV/ds is satisfied identically by
+!> the node kinematics: d/dt dx_k = v_k - v_{k-1}.
+!>
+!> The spatial discretization is second-order accurate in l0 (central differences
+!> of the wave operator with lumped mass); the convergence test shows it.
+!>
+!> Use by an outside owner (the full simulation): the end nodes 0 and N are then
+!> kinematic, tied to bodies (node 0: rocket nose, node N: parachute).  The owner
+!> integrates nodes 1..N-1 with a_k = f_k/m_k and applies f(:,0) to the body at
+!> node 0 and f(:,N) to the body at node N.  The end force contains
+!>     f(:,0) = T_1 t_1 + m_0 g + D_1/2 (- alpha m_0 v_0),
+!>     f(:,N) = -T_N t_N + m_N g + D_N/2 (- alpha m_N v_N),
+!> i.e. the end segment's tension plus the loads of the end half-segment (its
+!> weight and half its drag).  The half-segment mass m_0 = node_mass(0) =
+!> rho*l0/2 is NOT accelerated by the line: the owner adds it to the body's mass
+!> (its weight is already in f, so no gravity is applied to it again), or
+!> neglects it (error of order m_0/m_body).  The tension alone is `tension(1)`,
+!> `tension(N)` with `end_tangent`.
+module airlaunch_line_model
+  use airlaunch_kinds, only: dp, g0, pi
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_atmosphere, only: isa, air_state
+  implicit none
+  private
+  public :: line_params, line_model, line_energy
+
+  !> Physical parameters of one line (all SI; namelist group `&line`).
+  type :: line_params
+    real(dp) :: length = 60.0_dp           !< unstretched length L [m]
+    integer :: n_seg = 60                  !< number of segments N (>= 1)
+    real(dp) :: ea = 1.0e6_dp              !< axial stiffness EA [N]
+    real(dp) :: mass_per_length = 0.2_dp   !< mass per unstretched length rho [kg/m]
+    real(dp) :: damping = 0.0_dp           !< axial damping c_d [N s]: T = EA eps + c_d epsdot
+    real(dp) :: settling_damping = 0.0_dp  !< settling aid alpha [1/s]: f = -alpha m v (0 = off)
+    real(dp) :: diameter = 0.02_dp         !< aerodynamic diameter d [m]
+    real(dp) :: cd_normal = 1.2_dp         !< cross-flow drag coefficient (on d*ell)
+    real(dp) :: cd_tangential = 0.01_dp    !< tangential (skin-friction) coefficient (on pi*d*ell)
+    logical :: gravity = .true.            !< weight of the line on
+    logical :: air = .false.               !< aerodynamic drag of the line on
+    real(dp) :: wind(3) = 0.0_dp           !< uniform air velocity, earth frame [m/s]
+    real(dp) :: air_density = 0.0_dp       !< fixed air density [kg/m^3]; 0 = ISA at the altitude y
+  end type line_params
+
+  !> One discretized line (no module state: one object per line).
+  type :: line_model
+    type(line_params) :: p                   !< parameters
+    integer :: n = 0                         !< number of segments N
+    real(dp) :: l0 = 0.0_dp                  !< unstretched segment length L/N [m]
+    real(dp), allocatable :: node_mass(:)    !< lumped node masses m_k, k = 0..N [kg]
+  contains
+    procedure :: init => model_init
+    procedure :: forces => model_forces
+    procedure :: energy => model_energy
+    procedure :: wave_speed => model_wave_speed
+    procedure :: stable_step => model_stable_step
+    procedure :: total_mass => model_total_mass
+    procedure :: end_tangent => model_end_tangent
+  end type line_model
+
+  !> Mechanical energy of the line [J] (end bodies not included).
+  type :: line_energy
+    real(dp) :: kinetic = 0.0_dp     !< sum 1/2 m_k |v_k|^2
+    real(dp) :: elastic = 0.0_dp     !< sum 1/2 EA l0 eps_k^2 over taut segments
+    real(dp) :: potential = 0.0_dp   !< sum m_k g0 y_k (zero when gravity is off)
+  end type line_energy
+
+  !> Segments shorter than this fraction of l0 have no defined tangent.
+  real(dp), parameter :: tiny_fraction = 1.0e-12_dp
+
+contains
+
+  !> Check the parameters and build the discretization.  Every rejected value
+  !> gives one line naming the variable, its value and what is allowed.
+  subroutine model_init(self, params, error)
+    class(line_model), intent(inout) :: self               !< line (re-initialised)
+    type(line_params), intent(in) :: params                !< physical parameters
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    integer :: k
+
+    call check_params(params, error)
+    if (allocated(error)) return
+    self%p = params
+    self%n = params%n_seg
+    self%l0 = params%length/params%n_seg
+    if (allocated(self%node_mass)) deallocate(self%node_mass)
+    allocate(self%node_mass(0:self%n))
+    do k = 0, self%n
+      self%node_mass(k) = params%mass_per_length*self%l0
+    end do
+    self%node_mass(0) = 0.5_dp*self%node_mass(0)
+    self%node_mass(self%n) = 0.5_dp*self%node_mass(self%n)
+  end subroutine model_init
+
+  !> Validate the line parameters.
+  subroutine check_params(p, error)
+    type(line_params), intent(in) :: p                     !< parameters
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    if (p%n_seg < 1) then
+      call fatal_error(error, "line: n_seg = " // str(p%n_seg) // " is not allowed: the number of " // &
+        "segments must be >= 1")
+    else if (.not. (p%length > 0.0_dp)) then
+      call fatal_error(error, "line: length = " // str(p%length) // " m is not allowed: the unstretched " // &
+        "length must be > 0")
+    else if (.not. (p%ea > 0.0_dp)) then
+      call fatal_error(error, "line: ea = " // str(p%ea) // " N is not allowed: the axial stiffness " // &
+        "EA must be > 0")
+    else if (.not. (p%mass_per_length > 0.0_dp)) then
+      call fatal_error(error, "line: mass_per_length = " // str(p%mass_per_length) // " kg/m is not " // &
+        "allowed: the mass per length must be > 0 (the node masses divide the nodal forces)")
+    else if (.not. (p%damping >= 0.0_dp)) then
+      call fatal_error(error, "line: damping = " // str(p%damping) // " N s is not allowed: the axial " // &
+        "damping coefficient must be >= 0")
+    else if (.not. (p%settling_damping >= 0.0_dp)) then
+      call fatal_error(error, "line: settling_damping = " // str(p%settling_damping) // " 1/s is not " // &
+        "allowed: must be >= 0")
+    else if (.not. (p%diameter >= 0.0_dp)) then
+      call fatal_error(error, "line: diameter = " // str(p%diameter) // " m is not allowed: must be >= 0")
+    else if (.not. (p%cd_normal >= 0.0_dp)) then
+      call fatal_error(error, "line: cd_normal = " // str(p%cd_normal) // " is not allowed: must be >= 0")
+    else if (.not. (p%cd_tangential >= 0.0_dp)) then
+      call fatal_error(error, "line: cd_tangential = " // str(p%cd_tangential) // " is not allowed: " // &
+        "must be >= 0")
+    else if (.not. (p%air_density >= 0.0_dp)) then
+      call fatal_error(error, "line: air_density = " // str(p%air_density) // " kg/m^3 is not allowed: " // &
+        "must be > 0, or 0 for the ISA density at the line's altitude")
+    else if (any(p%wind /= p%wind)) then
+      call fatal_error(error, "line: wind has a NaN component: must be finite [m/s]")
+    end if
+  end subroutine check_params
+
+  !> Nodal forces and segment tensions for node positions x(3,0:N) and
+  !> velocities v(3,0:N) (earth frame, y up).  f(:,k) is the total force on node
+  !> k from the tensions of its segments and its lumped distributed loads (see
+  !> the module header for what the end forces contain).  Hot path: no
+  !> allocation, no I/O.  status = 0, or 1 if a tension is not finite.
+  subroutine model_forces(self, x, v, f, tension, status)
+    class(line_model), intent(in) :: self      !< line
+    real(dp), intent(in) :: x(:, 0:)           !< node positions (3, 0:N) [m]
+    real(dp), intent(in) :: v(:, 0:)           !< node velocities (3, 0:N) [m/s]
+    real(dp), intent(out) :: f(:, 0:)          !< node forces (3, 0:N) [N]
+    real(dp), intent(out) :: tension(:)        !< segment tensions T_k, k = 1..N [N]
+    integer, intent(out) :: status             !< 0 ok, 1 non-finite tension
+    integer :: k, n
+    real(dp) :: dx(3), dv(3), t(3), u(3), ut(3), un(3), drag(3)
+    real(dp) :: ell, eps, epsdot, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope
+    real(dp) :: qn, qt
+
+    n = self%n
+    ea = self%p%ea
+    cd = self%p%damping
+    tiny_len = tiny_fraction*self%l0
+    f(:, 0:n) = 0.0_dp
+    if (self%p%gravity) f(2, 0:n) = -g0*self%node_mass(0:n)
+    if (self%p%settling_damping > 0.0_dp) then
+      do k = 0, n
+        f(:, k) = f(:, k) - self%p%settling_damping*self%node_mass(k)*v(:, k)
+      end do
+    end if
+    if (self%p%air) call air_density_fit(self, x, y_lo, rho_lo, log_slope)
+    qn = 0.5_dp*self%p%cd_normal*self%p%diameter
+    qt = 0.5_dp*self%p%cd_tangential*pi*self%p%diameter
+
+    do k = 1, n
+      dx = x(:, k) - x(:, k-1)
+      ell = norm2(dx)
+      if (ell > tiny_len) then
+        t = dx/ell
+      else
+        t = 0.0_dp
+      end if
+      eps = ell/self%l0 - 1.0_dp
+      tk = 0.0_dp
+      if (eps > 0.0_dp) then
+        ! Eq. (3) with the dashpot; tension only (never compression)
+        dv = v(:, k) - v(:, k-1)
+        epsdot = dot_product(t, dv)/self%l0
+        tk = max(0.0_dp, ea*eps + cd*epsdot)
+      end if
+      tension(k) = tk
+      f(:, k-1) = f(:, k-1) + tk*t
+      f(:, k) = f(:, k) - tk*t
+      if (self%p%air .and. ell > tiny_len) then
+        ! distributed drag f of Eq. (8), half to each node
+        u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
+        ut = dot_product(u, t)*t
+        un = u - ut
+        rho_a = rho_lo*exp(log_slope*(0.5_dp*(x(2, k-1) + x(2, k)) - y_lo))
+        drag = rho_a*ell*(qn*norm2(un)*un + qt*norm2(ut)*ut)
+        f(:, k-1) = f(:, k-1) + 0.5_dp*drag
+        f(:, k) = f(:, k) + 0.5_dp*drag
+      end if
+    end do
+    status = 0
+    if (.not. (abs(sum(tension(1:n))) <= huge(1.0_dp))) status = 1
+  end subroutine model_forces
+
+  !> Air density along the line: the ISA density at the lowest and the highest
+  !> node, interpolated log-linearly in altitude (exact in the isothermal layer,
+  !> relative error below 1e-7 over 100 m of height in the troposphere), so the
+  !> standard is evaluated twice per call instead of once per segment.  A fixed
+  !> `air_density` > 0 replaces the ISA.
+  subroutine air_density_fit(self, x, y_lo, rho_lo, log_slope)
+    class(line_model), intent(in) :: self   !< line
+    real(dp), intent(in) :: x(:, 0:)        !< node positions
+    real(dp), intent(out) :: y_lo           !< lowest node altitude [m]
+    real(dp), intent(out) :: rho_lo         !< density at y_lo [kg/m^3]
+    real(dp), intent(out) :: log_slope      !< d ln(rho)/dy [1/m]
+    real(dp) :: rho_hi, y_hi
+    type(air_state) :: a
+    y_lo = minval(x(2, 0:self%n))
+    y_hi = maxval(x(2, 0:self%n))
+    log_slope = 0.0_dp
+    if (self%p%air_density > 0.0_dp) then
+      rho_lo = self%p%air_density
+      return
+    end if
+    a = isa(y_lo)
+    rho_lo = a%density
+    if (y_hi - y_lo > 1.0e-3_dp) then
+      a = isa(y_hi)
+      rho_hi = a%density
+      log_slope = log(rho_hi/rho_lo)/(y_hi - y_lo)
+    end if
+  end subroutine air_density_fit
+
+  !> Kinetic, elastic and gravitational energy of the line's nodes.
+  function model_energy(self, x, v) result(e)
+    class(line_model), intent(in) :: self   !< line
+    real(dp), intent(in) :: x(:, 0:)        !< node positions (3, 0:N) [m]
+    real(dp), intent(in) :: v(:, 0:)        !< node velocities (3, 0:N) [m/s]
+    type(line_energy) :: e
+    integer :: k
+    real(dp) :: eps
+    do k = 0, self%n
+      e%kinetic = e%kinetic + 0.5_dp*self%node_mass(k)*dot_product(v(:, k), v(:, k))
+      if (self%p%gravity) e%potential = e%potential + self%node_mass(k)*g0*x(2, k)
+    end do
+    do k = 1, self%n
+      eps = norm2(x(:, k) - x(:, k-1))/self%l0 - 1.0_dp
+      if (eps > 0.0_dp) e%elastic = e%elastic + 0.5_dp*self%p%ea*self%l0*eps**2
+    end do
+  end function model_energy
+
+  !> Axial wave speed c = sqrt(EA/rho) in material coordinates [m/s].
+  pure real(dp) function model_wave_speed(self) result(c)
+    class(line_model), intent(in) :: self   !< line
+    c = sqrt(self%p%ea/self%p%mass_per_length)
+  end function model_wave_speed
+
+  !> Largest stable step of the explicit (semi-implicit Euler) scheme [s]:
+  !> the highest axial mode of the lumped chain has w = 2c/l0 (Gershgorin bound,
+  !> also for a free end node of half mass) and damping ratio
+  !> zeta = w c_d/(2 EA) + alpha/(2w); semi-implicit Euler with explicit
+  !> damping is stable for h w <= 2 (sqrt(1 + zeta^2) - zeta).
+  pure real(dp) function model_stable_step(self) result(h)
+    class(line_model), intent(in) :: self   !< line
+    real(dp) :: w, zeta
+    w = 2.0_dp*self%wave_speed()/self%l0
+    zeta = w*self%p%damping/(2.0_dp*self%p%ea) + self%p%settling_damping/(2.0_dp*w)
+    h = 2.0_dp/w*(sqrt(1.0_dp + zeta**2) - zeta)
+  end function model_stable_step
+
+  !> Total mass of the line rho*L [kg].
+  pure real(dp) function model_total_mass(self) result(m)
+    class(line_model), intent(in) :: self   !< line
+    m = self%p%mass_per_length*self%p%length
+  end function model_total_mass
+
+  !> Unit tangent of the end segment at node 0 (which = 0) or node N (which = N),
+  !> pointing along the line from node 0 to node N; zero for a degenerate segment.
+  pure function model_end_tangent(self, x, which) result(t)
+    class(line_model), intent(in) :: self   !< line
+    real(dp), intent(in) :: x(:, 0:)        !< node positions (3, 0:N)
+    integer, intent(in) :: which            !< 0 or N
+    real(dp) :: t(3), dx(3), ell
+    if (which == 0) then
+      dx = x(:, 1) - x(:, 0)
+    else
+      dx = x(:, self%n) - x(:, self%n - 1)
+    end if
+    ell = norm2(dx)
+    t = 0.0_dp
+    if (ell > tiny_fraction*self%l0) t = dx/ell
+  end function model_end_tangent
+end module airlaunch_line_model

@@ -1,0 +1,123 @@
+!> The role every time integrator of a standalone line plays (STYLE.md habit 3):
+!> advance to an output time, give the node state, release resources.
+!> Implementations: `line_cvode` (default; CVODE BDF with a band linear solver,
+!> airlaunch_line_cvode) and `line_marching` (the paper's explicit marching with
+!> the end-force iteration, Eqs. (12)–(17), airlaunch_line_marching).
+module airlaunch_line_scheme
+  use airlaunch_kinds, only: dp, i8
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  implicit none
+  private
+  public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
+
+  !> How to integrate a line (namelist group `&line_scene`, scheme part).
+  type :: line_scheme_options
+    character(len=16) :: scheme = "cvode"   !< "cvode" (default) or "marching" (the paper's)
+    ! cvode
+    real(dp) :: rtol = 1.0e-6_dp            !< cvode: relative tolerance
+    real(dp) :: atol = 1.0e-6_dp            !< cvode: absolute tolerance [m, m/s]
+    real(dp) :: max_step = 0.0_dp           !< cvode: largest step [s], 0 = unlimited
+    integer :: max_order = 0                !< cvode: largest BDF order, 0 = 5
+    ! marching
+    real(dp) :: dt = 1.0e-4_dp              !< marching: fixed time step [s]
+    real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]
+    integer :: max_iterations = 20          !< marching: far-end iterations per step
+  end type line_scheme_options
+
+  !> Work counters of an integration.
+  type :: line_scheme_stats
+    integer(i8) :: steps = 0        !< time steps taken
+    integer(i8) :: rhs_evals = 0    !< force evaluations of the whole line
+    integer(i8) :: jac_evals = 0    !< cvode: Jacobian evaluations (difference quotients)
+    integer(i8) :: iterations = 0   !< marching: far-end force iterations (all steps)
+    integer(i8) :: failures = 0     !< cvode: error-test and convergence failures
+  end type line_scheme_stats
+
+  !> A line time integrator.
+  type, abstract :: line_scheme
+    real(dp) :: t = 0.0_dp   !< time of the current state [s]
+  contains
+    procedure(advance_interface), deferred :: advance
+    procedure(state_interface), deferred :: get_state
+    procedure(stats_interface), deferred :: stats
+    procedure(body_interface), deferred :: set_body_motion
+    procedure(free_interface), deferred :: free
+  end type line_scheme
+
+  abstract interface
+    !> Integrate to t_out (>= t); on failure `error` names the time and the quantity.
+    subroutine advance_interface(self, t_out, error)
+      import :: line_scheme, dp, error_type
+      class(line_scheme), intent(inout) :: self
+      real(dp), intent(in) :: t_out
+      type(error_type), allocatable, intent(inout) :: error
+    end subroutine advance_interface
+    !> Node positions x(3,0:N) and velocities v(3,0:N) at the current time,
+    !> kinematic ends included.
+    subroutine state_interface(self, x, v)
+      import :: line_scheme, dp
+      class(line_scheme), intent(inout) :: self
+      real(dp), intent(out) :: x(:, 0:), v(:, 0:)
+    end subroutine state_interface
+    !> Work counters so far.
+    function stats_interface(self) result(s)
+      import :: line_scheme, line_scheme_stats
+      class(line_scheme), intent(in) :: self
+      type(line_scheme_stats) :: s
+    end function stats_interface
+    !> Give end `which` (1 = node 0, 2 = node N) the motion of a body between
+    !> two samples (the owner's outer step); the integrator restarts there.
+    subroutine body_interface(self, which, t1, x1, v1, t2, x2, v2, error)
+      import :: line_scheme, dp, error_type
+      class(line_scheme), intent(inout) :: self
+      integer, intent(in) :: which
+      real(dp), intent(in) :: t1, t2, x1(3), v1(3), x2(3), v2(3)
+      type(error_type), allocatable, intent(inout) :: error
+    end subroutine body_interface
+    !> Release resources (safe to call twice).
+    subroutine free_interface(self)
+      import :: line_scheme
+      class(line_scheme), intent(inout) :: self
+    end subroutine free_interface
+  end interface
+
+contains
+
+  !> Validate the scheme options (one line naming the variable, its value and
+  !> what is allowed).
+  subroutine check_scheme_options(opts, error)
+    type(line_scheme_options), intent(in) :: opts          !< options
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    select case (trim(opts%scheme))
+    case ("cvode")
+      if (.not. (opts%rtol > 0.0_dp)) then
+        call fatal_error(error, "line_scene: rtol = " // str(opts%rtol) // " is not allowed: the relative " // &
+          "tolerance must be > 0")
+      else if (.not. (opts%atol > 0.0_dp)) then
+        call fatal_error(error, "line_scene: atol = " // str(opts%atol) // " is not allowed: the absolute " // &
+          "tolerance must be > 0")
+      else if (.not. (opts%max_step >= 0.0_dp)) then
+        call fatal_error(error, "line_scene: max_step = " // str(opts%max_step) // " s is not allowed: " // &
+          "must be > 0, or 0 for no limit")
+      else if (opts%max_order < 0 .or. opts%max_order > 5) then
+        call fatal_error(error, "line_scene: max_order = " // str(opts%max_order) // " is not allowed: " // &
+          "BDF order 1..5, or 0 for 5")
+      end if
+    case ("marching")
+      if (.not. (opts%dt > 0.0_dp)) then
+        call fatal_error(error, "line_scene: dt = " // str(opts%dt) // " s is not allowed: the marching " // &
+          "time step must be > 0")
+      else if (.not. (opts%force_tol > 0.0_dp)) then
+        call fatal_error(error, "line_scene: force_tol = " // str(opts%force_tol) // " N is not allowed: " // &
+          "the far-end force tolerance e0 must be > 0")
+      else if (opts%max_iterations < 1) then
+        call fatal_error(error, "line_scene: max_iterations = " // str(opts%max_iterations) // &
+          " is not allowed: must be >= 1")
+      end if
+    case default
+      call fatal_error(error, "line_scene: scheme = '" // trim(opts%scheme) // "' is not allowed: use " // &
+        "'cvode' (default) or 'marching'")
+    end select
+  end subroutine check_scheme_options
+end module airlaunch_line_scheme
