@@ -53,6 +53,7 @@ module airlaunch_line_scene
     real(dp) :: wall_time = 0.0_dp                   !< wall-clock time of `run` [s]
     type(line_scheme_stats) :: stats                 !< integrator work
     logical :: completed = .false.                   !< reached t_end
+    logical :: ready = .false.                       !< init succeeded
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -138,6 +139,7 @@ contains
     if (cfg%record_nodes) allocate(self%nodes(3, 0:n, n_max))
     if (cfg%record_tensions) allocate(self%tensions(n, n_max))
     self%n_out = 0
+    self%ready = .true.
   end subroutine scene_init
 
   !> Integrate to t_end, recording at every output time (t = 0 included).
@@ -148,7 +150,7 @@ contains
     integer(8) :: c0, c1, rate
     real(dp) :: t_out
 
-    if (.not. allocated(self%scheme)) then
+    if (.not. self%ready) then
       call fatal_error(error, "line_scene: run called before a successful init")
       return
     end if
@@ -226,5 +228,6 @@ contains
     if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension)
     self%n_out = 0
     self%completed = .false.
+    self%ready = .false.
   end subroutine scene_free
 end module airlaunch_line_scene
