@@ -71,8 +71,10 @@ module airlaunch_force_source
 
   !> An internal pull of constant magnitude between two bodies (a winch): the
   !> force `magnitude * C_a direction` acts on body b at point_b and its reaction on
-  !> body a at point_a.  Total momentum is conserved; angular momentum too when the
-  !> two points lie on the line of action.
+  !> body a at point_a.  With `central`, the direction is instead the line from
+  !> point_b to point_a (attraction for magnitude > 0; potential magnitude * distance).
+  !> Total momentum is conserved; angular momentum too when the two points lie on
+  !> the line of action (always for `central`).
   type, extends(force_source) :: pair_force_source
     integer :: body_a = 0                       !< reacting body (e.g. aircraft)
     integer :: body_b = 1                       !< pulled body (e.g. rocket)
@@ -80,6 +82,7 @@ module airlaunch_force_source
     real(dp) :: direction(3) = [-1.0_dp, 0.0_dp, 0.0_dp] !< unit direction in body-a axes
     real(dp) :: point_a(3) = 0.0_dp             !< reaction point, body-a axes [m]
     real(dp) :: point_b(3) = 0.0_dp             !< application point, body-b axes [m]
+    logical :: central = .false.                !< act along the line joining the two points
   contains
     procedure :: add_loads => pair_add_loads
   end type pair_force_source
@@ -149,7 +152,16 @@ contains
       call fatal_error(error, "pair force between bodies the scene does not have")
       return
     end if
-    f = self%magnitude*matmul(bodies(a)%c, self%direction)
+    if (self%central) then
+      f = bodies(a)%point_position(self%point_a) - bodies(b)%point_position(self%point_b)
+      if (norm2(f) == 0.0_dp) then
+        call fatal_error(error, "central pair force between coincident points")
+        return
+      end if
+      f = self%magnitude*f/norm2(f)
+    else
+      f = self%magnitude*matmul(bodies(a)%c, self%direction)
+    end if
     call add_point_force(bodies(b), self%point_b, f, force(:, b), moment(:, b))
     call add_point_force(bodies(a), self%point_a, -f, force(:, a), moment(:, a))
     if (.false.) moment(1, a) = moment(1, a) + t

@@ -210,7 +210,8 @@ contains
 
   !> Begin at time t in `phase` from state y: check the state against the joint
   !> geometry, capture the constraint references, evaluate once (so a singular
-  !> mass matrix or CFA shows here).  Phase 0 at t >= t0 is released at once.
+  !> mass matrix or CFA shows here).  Phase 0 at t >= t0 is released at once;
+  !> phase 2 with a normal force <= 0 separates at once (early_separation).
   subroutine sep_start(self, t, y, phase, error)
     class(separation_system), intent(inout) :: self       !< the scene
     real(dp), intent(in) :: t                             !< start time [s]
@@ -240,6 +241,14 @@ contains
       self%event_time(1) = t
     end if
     call self%evaluate(t, y, error)
+    if (allocated(error)) return
+    if (self%phase == phase_rotation .and. self%normal_force <= 0.0_dp) then
+      ! the edge cannot pull: the rocket is free from the start
+      self%phase = phase_free
+      self%event_time(3) = t
+      self%early_separation = .true.
+      call self%evaluate(t, y, error)
+    end if
   end subroutine sep_start
 
   !> Evaluate the dynamics at (t, y): loads, Kane + Newton-Euler with the CFA probes,
