@@ -12,6 +12,9 @@ program airlaunch
   use airlaunch_namelist, only: nml_file
   use airlaunch_run_config, only: run_config, read_run_config
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
+  use airlaunch_scenario_config, only: scenario_config, read_scenario_config
+  use airlaunch_launch_scene, only: launch_result, run_launch
+  use airlaunch_strings, only: str
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
@@ -64,6 +67,15 @@ program airlaunch
       if (allocated(error)) call fail_input(error%message)
       call run_drop(run, cfg, echo, summary, error)
     end block
+  case ("airlaunch")
+    block
+      type(scenario_config) :: cfg
+      type(launch_result) :: res
+      call read_scenario_config(f, cfg, echo, error)
+      if (allocated(error)) call fail_input(error%message)
+      call run_launch(run, cfg, echo, res, error)
+      summary = launch_summary(res)
+    end block
   case default
     call fail_input(path // ": &run: scene = '" // trim(run%scene) // "' is not available in this build")
   end select
@@ -71,13 +83,51 @@ program airlaunch
   if (allocated(error)) then
     write(error_unit, '(a)') "airlaunch: error: " // error%message
     if (allocated(summary)) write(error_unit, '(a)') summary
-    write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
+    if (run%trajectory) write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
     stop 3, quiet=.true.
   end if
   write(output_unit, '(a)') summary
   write(output_unit, '(a)') "output: " // trim(run%output)
 
 contains
+
+  !> The milestones of an air-launch run, one per line.
+  function launch_summary(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s
+    character(len=1), parameter :: nl = new_line("a")
+    s = "trim: alpha " // fx(r%trim_alpha_deg, 4) // " deg, elevator " // fx(r%trim_elevator_deg, 3) // &
+      " deg, thrust " // fx(r%trim_thrust_n/1000, 1) // " kN" // nl // &
+      "release (Case 0->1):        t = " // fx(r%release_time, 3) // " s" // nl // &
+      "edge (Case 1->2):           t = " // fx(r%edge_time, 3) // " s" // nl // &
+      "separation (Case 2->3):     t = " // fx(r%separation_time, 3) // " s" // &
+      merge(" (early: edge normal force reached zero)", "                                        ", &
+        r%early_separation) // nl // &
+      "  rocket pitch " // fx(r%pitch_at_separation_deg, 2) // " deg, pitch rate " // &
+      fx(r%pitch_rate_at_separation_deg_s, 2) // " deg/s" // nl // &
+      "first rocket pitch maximum: t = " // fx(r%pitch_max_time, 3) // " s, pitch " // fx(r%pitch_max_deg, 2) // &
+      " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg)" // nl // &
+      "minimum rocket-aircraft clearance: " // fx(merge(r%min_clearance, -1.0d0, r%min_clearance < 1.0d300), 2) // &
+      " m" // nl // &
+      "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at t = " // fx(r%peak_tension_time, 3) // " s" // nl // &
+      "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
+      "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
+      "integration: " // str(int(r%stats%steps)) // " steps, " // str(int(r%stats%rhs_evals)) // &
+      " right-hand sides, " // str(int(r%stats%jac_evals)) // " Jacobians"
+  end function launch_summary
+
+  !> Fixed-point number with d decimals.
+  function fx(x, d) result(s)
+    double precision, intent(in) :: x
+    integer, intent(in) :: d
+    character(len=:), allocatable :: s
+    character(len=32) :: buf, fmt
+    write(fmt, '("(f0.",i0,")")') d
+    write(buf, fmt) x
+    s = trim(adjustl(buf))
+    if (s(1:1) == ".") s = "0" // s
+    if (s(1:2) == "-.") s = "-0" // s(2:)
+  end function fx
 
   subroutine usage()
     write(output_unit, '(a)') "usage: airlaunch SCENARIO.nml [--output FILE]"

@@ -1,0 +1,80 @@
+!> Applied loads of the air-launch scene, as one force source of the
+!> separation system (src/multibody): aircraft aerodynamics and thrust (with
+!> the elevator hold), rocket aerodynamics with the bay shielding, and the
+!> line's end force at the rocket's tie-down point (direct coupling: the line
+!> nodes are integrated with the bodies, DESIGN §4 (b)).
+module airlaunch_launch_loads
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_rotation, only: dcm_to_euler
+  use airlaunch_aircraft_aero, only: aircraft_aero, aircraft_aero_eval, aircraft_aero_out
+  use airlaunch_rocket_aero, only: rocket_aero, rocket_aero_eval
+  use airlaunch_rigid_body, only: rigid_body
+  use airlaunch_force_source, only: force_source, add_point_force
+  use airlaunch_cut_joint, only: phase_free
+  implicit none
+  private
+  public :: launch_loads
+
+  !> Loads on the aircraft (body 0) and the rocket (body 1).
+  type, extends(force_source) :: launch_loads
+    type(aircraft_aero) :: aircraft                 !< aircraft aerodynamics and thrust
+    type(rocket_aero) :: rocket                     !< rocket aerodynamics
+    real(dp) :: edge_point(3) = 0.0_dp              !< ramp edge, aircraft axes [m]
+    real(dp) :: tie_down(3) = 0.0_dp                !< line attachment, rocket axes [m]
+    logical :: aircraft_aero_on = .true.            !< false for a prescribed aircraft
+    ! --- set by the scene before each evaluation
+    integer :: phase = 0                            !< current Case
+    real(dp) :: line_force(3) = 0.0_dp              !< line end force on the rocket, earth [N]
+    ! --- outputs of the last evaluation
+    type(aircraft_aero_out) :: aircraft_out
+  contains
+    procedure :: add_loads => launch_add_loads
+  end type launch_loads
+
+contains
+
+  subroutine launch_add_loads(self, t, bodies, force, moment, error)
+    class(launch_loads), intent(inout) :: self
+    real(dp), intent(in) :: t
+    type(rigid_body), intent(in) :: bodies(0:)
+    real(dp), intent(inout) :: force(:, 0:)
+    real(dp), intent(inout) :: moment(:, 0:)
+    type(error_type), allocatable, intent(inout) :: error
+    type(air_state) :: air
+    real(dp) :: e(3), f(3), m(3), x_shield, edge_e(3)
+    associate(b0 => bodies(0), b1 => bodies(1))
+      if (self%aircraft_aero_on) then
+        air = isa(b0%r(2))
+        if (.not. air%in_range) then
+          call fatal_error(error, "aircraft altitude " // str(b0%r(2)) // " m is outside the atmosphere model")
+          return
+        end if
+        e = dcm_to_euler(b0%c)
+        self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, matmul(transpose(b0%c), b0%v), &
+          b0%w, e(2))
+        force(:, 0) = force(:, 0) + matmul(b0%c, self%aircraft_out%force)
+        moment(:, 0) = moment(:, 0) + self%aircraft_out%moment
+      end if
+      air = isa(b1%r(2))
+      if (.not. air%in_range) then
+        call fatal_error(error, "rocket altitude " // str(b1%r(2)) // " m is outside the atmosphere model")
+        return
+      end if
+      if (self%phase == phase_free) then
+        x_shield = huge(1.0_dp)
+      else
+        ! the part of the rocket still ahead of the ramp edge is inside the bay
+        edge_e = b0%r + matmul(b0%c, self%edge_point)
+        x_shield = dot_product(b1%c(:, 1), edge_e - b1%r)
+      end if
+      call rocket_aero_eval(self%rocket, air%density, matmul(transpose(b1%c), b1%v), b1%w, x_shield, f, m)
+      force(:, 1) = force(:, 1) + matmul(b1%c, f)
+      moment(:, 1) = moment(:, 1) + m
+      call add_point_force(b1, self%tie_down, self%line_force, force(:, 1), moment(:, 1))
+    end associate
+    if (.false.) x_shield = t
+  end subroutine launch_add_loads
+end module airlaunch_launch_loads

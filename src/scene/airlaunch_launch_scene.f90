@@ -1,0 +1,435 @@
+!> The air-launch scene (the paper's scenario, §4-§5.2): build the system from
+!> the inputs, trim it, integrate the four phases with event location, record
+!> the output contract (docs/output.md) and the milestones.
+module airlaunch_launch_scene
+  use airlaunch_kinds, only: dp, pi, g0, rad2deg, deg2rad
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_rotation, only: quat_from_euler, dcm_to_euler, nose_elevation
+  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_run_config, only: run_config
+  use airlaunch_ncwrite, only: nc_writer
+  use airlaunch_output_meta, only: write_run_metadata
+  use airlaunch_scenario_config, only: scenario_config
+  use airlaunch_trim, only: trim_problem, trim_result, trim_case0
+  use airlaunch_rigid_body, only: rigid_body, new_rigid_body
+  use airlaunch_force_source, only: gravity_source
+  use airlaunch_cut_joint, only: cut_joint_geometry, cut_joint_options, phase_name, phase_free, &
+    phase_preparation
+  use airlaunch_line_model, only: line_params
+  use airlaunch_launch_loads, only: launch_loads
+  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size
+  implicit none
+  private
+  public :: launch_result, run_launch, setup_launch
+
+  !> Milestones of one run (also the summary row of a sweep case).
+  type :: launch_result
+    character(len=16) :: status = "completed"
+    character(len=:), allocatable :: failure
+    real(dp) :: trim_alpha_deg = 0.0_dp, trim_elevator_deg = 0.0_dp, trim_thrust_n = 0.0_dp
+    real(dp) :: release_time = -1.0_dp, edge_time = -1.0_dp, separation_time = -1.0_dp
+    logical :: early_separation = .false.
+    real(dp) :: pitch_at_separation_deg = 0.0_dp, pitch_rate_at_separation_deg_s = 0.0_dp
+    real(dp) :: pitch_max_time = -1.0_dp, pitch_max_deg = 0.0_dp, nose_elevation_at_max_deg = 0.0_dp
+    real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
+    real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
+    real(dp) :: max_constraint_residual = 0.0_dp
+    real(dp) :: end_time = 0.0_dp
+    type(cvode_stats) :: stats
+  end type launch_result
+
+contains
+
+  !> Build the system, trim it and fill its initial state y0 (relative
+  !> variables, see airlaunch_launch_system).
+  subroutine setup_launch(cfg, sys, y0, res, error)
+    type(scenario_config), intent(in) :: cfg
+    type(launch_system), intent(inout) :: sys
+    real(dp), allocatable, intent(out) :: y0(:)
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: error
+    type(air_state) :: air
+    type(trim_problem) :: tp
+    type(trim_result) :: tr
+    type(rigid_body) :: b0, b1
+    type(cut_joint_geometry) :: geo
+    type(cut_joint_options) :: jopt
+    type(launch_loads) :: loads
+    type(line_params) :: lp
+    real(dp) :: v0, radius, r_rocket(3), r_tie(3), pull, seg, dir(3)
+    integer :: n, k, i, status
+
+    air = isa(cfg%flight%altitude)
+    v0 = cfg%flight%mach*air%sound_speed
+    radius = cfg%rocket%aero%diameter/2
+    ! the line: weight and drag on, ISA density along it
+    lp = line_params(length=cfg%line%length, n_seg=cfg%line%n_seg, ea=cfg%line%ea, &
+      mass_per_length=cfg%line%mass_per_length, damping=cfg%line%damping, diameter=cfg%line%diameter, &
+      cd_normal=cfg%line%cd_normal, cd_tangential=cfg%line%cd_tangential, gravity=.true., air=.true.)
+    call sys%line%init(lp, error)
+    if (allocated(error)) return
+    sys%chute = cfg%chute
+    if (sys%chute%deploy_time >= 0.0_dp) sys%chute%fill_time = &
+      sys%chute%fill_constant*sqrt(4*sys%chute%drag_area/(pi*sys%chute%cd0))/v0
+
+    ! --- trim of the Case 0 system (aircraft + locked rocket + parachute pull)
+    r_rocket = [cfg%bay%ramp_edge_x + cfg%bay%l0, cfg%bay%floor_y + radius, 0.0_dp]
+    r_tie = r_rocket + [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
+    ! steady pull: the canopy's drag and the skin friction of the trailing line
+    pull = 0.5_dp*air%density*v0**2*(sys%chute%drag_area + cfg%line%cd_tangential*pi*cfg%line%diameter &
+      *cfg%line%length)
+    if (sys%chute%deploy_time >= 0.0_dp) pull = 0.5_dp*air%density*v0**2*sys%chute%packed_drag_area
+    tp = trim_problem(aircraft_mass=cfg%aircraft%mass, rocket_mass=cfg%rocket%mass, r_rocket=r_rocket, &
+      r_tie=r_tie, pull=pull, density=air%density, speed=v0, mode=cfg%flight%trim_mode, &
+      alpha_target=cfg%flight%trim_alpha)
+    loads%aircraft = cfg%aircraft%aero
+    call trim_case0(tp, loads%aircraft, tr, error)
+    if (allocated(error)) return
+    res%trim_alpha_deg = tr%alpha*rad2deg
+    res%trim_elevator_deg = tr%delta_e*rad2deg
+    res%trim_thrust_n = tr%thrust
+
+    ! --- bodies: aircraft in trimmed level flight, rocket locked on the rail
+    b0 = new_rigid_body("aircraft", cfg%aircraft%mass, diag(cfg%aircraft%inertia), error)
+    if (allocated(error)) return
+    b0%r = [0.0_dp, cfg%flight%altitude, 0.0_dp]
+    b0%v = [v0, 0.0_dp, 0.0_dp]
+    call b0%set_attitude(quat_from_euler([0.0_dp, tr%alpha, 0.0_dp]))
+    b1 = new_rigid_body("rocket", cfg%rocket%mass, diag(cfg%rocket%inertia), error)
+    if (allocated(error)) return
+    geo = cut_joint_geometry(rail_direction=[-1.0_dp, 0.0_dp, 0.0_dp], &
+      floor_point=[0.0_dp, cfg%bay%floor_y, 0.0_dp], edge_point=[cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp], &
+      contact_point=[0.0_dp, -radius, 0.0_dp], nose_x=cfg%rocket%aero%cg_from_nose, &
+      rocket_length=cfg%rocket%aero%length, rocket_radius=radius)
+    jopt = cut_joint_options(mu_rail=cfg%bay%friction, mu_edge=cfg%bay%friction)
+    sys%tie_down = [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
+    call sys%sep%init(b0, b1, sys%tie_down, 1, geo, jopt, cfg%bay%release_time, error, &
+      aircraft_prescribed=cfg%aircraft%dynamics == "prescribed")
+    if (allocated(error)) return
+    call sys%sep%joint%place_on_rail(sys%sep%bodies(0), cfg%bay%l0, 0.0_dp, sys%sep%bodies(1))
+    call sys%sep%add_source(gravity_source())
+    loads%rocket = cfg%rocket%aero
+    loads%edge_point = geo%edge_point
+    loads%tie_down = sys%tie_down
+    loads%aircraft_aero_on = cfg%aircraft%dynamics /= "prescribed"
+    call sys%sep%add_source(loads)
+    sys%iloads = size(sys%sep%sources)
+
+    ! --- state: reference frame at V0, h0; the line trails straight aft from
+    !     the tie-down point, stretched by the steady pull
+    sys%v_ref = v0
+    sys%h_ref = cfg%flight%altitude
+    n = sys%line%n
+    allocate(y0(rigid_size + 6*n), sys%yabs(rigid_size + 6*n), sys%ydabs(rigid_size + 6*n))
+    allocate(sys%x(3, 0:n), sys%v(3, 0:n), sys%f(3, 0:n), sys%tension(n))
+    call sys%sep%pack_state(y0(1:rigid_size))
+    do i = 0, 1
+      y0(13*i+1:13*i+3) = y0(13*i+1:13*i+3) - [0.0_dp, sys%h_ref, 0.0_dp]
+      y0(13*i+4) = y0(13*i+4) - v0
+    end do
+    seg = sys%line%l0*(1.0_dp + pull/cfg%line%ea)
+    dir = [-1.0_dp, 0.0_dp, 0.0_dp]
+    do k = 1, n
+      i = rigid_size + 6*(k - 1)
+      y0(i+1:i+3) = sys%sep%bodies(1)%point_position(sys%tie_down) + k*seg*dir - [0.0_dp, sys%h_ref, 0.0_dp]
+      y0(i+4:i+6) = 0.0_dp
+    end do
+    call sys%prepare(0.0_dp, y0, status)
+    call sys%sep%start(0.0_dp, sys%yabs(1:rigid_size), phase_preparation, error)
+  contains
+    pure function diag(d) result(m)
+      real(dp), intent(in) :: d(3)
+      real(dp) :: m(3, 3)
+      m = 0
+      m(1, 1) = d(1); m(2, 2) = d(2); m(3, 3) = d(3)
+    end function diag
+  end subroutine setup_launch
+
+  !> Run the scene and write its output (unless run%trajectory is false).
+  subroutine run_launch(run, cfg, echo, res, error)
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    character(len=*), intent(in) :: echo
+    type(launch_result), intent(out) :: res
+    type(error_type), allocatable, intent(inout) :: error
+    type(launch_system), target :: sys
+    type(cvode_solver) :: solver
+    type(cvode_options) :: opts
+    type(error_type), allocatable :: run_error
+    real(dp), allocatable :: y0(:)
+    ! recorded history
+    integer :: nmax, nrec, n
+    real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
+      load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
+      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:)
+    real(dp) :: tout
+    integer :: k
+
+    call setup_launch(cfg, sys, y0, res, error)
+    if (allocated(error)) return
+    n = sys%line%n
+    opts%rtol = run%rtol
+    opts%atol = run%atol
+    opts%linear_solver = "band"
+    opts%upper_bandwidth = rigid_size + 6 - 1   ! aircraft rows see node 1 through the CFA
+    opts%lower_bandwidth = rigid_size - 1       ! rocket rows see the aircraft
+    opts%atol_vector = atol_scaling(run%atol, size(y0))
+    call solver%init(sys, 0.0_dp, y0, opts, error)
+    if (allocated(error)) return
+
+    nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
+    if (run%trajectory) then
+      allocate(time(nmax), phase(nmax), ac_pos(3, nmax), ac_eul(3, nmax), ac_alpha(nmax), ac_q(nmax), &
+        elev(nmax), load_factor(nmax), rk_pos(3, nmax), rk_vel(3, nmax), rk_eul(3, nmax), rk_rate(nmax), &
+        rk_elev(nmax), pc_pos(3, nmax), t_rocket(nmax), t_chute(nmax), nodes(3, 0:n, nmax), &
+        cforce(6, nmax), normal(nmax), friction(nmax), clearance(nmax), residual(nmax))
+    end if
+    nrec = 0
+    call record()
+    do k = 1, nmax - 1
+      tout = min(k*run%output_dt, run%t_end)
+      call advance_to(tout, run_error)
+      if (allocated(run_error)) exit
+      call record()
+      if (tout >= run%t_end) exit
+    end do
+    res%stats = solver%stats()
+    res%end_time = solver%t
+    res%release_time = event_or_minus(sys%sep%event_time(1))
+    res%edge_time = event_or_minus(sys%sep%event_time(2))
+    res%separation_time = event_or_minus(sys%sep%event_time(3))
+    res%early_separation = sys%sep%early_separation
+    if (allocated(run_error)) then
+      res%status = "failed"
+      res%failure = run_error%message
+    end if
+    call solver%free()
+    if (run%trajectory) call write_output()
+    if (allocated(run_error)) call move_alloc(run_error, error)
+  contains
+
+    !> Integrate to tout, handling the events on the way.
+    subroutine advance_to(t_target, err)
+      real(dp), intent(in) :: t_target
+      type(error_type), allocatable, intent(inout) :: err
+      logical :: event, changed
+      integer :: which(launch_nroots), guard, status
+      real(dp) :: e(3)
+      do guard = 1, 100
+        call solver%advance(t_target, err, event, which)
+        if (allocated(err)) then
+          err%message = phase_name(sys%sep%phase) // ": " // err%message
+          return
+        end if
+        if (.not. event) return
+        call sys%prepare(solver%t, solver%y, status)
+        if (which(launch_nroots) < 0 .and. sys%sep%phase == phase_free .and. sys%find_pitch_max) then
+          e = dcm_to_euler(sys%sep%bodies(1)%c)
+          res%pitch_max_time = solver%t
+          res%pitch_max_deg = e(2)*rad2deg
+          res%nose_elevation_at_max_deg = nose_elevation(sys%sep%bodies(1)%q)*rad2deg
+          sys%find_pitch_max = .false.
+        end if
+        call sys%sep%handle_event(solver%t, sys%yabs(1:rigid_size), which(1:launch_nroots-1), changed, err)
+        if (allocated(err)) then
+          err%message = phase_name(sys%sep%phase) // ", t = " // str(solver%t) // " s: " // err%message
+          return
+        end if
+        if (changed .and. sys%sep%phase == phase_free .and. res%separation_time < 0.0_dp) then
+          e = dcm_to_euler(sys%sep%bodies(1)%c)
+          res%pitch_at_separation_deg = e(2)*rad2deg
+          res%pitch_rate_at_separation_deg_s = sys%euler_pitch_rate()*rad2deg
+          res%separation_time = solver%t
+        end if
+        call solver%reinit(solver%t, solver%y, err)
+        if (allocated(err)) return
+        if (solver%t >= t_target) return
+      end do
+      call fatal_error(err, phase_name(sys%sep%phase) // ", t = " // str(solver%t) // &
+        " s: too many events before the output time")
+    end subroutine advance_to
+
+    !> Sample the state at the solver's time (outputs and milestones).
+    subroutine record()
+      integer :: status
+      real(dp) :: ea(3), er(3), rate, nz, cl, edge(3), amag
+      type(error_type), allocatable :: eval_error
+      call sys%prepare(solver%t, solver%y, status)
+      call sys%sep%evaluate(solver%t, sys%yabs(1:rigid_size), eval_error)
+      associate(b0 => sys%sep%bodies(0), b1 => sys%sep%bodies(1))
+        ea = dcm_to_euler(b0%c)
+        er = dcm_to_euler(b1%c)
+        rate = sys%euler_pitch_rate()
+        ! load factor along the aircraft's y axis: specific force / g
+        nz = dot_product(b0%c(:, 2), sys%sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
+        edge = b0%r + matmul(b0%c, [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp])
+        cl = segment_distance(edge, b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp]), &
+          b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])) &
+          - cfg%rocket%aero%diameter/2
+        if (sys%sep%phase /= phase_free) cl = 0.0_dp
+        if (sys%sep%phase == phase_free) res%min_clearance = min(res%min_clearance, cl)
+        if (maxval(sys%tension) > res%peak_tension) then
+          res%peak_tension = maxval(sys%tension)
+          res%peak_tension_time = solver%t
+        end if
+        res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, &
+          abs(ea(2)*rad2deg - res%trim_alpha_deg))
+        res%max_load_factor_excursion = max(res%max_load_factor_excursion, abs(nz - 1.0_dp))
+        if (sys%sep%phase /= phase_free) res%max_constraint_residual = max(res%max_constraint_residual, &
+          sys%sep%js%res_position)
+        if (.not. run%trajectory) return
+        nrec = nrec + 1
+        time(nrec) = solver%t
+        phase(nrec) = sys%sep%phase
+        ac_pos(:, nrec) = b0%r
+        ac_eul(:, nrec) = ea*rad2deg
+        select type (s => sys%sep%sources(sys%iloads)%source)
+        type is (launch_loads)
+          ac_alpha(nrec) = s%aircraft_out%alpha*rad2deg
+          elev(nrec) = s%aircraft_out%delta_e*rad2deg
+        end select
+        ac_q(nrec) = b0%w(3)*rad2deg
+        load_factor(nrec) = nz
+        rk_pos(:, nrec) = b1%r
+        rk_vel(:, nrec) = b1%v
+        rk_eul(:, nrec) = er*rad2deg
+        rk_rate(nrec) = rate*rad2deg
+        rk_elev(nrec) = nose_elevation(b1%q)*rad2deg
+        pc_pos(:, nrec) = sys%x(:, n)
+        t_rocket(nrec) = sys%tension(1)
+        t_chute(nrec) = sys%tension(n)
+        nodes(:, :, nrec) = sys%x
+        cforce(1:3, nrec) = sys%sep%rh_force
+        cforce(4:6, nrec) = sys%sep%rh_moment
+        normal(nrec) = sys%sep%normal_force
+        friction(nrec) = sys%sep%friction_force
+        clearance(nrec) = cl
+        residual(nrec) = sys%sep%js%res_position
+        amag = 0.0_dp
+      end associate
+    end subroutine record
+
+    subroutine write_output()
+      type(nc_writer) :: w
+      type(error_type), allocatable :: werr
+      real(dp) :: node_index(0:n)
+      integer :: j
+      do j = 0, n
+        node_index(j) = j
+      end do
+      call w%create(run%output, werr)
+      call w%add_dim("time", time(1:nrec), "s", "time since the start (trimmed flight)", werr)
+      call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
+        "earth-frame component: 0 = x forward, 1 = y up, 2 = z right", werr)
+      call w%add_dim("angle", [0.0_dp, 1.0_dp, 2.0_dp], "1", "Euler angle: 0 = yaw, 1 = pitch, 2 = roll", werr)
+      call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
+      call w%add_dim("wrench", [0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp], "1", &
+        "0-2 force on the rocket (earth x, y, z), 3-5 moment on the rocket about its CG (rocket axes)", werr)
+      call w%add_var_1d("phase", ["time"], phase(1:nrec), "1", "phase: 0 locked, 1 rail extraction, " // &
+        "2 rotation on the ramp edge, 3 free flight", werr)
+      call w%add_var_2d("aircraft_position", ["xyz ", "time"], ac_pos(:, 1:nrec), "m", "aircraft CG, earth frame", werr)
+      call w%add_var_2d("aircraft_euler_deg", ["angle", "time "], ac_eul(:, 1:nrec), "degree", &
+        "aircraft yaw, pitch, roll", werr)
+      call w%add_var_1d("aircraft_alpha_deg", ["time"], ac_alpha(1:nrec), "degree", "aircraft angle of attack", werr)
+      call w%add_var_1d("aircraft_pitch_rate_deg_s", ["time"], ac_q(1:nrec), "degree s-1", &
+        "aircraft body pitch rate", werr)
+      call w%add_var_1d("elevator_deg", ["time"], elev(1:nrec), "degree", "elevator deflection", werr)
+      call w%add_var_1d("aircraft_load_factor", ["time"], load_factor(1:nrec), "1", &
+        "aircraft normal load factor (specific force along body y / g)", werr)
+      call w%add_var_2d("rocket_position", ["xyz ", "time"], rk_pos(:, 1:nrec), "m", "rocket CG, earth frame", werr)
+      call w%add_var_2d("rocket_velocity", ["xyz ", "time"], rk_vel(:, 1:nrec), "m s-1", &
+        "rocket CG velocity, earth frame", werr)
+      call w%add_var_2d("rocket_euler_deg", ["angle", "time "], rk_eul(:, 1:nrec), "degree", &
+        "rocket yaw, pitch, roll (the paper's Euler convention; pitch in [-90, 90])", werr)
+      call w%add_var_1d("rocket_pitch_rate_deg_s", ["time"], rk_rate(1:nrec), "degree s-1", &
+        "rocket Euler pitch rate", werr)
+      call w%add_var_1d("rocket_nose_elevation_deg", ["time"], rk_elev(1:nrec), "degree", &
+        "rocket nose elevation, continuous through the vertical (0 level forward, 90 up, 180 level aft)", werr)
+      call w%add_var_2d("parachute_position", ["xyz ", "time"], pc_pos(:, 1:nrec), "m", "parachute, earth frame", werr)
+      call w%add_var_1d("line_tension_rocket_end_N", ["time"], t_rocket(1:nrec), "N", &
+        "line tension at the rocket end", werr)
+      call w%add_var_1d("line_tension_parachute_end_N", ["time"], t_chute(1:nrec), "N", &
+        "line tension at the parachute end", werr)
+      call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], nodes(:, :, 1:nrec), "m", &
+        "line node positions, earth frame", werr)
+      call w%add_var_2d("constraint_force", ["wrench", "time  "], cforce(:, 1:nrec), "N or N m", &
+        "cut-joint constraint wrench R_H on the rocket (CFA)", werr)
+      call w%add_var_1d("edge_normal_force_N", ["time"], normal(1:nrec), "N", &
+        "contact normal force of the rail / ramp edge on the rocket", werr)
+      call w%add_var_1d("friction_force_N", ["time"], friction(1:nrec), "N", &
+        "friction on the rocket along the exit direction", werr)
+      call w%add_var_1d("clearance_m", ["time"], clearance(1:nrec), "m", &
+        "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
+      call w%add_var_1d("constraint_residual_m", ["time"], residual(1:nrec), "m", &
+        "position residual of the cut-joint constraints", werr)
+      call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
+        "(Zheng & Zhang 2018, §5.2)", echo, werr)
+      call write_milestones(w, res, werr)
+      if (allocated(werr)) then
+        call w%abort()
+        if (.not. allocated(run_error)) call move_alloc(werr, run_error)
+      else
+        call w%commit(werr)
+        if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
+      end if
+    end subroutine write_output
+  end subroutine run_launch
+
+  !> The milestones as global attributes.
+  subroutine write_milestones(w, res, error)
+    type(nc_writer), intent(inout) :: w
+    type(launch_result), intent(in) :: res
+    type(error_type), allocatable, intent(inout) :: error
+    call w%add_text_att("/", "status", trim(res%status), error)
+    if (allocated(res%failure)) call w%add_text_att("/", "failure", res%failure, error)
+    call w%add_real_att("/", "trim_alpha_deg", res%trim_alpha_deg, error)
+    call w%add_real_att("/", "trim_elevator_deg", res%trim_elevator_deg, error)
+    call w%add_real_att("/", "trim_thrust_N", res%trim_thrust_n, error)
+    call w%add_real_att("/", "release_time_s", res%release_time, error)
+    call w%add_real_att("/", "edge_time_s", res%edge_time, error)
+    call w%add_real_att("/", "separation_time_s", res%separation_time, error)
+    call w%add_text_att("/", "early_separation", merge("true ", "false", res%early_separation), error)
+    call w%add_real_att("/", "pitch_at_separation_deg", res%pitch_at_separation_deg, error)
+    call w%add_real_att("/", "pitch_rate_at_separation_deg_s", res%pitch_rate_at_separation_deg_s, error)
+    call w%add_real_att("/", "pitch_max_time_s", res%pitch_max_time, error)
+    call w%add_real_att("/", "pitch_max_deg", res%pitch_max_deg, error)
+    call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", res%nose_elevation_at_max_deg, error)
+    call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
+    call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
+    call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
+    call w%add_real_att("/", "max_aircraft_pitch_excursion_deg", res%max_aircraft_pitch_excursion_deg, error)
+    call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
+    call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)
+  end subroutine write_milestones
+
+  pure real(dp) function event_or_minus(t) result(r)
+    real(dp), intent(in) :: t
+    r = t
+    if (t < -1.0e300_dp) r = -1.0_dp
+  end function event_or_minus
+
+  !> Per-component absolute tolerances: positions and velocities in m and
+  !> m/s (relative variables, small numbers), quaternions and rates tighter.
+  pure function atol_scaling(atol, n) result(a)
+    real(dp), intent(in) :: atol
+    integer, intent(in) :: n
+    real(dp) :: a(n)
+    integer :: i
+    a = atol*1.0e2_dp
+    do i = 0, 1
+      a(13*i+7:13*i+10) = atol
+      a(13*i+11:13*i+13) = atol*10
+    end do
+  end function atol_scaling
+
+  !> Distance from point p to the segment [a, b].
+  pure real(dp) function segment_distance(p, a, b) result(d)
+    real(dp), intent(in) :: p(3), a(3), b(3)
+    real(dp) :: ab(3), s
+    ab = b - a
+    s = max(0.0_dp, min(1.0_dp, dot_product(p - a, ab)/dot_product(ab, ab)))
+    d = norm2(p - (a + s*ab))
+  end function segment_distance
+end module airlaunch_launch_scene

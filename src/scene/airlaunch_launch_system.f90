@@ -1,0 +1,181 @@
+!> The air-launch system as one ODE for CVODE: the rigid separation scene of
+!> src/multibody (aircraft B0 + rocket B1 + cut joint by the CFA + phases) and
+!> the flexible line B2 whose last node carries the parachute B3 (direct
+!> coupling, DESIGN §4 (b)): the line's interior nodes and the parachute are
+!> integrated together with the bodies, and the line's end force acts on the
+!> rocket at its tie-down point.
+!>
+!> State (relative to a reference frame translating at the initial speed V0
+!> along x at the initial altitude h0, so that positions and velocities stay
+!> small numbers and CVODE's relative tolerance resolves the line's stretch):
+!>   y = [aircraft r, v, q, w (13) | rocket r, v, q, w (13) | nodes 1..N: x, v (6 each)]
+!> with r_abs = r + (V0 t, h0, 0) and v_abs = v + (V0, 0, 0) for every point
+!> quantity.  Node N is the parachute: mass m_N + m_canopy + m_apparent, drag of
+!> its inflating canopy.  The half-segment mass at node 0 (rho l0/2) is
+!> neglected against the rocket's (its weight and drag are in the end force).
+!>
+!> Events: the four of the separation scene (release, CG past the edge, nose
+!> past the edge, edge normal force zero) and, in Case 3 until it is found, the
+!> first maximum of the rocket's Euler pitch (Euler pitch rate
+!> theta' = sin(gamma) w_y + cos(gamma) w_z crossing zero downwards).
+module airlaunch_launch_system
+  use airlaunch_kinds, only: dp, g0
+  use airlaunch_error, only: error_type
+  use airlaunch_strings, only: str
+  use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_rotation, only: dcm_to_euler
+  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use airlaunch_separation, only: separation_system, separation_nroots
+  use airlaunch_cut_joint, only: phase_free
+  use airlaunch_line_model, only: line_model
+  use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass
+  use airlaunch_launch_loads, only: launch_loads
+  implicit none
+  private
+  public :: launch_system, launch_nroots, rigid_size
+
+  !> Events: the separation scene's and the pitch maximum.
+  integer, parameter :: launch_nroots = separation_nroots + 1
+  !> Rigid part of the state (aircraft + rocket).
+  integer, parameter :: rigid_size = 26
+
+  !> The whole system.
+  type, extends(ode_system) :: launch_system
+    type(separation_system) :: sep          !< aircraft + rocket + joint + phases
+    type(line_model) :: line                !< the line, node N = parachute
+    type(parachute) :: chute                !< the canopy
+    integer :: iloads = 0                   !< index of the launch_loads source in sep%sources
+    real(dp) :: v_ref = 0.0_dp              !< V0 of the reference frame [m/s]
+    real(dp) :: h_ref = 0.0_dp              !< h0 of the reference frame [m]
+    real(dp) :: tie_down(3) = 0.0_dp        !< rocket axes [m]
+    logical :: find_pitch_max = .true.      !< event 5 active in Case 3
+    ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
+    real(dp), allocatable :: yabs(:), ydabs(:)
+    real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)
+    real(dp) :: chute_drag(3) = 0.0_dp
+  contains
+    procedure :: rhs => launch_rhs
+    procedure :: nroots => launch_nroots_fn
+    procedure :: roots => launch_roots
+    procedure :: prepare => launch_prepare
+    procedure :: to_absolute => launch_to_absolute
+    procedure :: euler_pitch_rate => launch_euler_pitch_rate
+  end type launch_system
+
+contains
+
+  !> Absolute state (earth frame) of the rigid part and the nodes from y.
+  subroutine launch_to_absolute(self, t, y)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t, y(:)
+    integer :: k, n, i
+    self%yabs = y
+    do i = 0, 1   ! aircraft, rocket
+      self%yabs(13*i+1) = y(13*i+1) + self%v_ref*t
+      self%yabs(13*i+2) = y(13*i+2) + self%h_ref
+      self%yabs(13*i+4) = y(13*i+4) + self%v_ref
+    end do
+    n = self%line%n
+    do k = 1, n
+      i = rigid_size + 6*(k - 1)
+      self%x(:, k) = y(i+1:i+3) + [self%v_ref*t, self%h_ref, 0.0_dp]
+      self%v(:, k) = y(i+4:i+6) + [self%v_ref, 0.0_dp, 0.0_dp]
+    end do
+  end subroutine launch_to_absolute
+
+  !> Everything the rigid scene needs before it evaluates: bodies from the
+  !> state, the line's node forces, the end force and phase in the loads.
+  subroutine launch_prepare(self, t, y, status)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t, y(:)
+    integer, intent(out) :: status
+    call self%to_absolute(t, y)
+    call self%sep%load_state(self%yabs(1:rigid_size))
+    self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
+    self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
+    call self%line%forces(self%x, self%v, self%f, self%tension, status)
+    if (status /= 0) then
+      self%failure = "line tension is not finite at t = " // str(t) // " s"
+      status = rhs_fatal
+      return
+    end if
+    select type (s => self%sep%sources(self%iloads)%source)
+    type is (launch_loads)
+      s%line_force = self%f(:, 0)
+      s%phase = self%sep%phase
+    end select
+    status = rhs_ok
+  end subroutine launch_prepare
+
+  subroutine launch_rhs(self, t, y, ydot, status)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t
+    real(dp), intent(in) :: y(:)
+    real(dp), intent(out) :: ydot(:)
+    integer, intent(out) :: status
+    integer :: k, n, i
+    real(dp) :: m, vrel(3)
+    type(air_state) :: air
+    call self%prepare(t, y, status)
+    if (status /= rhs_ok) return
+    call self%sep%rhs(t, self%yabs(1:rigid_size), ydot(1:rigid_size), status)
+    if (status /= rhs_ok) then
+      if (allocated(self%sep%failure)) self%failure = self%sep%failure
+      return
+    end if
+    ydot(1:3) = ydot(1:3) - [self%v_ref, 0.0_dp, 0.0_dp]
+    ydot(14:16) = ydot(14:16) - [self%v_ref, 0.0_dp, 0.0_dp]
+    n = self%line%n
+    do k = 1, n - 1
+      i = rigid_size + 6*(k - 1)
+      ydot(i+1:i+3) = y(i+4:i+6)
+      ydot(i+4:i+6) = self%f(:, k)/self%line%node_mass(k)
+    end do
+    ! node N: the parachute
+    i = rigid_size + 6*(n - 1)
+    air = isa(self%x(2, n))
+    if (.not. air%in_range) then
+      self%failure = "parachute altitude " // str(self%x(2, n)) // " m is outside the atmosphere model"
+      status = rhs_fatal
+      return
+    end if
+    vrel = self%v(:, n)
+    self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vrel)*vrel
+    m = self%line%node_mass(n) + self%chute%mass + parachute_added_mass(self%chute, air%density, t)
+    ydot(i+1:i+3) = y(i+4:i+6)
+    ydot(i+4:i+6) = (self%f(:, n) + self%chute_drag + [0.0_dp, -g0*self%chute%mass, 0.0_dp])/m
+    status = rhs_ok
+  end subroutine launch_rhs
+
+  integer function launch_nroots_fn(self)
+    class(launch_system), intent(in) :: self
+    launch_nroots_fn = launch_nroots
+    if (.false.) launch_nroots_fn = self%iloads
+  end function launch_nroots_fn
+
+  subroutine launch_roots(self, t, y, g, status)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t
+    real(dp), intent(in) :: y(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(out) :: status
+    g = 1.0_dp
+    call self%prepare(t, y, status)
+    if (status /= rhs_ok) return
+    call self%sep%roots(t, self%yabs(1:rigid_size), g(1:separation_nroots), status)
+    if (status /= rhs_ok) then
+      if (allocated(self%sep%failure)) self%failure = self%sep%failure
+      return
+    end if
+    if (self%find_pitch_max .and. self%sep%phase == phase_free) g(launch_nroots) = self%euler_pitch_rate()
+  end subroutine launch_roots
+
+  !> Euler pitch rate of the rocket [rad/s] from its body rates (no
+  !> singularity): theta' = sin(gamma) w_y + cos(gamma) w_z (Eqs. (49)-(50)).
+  real(dp) function launch_euler_pitch_rate(self) result(r)
+    class(launch_system), intent(in) :: self
+    real(dp) :: e(3)
+    e = dcm_to_euler(self%sep%bodies(1)%c)
+    r = sin(e(3))*self%sep%bodies(1)%w(2) + cos(e(3))*self%sep%bodies(1)%w(3)
+  end function launch_euler_pitch_rate
+end module airlaunch_launch_system
