@@ -104,6 +104,7 @@ module airlaunch_cut_joint
     real(dp) :: l10 = 0.0_dp            !< nose-to-edge distance along the rail at the start [m]
   contains
     procedure :: setup => joint_setup
+    procedure :: validate => joint_validate
     procedure :: capture => joint_capture
     procedure :: inside_rocket => joint_inside_rocket
     procedure :: evaluate => joint_evaluate
@@ -147,15 +148,31 @@ contains
     end select
   end function joint_components
 
-  !> Validate the state-independent geometry and options and build the joint frame.
-  subroutine joint_setup(self, geo, opt, error)
+  !> Store the geometry and options and build the joint frame (no checks: call
+  !> `validate` before running; the placement helpers only need the frame).
+  subroutine joint_setup(self, geo, opt)
     class(cut_joint), intent(inout) :: self               !< joint
     type(cut_joint_geometry), intent(in) :: geo           !< geometry
     type(cut_joint_options), intent(in) :: opt            !< options
-    type(error_type), allocatable, intent(inout) :: error !< set on inconsistent input
-    real(dp) :: e1(3), e2(3), d(3)
+    real(dp) :: e1(3), e2(3)
     self%geo = geo
     self%opt = opt
+    e1 = [-1.0_dp, 0.0_dp, 0.0_dp]
+    if (norm2(geo%rail_direction) > 0.0_dp) e1 = geo%rail_direction/norm2(geo%rail_direction)
+    e2 = [0.0_dp, 1.0_dp, 0.0_dp] - e1(2)*e1
+    if (norm2(e2) < 1.0e-6_dp) e2 = [1.0_dp, 0.0_dp, 0.0_dp] - e1(1)*e1
+    e2 = e2/norm2(e2)
+    self%e(:, 1) = e1
+    self%e(:, 2) = e2
+    self%e(:, 3) = cross(e1, e2)
+  end subroutine joint_setup
+
+  !> Check the state-independent geometry and options.
+  subroutine joint_validate(self, error)
+    class(cut_joint), intent(in) :: self                  !< joint (set up)
+    type(error_type), allocatable, intent(inout) :: error !< set on inconsistent input
+    real(dp) :: e1(3), e2(3), d(3)
+    associate(geo => self%geo, opt => self%opt)
     if (.not. (all(ieee_is_finite(geo%rail_direction)) .and. all(ieee_is_finite(geo%floor_point)) &
         .and. all(ieee_is_finite(geo%edge_point)) .and. all(ieee_is_finite(geo%contact_point)))) then
       call fatal_error(error, "inconsistent geometry: joint points are not finite numbers")
@@ -171,10 +188,6 @@ contains
       call fatal_error(error, "inconsistent geometry: rail direction is vertical in aircraft axes")
       return
     end if
-    e2 = e2/norm2(e2)
-    self%e(:, 1) = e1
-    self%e(:, 2) = e2
-    self%e(:, 3) = cross(e1, e2)
     if (.not. (geo%rocket_length > 0.0_dp .and. geo%rocket_radius > 0.0_dp)) then
       call fatal_error(error, "inconsistent geometry: rocket length and radius must be positive (got " &
         // str(geo%rocket_length) // " m, " // str(geo%rocket_radius) // " m)")
@@ -205,7 +218,8 @@ contains
         "and the stick band > 0")
       return
     end if
-  end subroutine joint_setup
+    end associate
+  end subroutine joint_validate
 
   !> True if the rocket-axis point p lies inside the rocket envelope (cylinder of
   !> the given radius from the tail at nose_x - length to the nose at nose_x).

@@ -57,12 +57,14 @@ module airlaunch_separation
     type(kane_chain) :: chain                 !< rocket [+ line] [+ parachute]
     type(cut_joint) :: joint                  !< the B0-B1 cut joint
     real(dp) :: t0 = 0.0_dp                   !< release time (end of Case 0) [s]
+    real(dp) :: tie_down(3) = 0.0_dp          !< rocket attach point of chain body 2, rocket axes [m]
     real(dp) :: quat_gain = 1.0_dp            !< quaternion norm drift gain [1/s]
     type(force_source_slot), allocatable :: sources(:)  !< applied-load models
     ! --- phase machine
     integer :: phase = phase_preparation      !< current Case 0..3
     real(dp) :: event_time(3) = -huge(1.0_dp) !< times of 0->1, 1->2, 2->3 (-huge: not yet)
     logical :: early_separation = .false.     !< 2->3 by the normal force reaching zero
+    real(dp) :: quat_drift = 0.0_dp           !< largest |1 - |q|| of the state after the last `advance`
     ! --- bodies (paper numbering 0..n) and their loads, updated by load_state/evaluate
     type(rigid_body), allocatable :: bodies(:)   !< (0:n) 0 aircraft, 1 rocket, 2.. chain
     real(dp), allocatable :: force(:, :)         !< (3, 0:n) applied CG forces, earth [N]
@@ -97,6 +99,7 @@ module airlaunch_separation
     procedure :: nroots => sep_nroots
     procedure :: roots => sep_roots
     procedure :: handle_event => sep_handle_event
+    procedure :: normalize_quaternions => sep_normalize_quaternions
     procedure :: advance => sep_advance
     procedure :: linear_momentum => sep_linear_momentum
     procedure :: angular_momentum => sep_angular_momentum
@@ -109,6 +112,8 @@ contains
   !> Configure the scene.  `aircraft` carries the aircraft's mass properties (and
   !> may carry its state), `rocket` the rocket's; `tie_down` is the rocket point
   !> (rocket axes) where body 2 of the chain is attached (ignored for nchain = 1).
+  !> Mass properties are checked here; the geometry and t0 are checked by `start`,
+  !> whose errors name the phase and the time.
   subroutine sep_init(self, aircraft, rocket, tie_down, nchain, geometry, options, t0, error, &
       aircraft_prescribed)
     class(separation_system), intent(inout) :: self       !< the scene
@@ -118,31 +123,22 @@ contains
     integer, intent(in) :: nchain                         !< bodies in the chain (1..3)
     type(cut_joint_geometry), intent(in) :: geometry      !< joint geometry
     type(cut_joint_options), intent(in) :: options        !< friction and drift control
-    real(dp), intent(in) :: t0                            !< release time [s], >= 0
+    real(dp), intent(in) :: t0                            !< release time [s], >= 0 (checked by start)
     type(error_type), allocatable, intent(inout) :: error !< set on invalid input
     logical, intent(in), optional :: aircraft_prescribed  !< aircraft at constant velocity/rate
     integer :: k
     self%aircraft_prescribed = .false.
     if (present(aircraft_prescribed)) self%aircraft_prescribed = aircraft_prescribed
-    if (.not. (t0 >= 0.0_dp)) then
-      call fatal_error(error, "phase schedule: release time t0 = " // str(t0) // " s must be >= 0")
-      return
-    end if
     self%t0 = t0
+    self%tie_down = tie_down
     call check_mass_properties("aircraft", aircraft%mass, aircraft%inertia, .false., error)
     if (allocated(error)) return
-    call self%joint%setup(geometry, options, error)
-    if (allocated(error)) return
+    call self%joint%setup(geometry, options)
     call self%chain%init(nchain, ncol_max, error)
     if (allocated(error)) return
     call self%chain%set_link(1, "rocket", rocket%mass, rocket%inertia, [0.0_dp, 0.0_dp, 0.0_dp], &
       tie_down, error)
     if (allocated(error)) return
-    if (nchain > 1 .and. .not. self%joint%inside_rocket(tie_down)) then
-      call fatal_error(error, "inconsistent geometry: the tie-down point [" // str(tie_down(1)) // ", " &
-        // str(tie_down(2)) // ", " // str(tie_down(3)) // "] m lies outside the rocket")
-      return
-    end if
     if (allocated(self%bodies)) deallocate(self%bodies, self%force, self%moment, self%udot)
     allocate(self%bodies(0:nchain), self%force(3, 0:nchain), self%moment(3, 0:nchain))
     allocate(self%udot(self%chain%speed_size()))
@@ -231,7 +227,15 @@ contains
     self%event_time = -huge(1.0_dp)
     self%early_separation = .false.
     call self%load_state(y)
-    call self%joint%capture(phase, self%bodies(0), self%bodies(1), error)
+    if (.not. (self%t0 >= 0.0_dp)) then
+      call fatal_error(error, "inconsistent input: release time t0 = " // str(self%t0) // " s must be >= 0")
+    else if (self%chain%n > 1 .and. .not. self%joint%inside_rocket(self%tie_down)) then
+      call fatal_error(error, "inconsistent geometry: the tie-down point [" // str(self%tie_down(1)) // ", " &
+        // str(self%tie_down(2)) // ", " // str(self%tie_down(3)) // "] m lies outside the rocket")
+    else
+      call self%joint%validate(error)
+      if (.not. allocated(error)) call self%joint%capture(phase, self%bodies(0), self%bodies(1), error)
+    end if
     if (allocated(error)) then
       error%message = phase_name(phase) // ", t = " // str(t) // " s: " // error%message
       return
@@ -473,7 +477,8 @@ contains
   end subroutine sep_handle_event
 
   !> Integrate to tout, stopping at every event to switch the phase and restart
-  !> CVODE.  On return the solver holds the state at tout.
+  !> CVODE.  On return the solver holds the state at tout (quat_drift its largest
+  !> quaternion norm error).
   subroutine sep_advance(self, solver, tout, error)
     class(separation_system), intent(inout) :: self       !< the scene (the solver's system)
     type(cvode_solver), intent(inout) :: solver           !< CVODE bound to this scene
@@ -487,18 +492,45 @@ contains
         error%message = phase_name(self%phase) // ": " // error%message
         return
       end if
-      if (.not. event) return
-      call self%handle_event(solver%t, solver%y, which, changed, error)
-      if (allocated(error)) return
+      changed = .false.
+      if (event) then
+        call self%handle_event(solver%t, solver%y, which, changed, error)
+        if (allocated(error)) return
+      end if
+      self%quat_drift = drift(solver%y)
       if (changed) then
         call solver%reinit(solver%t, solver%y, error)
         if (allocated(error)) return
       end if
-      if (solver%t >= tout) return
+      if (.not. event .or. solver%t >= tout) return
     end do
     call fatal_error(error, phase_name(self%phase) // ", t = " // str(solver%t) // &
       " s: too many events before the output time")
+  contains
+    !> Largest quaternion norm error of the state.
+    real(dp) function drift(y)
+      real(dp), intent(in) :: y(:)
+      integer :: k, o
+      drift = abs(1.0_dp - norm2(y(7:10)))
+      do k = 1, self%chain%n
+        o = body_state_size + 6 + 7*(k - 1)
+        drift = max(drift, abs(1.0_dp - norm2(y(o+1:o+4))))
+      end do
+    end function drift
   end subroutine sep_advance
+
+  !> Project the quaternions of a state onto unit norm (for a CVODE projection
+  !> callback, CVodeSetProjFn, or before a re-initialisation).
+  pure subroutine sep_normalize_quaternions(self, y)
+    class(separation_system), intent(in) :: self   !< the scene
+    real(dp), intent(inout) :: y(:)                !< state
+    integer :: k, o
+    y(7:10) = y(7:10)/norm2(y(7:10))
+    do k = 1, self%chain%n
+      o = body_state_size + 6 + 7*(k - 1)
+      y(o+1:o+4) = y(o+1:o+4)/norm2(y(o+1:o+4))
+    end do
+  end subroutine sep_normalize_quaternions
 
   !> Total linear momentum of the loaded bodies, earth [kg m/s].
   function sep_linear_momentum(self) result(p)
