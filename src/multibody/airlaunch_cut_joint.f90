@@ -7,6 +7,8 @@
 !>   * the constraint rows at acceleration level, c = Jac * accelerations + bias, where
 !>     bias holds the velocity-product terms and the Baumgarte drift control
 !>     c = phi'' + 2 zeta w_n phi' + w_n^2 phi (gains `baumgarte_omega`, `baumgarte_zeta`);
+!>     the slide row (used while the friction sticks, or always with `edge_no_slip`)
+!>     is s'' + stick_rate s' = 0 instead: the slide rate decays in 1/stick_rate;
 !>   * the constraint residual (position, angle, velocity, angular velocity).
 !>
 !> Geometry (input): joint frame E = [e1, e2, e3] in aircraft axes: e1 = rail direction
@@ -63,7 +65,8 @@ module airlaunch_cut_joint
     real(dp) :: mu_rail = 0.0_dp           !< Coulomb friction coefficient on the rail (Case 1)
     real(dp) :: mu_edge = 0.0_dp           !< Coulomb friction coefficient at the ramp edge (Case 2)
     logical :: edge_no_slip = .false.      !< Case 2 without sliding (pure pivot about the edge)
-    real(dp) :: stick_velocity = 1.0e-3_dp !< Karnopp stick band half-width [m/s]
+    real(dp) :: stick_velocity = 1.0e-4_dp !< Karnopp stick band half-width [m/s]
+    real(dp) :: stick_rate = 1.0e3_dp      !< decay rate of the slide rate while sticking [1/s]
     real(dp) :: baumgarte_omega = 10.0_dp  !< drift control natural frequency w_n [rad/s]
     real(dp) :: baumgarte_zeta = 1.0_dp    !< drift control damping ratio
   end type cut_joint_options
@@ -213,7 +216,8 @@ contains
       return
     end if
     if (opt%mu_rail < 0.0_dp .or. opt%mu_edge < 0.0_dp .or. .not. (opt%stick_velocity > 0.0_dp) &
-        .or. .not. (opt%baumgarte_omega >= 0.0_dp) .or. .not. (opt%baumgarte_zeta >= 0.0_dp)) then
+        .or. .not. (opt%baumgarte_omega >= 0.0_dp) .or. .not. (opt%baumgarte_zeta >= 0.0_dp) &
+        .or. .not. (opt%stick_rate > 0.0_dp)) then
       call fatal_error(error, "cut joint: friction coefficients and Baumgarte gains must be >= 0 " // &
         "and the stick band > 0")
       return
@@ -334,6 +338,9 @@ contains
         if (i > 1 .or. phase == phase_preparation) js%bias(i) = js%bias(i) + kp*dot_product(self%e(:, i), pos)
         js%bias(3+i) = dot_product(self%e(:, i), bom + kd*om + kp*phi)
       end do
+      ! rail slide row, used only while sticking: drive the slide rate to zero
+      if (phase == phase_extraction) js%bias(1) = dot_product(self%e(:, 1), bw) + &
+        self%opt%stick_rate*dot_product(self%e(:, 1), wd)
       ! wrench basis: forces along e_i at the contact point, moments about e_i
       do i = 1, 3
         g = matmul(b0%c, self%e(:, i))
@@ -363,7 +370,7 @@ contains
       beps = matmul(transpose(b1%c), matmul(b0%c, cross(b0%w, cross(b0%w, p)))) &
         - cross(b1%w, matmul(transpose(b1%c), dz)) - cross(b1%w, epsd)
       ! row 1: slide along the exit direction -x_r; rows 2-3: contact and lateral
-      js%bias(1) = beps(1) + kd*epsd(1)
+      js%bias(1) = beps(1) + self%opt%stick_rate*epsd(1)
       js%bias(2) = beps(2) + kd*epsd(2) + kp*(js%eps(2) - self%geo%contact_point(2))
       js%bias(3) = beps(3) + kd*epsd(3) + kp*(js%eps(3) - self%geo%contact_point(3))
       rh1 = matmul(js%rel, self%h1)

@@ -9,6 +9,10 @@
 !> 4. Free aircraft and rocket in vacuum, an internal pull P between them along the
 !>    rail line through both CGs: total momentum and angular momentum conserved, the
 !>    relative acceleration along the rail equals the two-body value P (1/m0 + 1/m1).
+!> Friction (Karnopp stick band): a pull below mu m g leaves the rocket stuck
+!> (friction = -pull); a rocket sliding at v0 with no pull stops after v0/(mu g)
+!> at v0^2/(2 mu g) and stays stuck (to v_stick/stick_rate = 1e-7 m: entering the
+!> stick band at v_stick = 1e-4 m/s the slide rate decays at stick_rate = 1000 /s).
 !> Tolerances: CVODE rtol 1e-11 (BDF integrates this quadratic motion almost
 !> exactly); x(t) 1e-6 relative and events 1e-8 s (issue); forces 1e-6 relative;
 !> momentum 1e-9 relative (issue).
@@ -23,6 +27,7 @@ program test_multibody_extraction
 
   call rail_with_prescribed_aircraft()
   call rail_between_free_bodies()
+  call stick_and_slip()
   call finish()
 
 contains
@@ -183,4 +188,54 @@ contains
       // fmt(norm2(sys%angular_momentum() - h0)/norm2(h0)))
     call solver%free()
   end subroutine rail_between_free_bodies
+  subroutine stick_and_slip()
+    type(separation_system), target :: sys
+    type(cvode_solver) :: solver
+    type(error_type), allocatable :: error
+    type(constant_load_source) :: pull
+    real(dp), allocatable :: y(:)
+    real(dp), parameter :: mu = 0.3_dp, m = 28000.0_dp, v0 = 2.0_dp
+    real(dp) :: s0, tstop
+    call section("friction: stick below the breakaway force, slide to a stop and stick")
+    call make_scene(sys, .true., mu, 0.0_dp, error)
+    sys%bodies(0)%v = [150.0_dp, 0.0_dp, 0.0_dp]
+    call sys%joint%place_on_rail(sys%bodies(0), 6.0_dp, 0.0_dp, sys%bodies(1))
+    pull%body = 1
+    pull%force = [-0.5_dp*mu*m*g0, 0.0_dp, 0.0_dp]
+    pull%body_axes_force = .true.
+    call sys%add_source(pull)
+    call sys%add_source(gravity_source())
+    allocate(y(sys%state_size()))
+    call sys%pack_state(y)
+    call sys%start(0.0_dp, y, phase_extraction, error)
+    call check(sys%stick, "half the breakaway pull: the rocket sticks")
+    call check_close(sys%friction_force, -0.5_dp*mu*m*g0, "static friction balances the pull", rel=1e-9_dp)
+    s0 = sys%js%slide
+    call solver%init(sys, 0.0_dp, y, cvode_options(rtol=1e-10_dp, atol=1e-10_dp), error)
+    call sys%advance(solver, 2.0_dp, error)
+    call sys%evaluate(solver%t, solver%y, error)
+    call check(abs(sys%js%slide - s0) < 1e-8_dp, "no creep after 2 s: " // fmt(sys%js%slide - s0) // " m")
+    call solver%free()
+    ! sliding with no pull: decelerates at mu g and stops
+    sys%sources(1)%source = constant_load_source(body=1)
+    call sys%joint%place_on_rail(sys%bodies(0), 6.0_dp, v0, sys%bodies(1))
+    call sys%pack_state(y)
+    call sys%start(0.0_dp, y, phase_extraction, error)
+    call check(.not. sys%stick, "sliding at 2 m/s")
+    call check_close(sys%friction_force, -mu*m*g0, "kinetic friction -mu m g", rel=1e-9_dp)
+    s0 = sys%js%slide
+    tstop = v0/(mu*g0)
+    call solver%init(sys, 0.0_dp, y, cvode_options(rtol=1e-12_dp, atol=1e-12_dp), error)
+    call sys%advance(solver, 0.5_dp*tstop, error)
+    call sys%evaluate(solver%t, solver%y, error)
+    call check_close(sys%js%slide - s0, v0*solver%t - 0.5_dp*mu*g0*solver%t**2, "x(t) while sliding", rel=1e-8_dp)
+    call sys%advance(solver, tstop + 1.0_dp, error)
+    call check(.not. allocated(error), "integration through the stop")
+    call sys%evaluate(solver%t, solver%y, error)
+    call check(sys%stick, "stuck after the stop")
+    call check_close(sys%js%slide - s0, v0**2/(2*mu*g0), "stopping distance v0^2/(2 mu g)", &
+      abs=sys%joint%opt%stick_velocity/sys%joint%opt%stick_rate + 1e-8_dp)
+    call check(abs(sys%js%slide_rate) < 1e-6_dp, "at rest: " // fmt(sys%js%slide_rate) // " m/s")
+    call solver%free()
+  end subroutine stick_and_slip
 end program test_multibody_extraction
