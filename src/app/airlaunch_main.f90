@@ -113,7 +113,9 @@ contains
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
       "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
       "integration: " // str(int(r%stats%steps)) // " steps, " // str(int(r%stats%rhs_evals)) // &
-      " right-hand sides, " // str(int(r%stats%jac_evals)) // " Jacobians"
+      " right-hand sides, " // str(int(r%stats%jac_evals)) // " Jacobians, " // &
+      str(int(r%stats%nonlin_iters)) // " Newton iterations, " // str(int(r%stats%nonlin_fails)) // &
+      " convergence failures, " // str(int(r%stats%err_test_fails)) // " error-test failures"
   end function launch_summary
 
   !> Fixed-point number with d decimals.

@@ -20,6 +20,7 @@ module airlaunch_run_config
     real(dp) :: rtol = 1.0e-6_dp               !< CVODE relative tolerance
     real(dp) :: atol = 1.0e-8_dp               !< CVODE absolute tolerance (scaled per state)
     logical :: trajectory = .true.             !< write the time history (false: summary only)
+    integer :: max_order = 0                   !< largest BDF order (0: CVODE's 5)
   end type run_config
 
 contains
@@ -34,15 +35,15 @@ contains
     real(dp) :: t_end, output_dt, rtol, atol
     character(len=256) :: output
     logical :: trajectory, present
-    integer :: unit, ios
+    integer :: unit, ios, max_order
     character(len=256) :: msg
-    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory
-    type(nml_var), parameter :: vars(7) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order
+    type(nml_var), parameter :: vars(8) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
       nml_var("output_dt", "real"), nml_var("output", "string"), nml_var("rtol", "real"), &
-      nml_var("atol", "real"), nml_var("trajectory", "logical")]
+      nml_var("atol", "real"), nml_var("trajectory", "logical"), nml_var("max_order", "integer")]
 
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
-    rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory
+    rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
     call f%check_group("run", vars, error)
     if (allocated(error)) return
     call f%position("run", unit, present)
@@ -59,12 +60,13 @@ contains
     call require_positive(f, "run", "output_dt", output_dt, "s", error)
     call require_range(f, "run", "rtol", rtol, 1.0e-14_dp, 1.0e-1_dp, "", error)
     call require_range(f, "run", "atol", atol, 1.0e-16_dp, 1.0_dp, "", error)
+    call require_int_range(f, "run", "max_order", max_order, 0, 5, error)
     if (allocated(error)) return
     if (len_trim(output) == 0) then
       call fatal_error(error, f%path // ": &run: output = '' is not allowed (a file name, e.g. 'output/run.nc')")
       return
     end if
-    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory)
+    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order)
     block
       integer :: u
       open(newunit=u, status="scratch", action="readwrite")

@@ -7,7 +7,7 @@ module airlaunch_linalg
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: solve_general, solve_spd, rcond_limit
+  public :: solve_general, solve_spd, solve_banded, rcond_limit
 
   !> Smallest reciprocal condition number (1-norm) accepted: below it the
   !> solution has fewer than ~2 significant digits in double precision.
@@ -42,6 +42,12 @@ module airlaunch_linalg
       real(dp), intent(out) :: rcond, work(*)
       integer, intent(out) :: iwork(*), info
     end subroutine dgecon
+    subroutine dgbsv(n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
+      import :: dp
+      integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb
+      real(dp), intent(inout) :: ab(ldab, *), b(ldb, *)
+      integer, intent(out) :: ipiv(*), info
+    end subroutine dgbsv
     subroutine dpotrf(uplo, n, a, lda, info)
       import :: dp
       character, intent(in) :: uplo
@@ -146,4 +152,28 @@ contains
     call dpotrs('U', n, size(b, 2), a, n, b, n, info)
     if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
   end subroutine solve_spd
+
+  !> Solve A X = B for a band matrix A with kl sub- and ku super-diagonals
+  !> (LU with partial pivoting, dgbsv).  `ab` is in LAPACK band storage with
+  !> 2*kl + ku + 1 rows: A(i, j) = ab(kl + ku + 1 + i - j, j); on exit the factors.
+  subroutine solve_banded(ab, kl, ku, b, error, what)
+    real(dp), intent(inout) :: ab(:, :)      !< (2 kl + ku + 1) x n band storage
+    integer, intent(in) :: kl, ku            !< lower and upper bandwidths
+    real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    character(len=*), intent(in) :: what     !< name of the system, for the message
+    integer :: n, info, ipiv(size(ab, 2))
+    n = size(ab, 2)
+    if (size(ab, 1) /= 2*kl + ku + 1 .or. size(b, 1) /= n) then
+      call fatal_error(error, what // ": band storage has " // str(size(ab, 1)) // " rows for kl = " // &
+        str(kl) // ", ku = " // str(ku) // " and the right-hand side " // str(size(b, 1)) // " rows for n = " // str(n))
+      return
+    end if
+    call dgbsv(n, kl, ku, size(b, 2), ab, size(ab, 1), ipiv, b, n, info)
+    if (info > 0) then
+      call fatal_error(error, what // ": matrix is singular (zero pivot " // str(info) // " of " // str(n) // ")")
+    else if (info < 0) then
+      call fatal_error(error, what // ": dgbsv illegal argument " // str(-info))
+    end if
+  end subroutine solve_banded
 end module airlaunch_linalg

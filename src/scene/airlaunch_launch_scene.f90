@@ -8,6 +8,7 @@ module airlaunch_launch_scene
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: quat_from_euler, dcm_to_euler, nose_elevation
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_linalg, only: solve_banded
   use airlaunch_run_config, only: run_config
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
@@ -136,6 +137,8 @@ contains
       y0(i+1:i+3) = sys%sep%bodies(1)%point_position(sys%tie_down) + k*seg*dir - [0.0_dp, sys%h_ref, 0.0_dp]
       y0(i+4:i+6) = 0.0_dp
     end do
+    call settle_line(sys, y0, error)
+    if (allocated(error)) return
     call sys%prepare(0.0_dp, y0, status)
     call sys%sep%start(0.0_dp, sys%yabs(1:rigid_size), phase_preparation, error)
   contains
@@ -146,6 +149,74 @@ contains
       m(1, 1) = d(1); m(2, 2) = d(2); m(3, 3) = d(3)
     end function diag
   end subroutine setup_launch
+
+  !> Static equilibrium of the trailing line in the trimmed flight: every node
+  !> moves with the aircraft at V0, node 0 is the tie-down point, and the node
+  !> positions (1..N, node N the parachute) are found by Newton's method with a
+  !> finite-difference block-tridiagonal Jacobian (3-colouring of the nodes,
+  !> LAPACK band solve).  Starting in equilibrium removes the transient that a
+  !> straight initial line would ring with (weight and drag sag it).
+  subroutine settle_line(sys, y, error)
+    type(launch_system), intent(inout) :: sys
+    real(dp), intent(inout) :: y(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: n, m, it, color, k, c, i, j, row, col
+    real(dp), allocatable :: r(:), r2(:), ab(:, :), du(:, :)
+    real(dp) :: scale, h
+    integer, parameter :: kl = 5, ku = 5
+    n = sys%line%n
+    m = 3*n
+    allocate(r(m), r2(m), ab(2*kl + ku + 1, m), du(m, 1))
+    h = 1.0e-5_dp
+    call residual(y, r)
+    scale = max(1.0_dp, maxval(abs(r)))
+    do it = 1, 30
+      if (maxval(abs(r)) <= 1.0e-9_dp*scale) exit
+      ab = 0.0_dp
+      do color = 0, 2
+        do c = 1, 3
+          do k = 1 + color, n, 3
+            i = rigid_size + 6*(k - 1) + c
+            y(i) = y(i) + h
+          end do
+          call residual(y, r2)
+          do k = 1 + color, n, 3
+            i = rigid_size + 6*(k - 1) + c
+            y(i) = y(i) - h
+            col = 3*(k - 1) + c
+            do row = max(1, 3*(k - 2) + 1), min(m, 3*k + 3)
+              ab(kl + ku + 1 + row - col, col) = (r2(row) - r(row))/h
+            end do
+          end do
+        end do
+      end do
+      du(:, 1) = -r
+      call solve_banded(ab, kl, ku, du, error, "static line equilibrium")
+      if (allocated(error)) return
+      do k = 1, n
+        j = rigid_size + 6*(k - 1)
+        y(j+1:j+3) = y(j+1:j+3) + du(3*k-2:3*k, 1)
+      end do
+      call residual(y, r)
+    end do
+    if (maxval(abs(r)) > 1.0e-6_dp*scale) call fatal_error(error, "the trailing line has no static " // &
+      "equilibrium in the trimmed flight (residual " // str(maxval(abs(r))) // " N)")
+  contains
+    !> Node accelerations times masses in the steady flight (zero at equilibrium).
+    subroutine residual(yy, res)
+      real(dp), intent(in) :: yy(:)
+      real(dp), intent(out) :: res(:)
+      real(dp) :: ydot(size(yy))
+      integer :: kk, status, ii
+      call sys%prepare(0.0_dp, yy, status)
+      ! nodes move with the aircraft: relative velocity zero
+      call sys%rhs(0.0_dp, yy, ydot, status)
+      do kk = 1, n
+        ii = rigid_size + 6*(kk - 1)
+        res(3*kk-2:3*kk) = ydot(ii+4:ii+6)*sys%line%node_mass(kk)
+      end do
+    end subroutine residual
+  end subroutine settle_line
 
   !> Run the scene and write its output (unless run%trajectory is false).
   subroutine run_launch(run, cfg, echo, res, error)
@@ -176,6 +247,7 @@ contains
     opts%upper_bandwidth = rigid_size + 6 - 1   ! aircraft rows see node 1 through the CFA
     opts%lower_bandwidth = rigid_size - 1       ! rocket rows see the aircraft
     opts%atol_vector = atol_scaling(run%atol, size(y0))
+    opts%max_order = run%max_order
     call solver%init(sys, 0.0_dp, y0, opts, error)
     if (allocated(error)) return
 
@@ -195,7 +267,7 @@ contains
       call record()
       if (tout >= run%t_end) exit
     end do
-    res%stats = solver%stats()
+    call add_stats(res%stats, solver%stats())
     res%end_time = solver%t
     res%release_time = event_or_minus(sys%sep%event_time(1))
     res%edge_time = event_or_minus(sys%sep%event_time(2))
@@ -243,8 +315,13 @@ contains
           res%pitch_rate_at_separation_deg_s = sys%euler_pitch_rate()*rad2deg
           res%separation_time = solver%t
         end if
-        call solver%reinit(solver%t, solver%y, err)
-        if (allocated(err)) return
+        if (changed) then
+          ! the constraint set changed: restart CVODE from the event (its
+          ! counters restart too, so keep the totals)
+          call add_stats(res%stats, solver%stats())
+          call solver%reinit(solver%t, solver%y, err)
+          if (allocated(err)) return
+        end if
         if (solver%t >= t_target) return
       end do
       call fatal_error(err, phase_name(sys%sep%phase) // ", t = " // str(solver%t) // &
@@ -403,6 +480,20 @@ contains
     call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
     call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)
   end subroutine write_milestones
+
+  !> Accumulate CVODE counters.
+  pure subroutine add_stats(total, part)
+    type(cvode_stats), intent(inout) :: total
+    type(cvode_stats), intent(in) :: part
+    total%steps = total%steps + part%steps
+    total%rhs_evals = total%rhs_evals + part%rhs_evals
+    total%jac_evals = total%jac_evals + part%jac_evals
+    total%lin_setups = total%lin_setups + part%lin_setups
+    total%err_test_fails = total%err_test_fails + part%err_test_fails
+    total%nonlin_iters = total%nonlin_iters + part%nonlin_iters
+    total%nonlin_fails = total%nonlin_fails + part%nonlin_fails
+    total%root_evals = total%root_evals + part%root_evals
+  end subroutine add_stats
 
   pure real(dp) function event_or_minus(t) result(r)
     real(dp), intent(in) :: t

@@ -40,6 +40,7 @@ module airlaunch_cvode
     real(dp) :: initial_step = 0.0_dp            !< first step [s]; 0 = CVODE's estimate
     integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
     integer :: max_num_steps = 200000            !< steps allowed between two outputs
+    logical :: stability_limit_detection = .false. !< BDF order reduction near the imaginary axis
   end type cvode_options
 
   !> Counters of the integration.
@@ -176,6 +177,7 @@ contains
     if (opts%initial_step > 0.0_dp) ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
     if (opts%max_order > 0) ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
     ierr = FCVodeSetMaxHnilWarns(self%mem, -1_c_int)
+    if (opts%stability_limit_detection) ierr = FCVodeSetStabLimDet(self%mem, 1_c_int)
     call self%set_roots(sys%nroots(), error)
   end subroutine solver_init
 
