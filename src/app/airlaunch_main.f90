@@ -103,6 +103,7 @@ contains
       "separation (Case 2->3):     t = " // fx(r%separation_time, 3) // " s" // &
       merge(" (early: edge normal force reached zero)", "                                        ", &
         r%early_separation) // nl // &
+      edge_note(r%edge_pull_time) // &
       "  rocket pitch " // fx(r%pitch_at_separation_deg, 2) // " deg, pitch rate " // &
       fx(r%pitch_rate_at_separation_deg_s, 2) // " deg/s" // nl // &
       "first rocket pitch maximum: t = " // fx(r%pitch_max_time, 3) // " s, pitch " // fx(r%pitch_max_deg, 2) // &
@@ -117,6 +118,15 @@ contains
       str(int(r%stats%nonlin_iters)) // " Newton iterations, " // str(int(r%stats%nonlin_fails)) // &
       " convergence failures, " // str(int(r%stats%err_test_fails)) // " error-test failures"
   end function launch_summary
+
+  !> Note on a bilateral edge that had to pull (empty otherwise).
+  function edge_note(t) result(s)
+    double precision, intent(in) :: t
+    character(len=:), allocatable :: s
+    s = ""
+    if (t >= 0.0d0) s = "  (bilateral edge: a one-sided edge would have released the rocket at t = " // &
+      fx(t, 3) // " s)" // new_line("a")
+  end function edge_note
 
   !> Fixed-point number with d decimals.
   function fx(x, d) result(s)

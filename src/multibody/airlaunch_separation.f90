@@ -64,6 +64,11 @@ module airlaunch_separation
     integer :: phase = phase_preparation      !< current Case 0..3
     real(dp) :: event_time(3) = -huge(1.0_dp) !< times of 0->1, 1->2, 2->3 (-huge: not yet)
     logical :: early_separation = .false.     !< 2->3 by the normal force reaching zero
+    !> Case 2 contact held two-sided (the paper's equality constraint, Eq. (66)):
+    !> the edge may pull, Case 2 ends only when the nose passes the edge, and the
+    !> first time the normal force turns to pulling is recorded in edge_pull_time.
+    logical :: edge_bilateral = .false.
+    real(dp) :: edge_pull_time = -huge(1.0_dp) !< first zero crossing of N in Case 2 (bilateral)
     real(dp) :: quat_drift = 0.0_dp           !< largest |1 - |q|| of the state after the last `advance`
     ! --- bodies (paper numbering 0..n) and their loads, updated by load_state/evaluate
     type(rigid_body), allocatable :: bodies(:)   !< (0:n) 0 aircraft, 1 rocket, 2.. chain
@@ -226,6 +231,7 @@ contains
     self%phase = phase
     self%event_time = -huge(1.0_dp)
     self%early_separation = .false.
+    self%edge_pull_time = -huge(1.0_dp)
     call self%load_state(y)
     if (.not. (self%t0 >= 0.0_dp)) then
       call fatal_error(error, "inconsistent input: release time t0 = " // str(self%t0) // " s must be >= 0")
@@ -246,7 +252,7 @@ contains
     end if
     call self%evaluate(t, y, error)
     if (allocated(error)) return
-    if (self%phase == phase_rotation .and. self%normal_force <= 0.0_dp) then
+    if (self%phase == phase_rotation .and. self%normal_force <= 0.0_dp .and. .not. self%edge_bilateral) then
       ! the edge cannot pull: the rocket is free from the start
       self%phase = phase_free
       self%event_time(3) = t
@@ -455,7 +461,9 @@ contains
         changed = .true.
         call self%evaluate(t, y, error)
         if (allocated(error)) return
-        if (self%normal_force <= 0.0_dp) then
+        if (self%normal_force <= 0.0_dp .and. self%edge_bilateral) then
+          self%edge_pull_time = t
+        else if (self%normal_force <= 0.0_dp) then
           ! the edge cannot push: the rocket leaves the aircraft at once
           self%phase = phase_free
           self%event_time(3) = t
@@ -463,7 +471,14 @@ contains
         end if
       end if
     case (phase_rotation)
-      if (which(4) < 0) then
+      if (which(4) < 0 .and. self%edge_bilateral) then
+        if (self%edge_pull_time < -1.0e300_dp) self%edge_pull_time = t
+        if (which(3) > 0) then
+          self%phase = phase_free
+          self%event_time(3) = t
+          changed = .true.
+        end if
+      else if (which(4) < 0) then
         self%phase = phase_free
         self%event_time(3) = t
         self%early_separation = .true.

@@ -32,6 +32,7 @@ module airlaunch_launch_scene
     real(dp) :: trim_alpha_deg = 0.0_dp, trim_elevator_deg = 0.0_dp, trim_thrust_n = 0.0_dp
     real(dp) :: release_time = -1.0_dp, edge_time = -1.0_dp, separation_time = -1.0_dp
     logical :: early_separation = .false.
+    real(dp) :: edge_pull_time = -1.0_dp   !< bilateral edge: first time the edge had to pull [s]
     real(dp) :: pitch_at_separation_deg = 0.0_dp, pitch_rate_at_separation_deg_s = 0.0_dp
     real(dp) :: pitch_max_time = -1.0_dp, pitch_max_deg = 0.0_dp, nose_elevation_at_max_deg = 0.0_dp
     real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
@@ -109,6 +110,7 @@ contains
     call sys%sep%init(b0, b1, sys%tie_down, 1, geo, jopt, cfg%bay%release_time, error, &
       aircraft_prescribed=cfg%aircraft%dynamics == "prescribed")
     if (allocated(error)) return
+    sys%sep%edge_bilateral = cfg%bay%edge_contact == "bilateral"
     call sys%sep%joint%place_on_rail(sys%sep%bodies(0), cfg%bay%l0, 0.0_dp, sys%sep%bodies(1))
     call sys%sep%add_source(gravity_source())
     loads%rocket = cfg%rocket%aero
@@ -273,6 +275,7 @@ contains
     res%edge_time = event_or_minus(sys%sep%event_time(2))
     res%separation_time = event_or_minus(sys%sep%event_time(3))
     res%early_separation = sys%sep%early_separation
+    res%edge_pull_time = event_or_minus(sys%sep%edge_pull_time)
     if (allocated(run_error)) then
       res%status = "failed"
       res%failure = run_error%message
@@ -468,6 +471,7 @@ contains
     call w%add_real_att("/", "edge_time_s", res%edge_time, error)
     call w%add_real_att("/", "separation_time_s", res%separation_time, error)
     call w%add_text_att("/", "early_separation", merge("true ", "false", res%early_separation), error)
+    call w%add_real_att("/", "edge_pull_time_s", res%edge_pull_time, error)
     call w%add_real_att("/", "pitch_at_separation_deg", res%pitch_at_separation_deg, error)
     call w%add_real_att("/", "pitch_rate_at_separation_deg_s", res%pitch_rate_at_separation_deg_s, error)
     call w%add_real_att("/", "pitch_max_time_s", res%pitch_max_time, error)

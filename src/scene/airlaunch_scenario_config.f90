@@ -48,6 +48,7 @@ module airlaunch_scenario_config
     real(dp) :: friction = 0.005_dp      !< rail friction coefficient
     real(dp) :: release_time = 0.5_dp    !< t0 [s]: end of Case 0
     real(dp) :: l0 = 10.0_dp             !< rocket CG ahead of the ramp edge at release [m]
+    character(len=16) :: edge_contact = "one_sided"  !< Case 2 contact: "one_sided" or "bilateral"
   end type bay_config
 
   !> Rocket (payload).
@@ -223,15 +224,18 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0
+    character(len=16) :: edge_contact
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
-    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0
-    type(nml_var), parameter :: vars(8) = [nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
+    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact
+    type(nml_var), parameter :: vars(9) = [nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
       nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
-      nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real")]
+      nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real"), &
+      nml_var("edge_contact", "string")]
     ramp_edge_x = c%ramp_edge_x; floor_y = c%floor_y; length = c%length; width = c%width
     height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0
+    edge_contact = c%edge_contact
     call open_group(f, "bay", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -248,8 +252,9 @@ contains
     call require_range(f, "bay", "friction", friction, 0.0_dp, 1.0_dp, "", error)
     call require_nonnegative(f, "bay", "release_time", release_time, "s", error)
     call require_positive(f, "bay", "l0", l0, "m", error)
+    call require_choice(f, "bay", "edge_contact", edge_contact, [character(len=16) :: "one_sided", "bilateral"], error)
     if (allocated(error)) return
-    c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0)
+    c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=bay)
     call echo_namelist_unit(u, echo)
