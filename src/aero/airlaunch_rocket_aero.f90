@@ -15,7 +15,12 @@
 !> potential and axial terms are scaled by the exposed fraction of the length
 !> (a simple shielding model for a rocket that leaves the bay tail first).
 !> Axial force: -1/2 rho |u| u S_ref C_A.  Optional fins (a documented
-!> configuration choice) add C_N,fin = cn_alpha_fin sin(a_local) at x_fin.
+!> configuration choice) add, at their centre of pressure x_fin and with the
+!> local velocity there (so they damp rotation too),
+!>   C_N,fin = cn_alpha_fin sin(a) |cos(a)| + cn_fin_90 sin^2(a)
+!> (the linear Barrowman slope at small angles and the flat-plate cross-flow
+!> normal force at 90 deg, Hoerner, Fluid-Dynamic Drag, 1965: C_N = 1.28 on the
+!> projected fin area), opposite to the local cross-flow velocity.
 !>
 !> Body frame: x along the axis towards the nose, origin at the CG.
 module airlaunch_rocket_aero
@@ -35,6 +40,7 @@ module airlaunch_rocket_aero
     real(dp) :: eta = 0.7_dp              !< finite-length factor of the cross-flow drag (L/d ~ 11)
     real(dp) :: cn_alpha_fin = 0.0_dp     !< fin normal-force slope on S_ref [1/rad]; 0 = no fins
     real(dp) :: x_fin_from_nose = 17.5_dp !< fin centre of pressure [m]
+    real(dp) :: cn_fin_90 = 0.0_dp        !< fin normal-force coefficient at 90 deg on S_ref
     integer :: n_strips = 16              !< strips of the cross-flow integral
   end type rocket_aero
 
@@ -92,8 +98,8 @@ contains
         vp = [0.0_dp, v_loc(2), v_loc(3)]
         vpn = norm2(vp)
         if (vpn > 0.0_dp) then
-          ! fin normal force ~ cn_alpha sin(local angle), opposite to the local cross-flow
-          f = -0.5_dp*rho*norm2(v_loc)*s_ref*p%cn_alpha_fin*vp
+          ! C_N,fin q S_ref along -vp/|vp|, with sin(a) = |vp|/|v|, |cos(a)| = |v_x|/|v|
+          f = -0.5_dp*rho*s_ref*(p%cn_alpha_fin*abs(v_loc(1)) + p%cn_fin_90*vpn)*vp
           force = force + f
           moment = moment + [0.0_dp, -x*f(3), x*f(2)]
         end if

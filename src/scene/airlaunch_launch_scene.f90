@@ -246,8 +246,13 @@ contains
     opts%rtol = run%rtol
     opts%atol = run%atol
     opts%linear_solver = "band"
-    opts%upper_bandwidth = rigid_size + 6 - 1   ! aircraft rows see node 1 through the CFA
-    opts%lower_bandwidth = rigid_size - 1       ! rocket rows see the aircraft
+    ! The band holds the stiff couplings: the line's node chain and node 1 with
+    ! the rocket's position and attitude (offsets up to 18).  The aircraft-rocket
+    ! coupling through the CFA (offsets to 25) and aircraft-node 1 (31) are soft
+    ! and left out of the Newton matrix (a modified Newton iteration): measured
+    ! 27 % faster than the full band with the same milestones (docs/performance.md).
+    opts%upper_bandwidth = 18
+    opts%lower_bandwidth = 18
     opts%atol_vector = atol_scaling(run%atol, size(y0))
     opts%max_order = run%max_order
     call solver%init(sys, 0.0_dp, y0, opts, error)

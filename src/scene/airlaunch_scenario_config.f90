@@ -56,6 +56,12 @@ module airlaunch_scenario_config
     real(dp) :: mass = 28000.0_dp
     real(dp) :: inertia(3) = [7870.0_dp, 545000.0_dp, 545000.0_dp]
     real(dp) :: tie_down_from_nose = 0.0_dp   !< line attachment, aft of the nose tip on the axis [m]
+    integer :: fin_count = 0                  !< 0 (no fins), 3, or 4 (X configuration)
+    real(dp) :: fin_semi_span = 0.0_dp        !< [m] from the body surface
+    real(dp) :: fin_root_chord = 0.0_dp       !< [m]
+    real(dp) :: fin_tip_chord = 0.0_dp        !< [m]
+    real(dp) :: fin_sweep = 0.0_dp            !< leading-edge sweep distance, root to tip [m]
+    real(dp) :: fin_root_le_from_nose = 0.0_dp  !< root leading edge [m]
     type(rocket_aero) :: aero
   end type rocket_config
 
@@ -266,25 +272,29 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose
-    real(dp) :: cp_pot_from_nose, c_axial, c_dn, eta, cn_alpha_fin, x_fin_from_nose
-    integer :: n_strips, u, ios
+    real(dp) :: cp_pot_from_nose, c_axial, c_dn, eta
+    real(dp) :: fin_semi_span, fin_root_chord, fin_tip_chord, fin_sweep, fin_root_le_from_nose
+    integer :: n_strips, fin_count, u, ios
     logical :: present
     character(len=256) :: msg
     namelist /rocket/ mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose, &
-      cp_pot_from_nose, c_axial, c_dn, eta, cn_alpha_fin, x_fin_from_nose, n_strips
-    type(nml_var), parameter :: vars(15) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
+      cp_pot_from_nose, c_axial, c_dn, eta, n_strips, fin_count, fin_semi_span, fin_root_chord, &
+      fin_tip_chord, fin_sweep, fin_root_le_from_nose
+    type(nml_var), parameter :: vars(19) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
       nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("length", "real"), &
       nml_var("diameter", "real"), nml_var("cg_from_nose", "real"), nml_var("tie_down_from_nose", "real"), &
       nml_var("cp_pot_from_nose", "real"), nml_var("c_axial", "real"), nml_var("c_dn", "real"), &
-      nml_var("eta", "real"), nml_var("cn_alpha_fin", "real"), nml_var("x_fin_from_nose", "real"), &
-      nml_var("n_strips", "integer")]
+      nml_var("eta", "real"), nml_var("n_strips", "integer"), nml_var("fin_count", "integer"), &
+      nml_var("fin_semi_span", "real"), nml_var("fin_root_chord", "real"), nml_var("fin_tip_chord", "real"), &
+      nml_var("fin_sweep", "real"), nml_var("fin_root_le_from_nose", "real")]
     associate(a => c%aero)
       mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
       length = a%length; diameter = a%diameter; cg_from_nose = a%cg_from_nose
       tie_down_from_nose = c%tie_down_from_nose; cp_pot_from_nose = a%cp_pot_from_nose
-      c_axial = a%c_axial; c_dn = a%c_dn; eta = a%eta; cn_alpha_fin = a%cn_alpha_fin
-      x_fin_from_nose = a%x_fin_from_nose; n_strips = a%n_strips
+      c_axial = a%c_axial; c_dn = a%c_dn; eta = a%eta; n_strips = a%n_strips
     end associate
+    fin_count = c%fin_count; fin_semi_span = c%fin_semi_span; fin_root_chord = c%fin_root_chord
+    fin_tip_chord = c%fin_tip_chord; fin_sweep = c%fin_sweep; fin_root_le_from_nose = c%fin_root_le_from_nose
     call open_group(f, "rocket", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -308,17 +318,59 @@ contains
     call require_nonnegative(f, "rocket", "c_axial", c_axial, "", error)
     call require_nonnegative(f, "rocket", "c_dn", c_dn, "", error)
     call require_range(f, "rocket", "eta", eta, 0.0_dp, 1.0_dp, "", error)
-    call require_nonnegative(f, "rocket", "cn_alpha_fin", cn_alpha_fin, "1/rad", error)
-    call require_range(f, "rocket", "x_fin_from_nose", x_fin_from_nose, 0.0_dp, length, "m", error)
     call require_int_range(f, "rocket", "n_strips", n_strips, 1, 1000, error)
+    if (.not. allocated(error) .and. fin_count /= 0 .and. fin_count /= 3 .and. fin_count /= 4) &
+      call fatal_error(error, f%path // ": &rocket: fin_count = " // str(fin_count) // &
+        " is not allowed (0 = no fins, 3, or 4 in X configuration)")
+    if (fin_count > 0) then
+      call require_positive(f, "rocket", "fin_semi_span", fin_semi_span, "m", error)
+      call require_positive(f, "rocket", "fin_root_chord", fin_root_chord, "m", error)
+      call require_nonnegative(f, "rocket", "fin_tip_chord", fin_tip_chord, "m", error)
+      call require_nonnegative(f, "rocket", "fin_sweep", fin_sweep, "m", error)
+      call require_range(f, "rocket", "fin_root_le_from_nose", fin_root_le_from_nose, 0.0_dp, &
+        length - fin_root_chord, "m (the root chord must end at or ahead of the tail)", error)
+    end if
     if (allocated(error)) return
     c%mass = mass; c%inertia = [ixx, iyy, izz]; c%tie_down_from_nose = tie_down_from_nose
-    c%aero = rocket_aero(length, diameter, cg_from_nose, cp_pot_from_nose, c_axial, c_dn, eta, &
-      cn_alpha_fin, x_fin_from_nose, n_strips)
+    c%fin_count = fin_count; c%fin_semi_span = fin_semi_span; c%fin_root_chord = fin_root_chord
+    c%fin_tip_chord = fin_tip_chord; c%fin_sweep = fin_sweep; c%fin_root_le_from_nose = fin_root_le_from_nose
+    c%aero = rocket_aero(length=length, diameter=diameter, cg_from_nose=cg_from_nose, &
+      cp_pot_from_nose=cp_pot_from_nose, c_axial=c_axial, c_dn=c_dn, eta=eta, n_strips=n_strips)
+    if (fin_count > 0) call barrowman_fins(c)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=rocket)
     call echo_namelist_unit(u, echo)
   end subroutine read_rocket
+
+  !> Fin normal-force slope and centre of pressure by Barrowman's equations
+  !> (J. S. Barrowman, The practical calculation of the aerodynamic
+  !> characteristics of slender finned vehicles, 1967): trapezoidal fins of
+  !> semi-span s, root chord cr, tip chord ct, leading-edge sweep xr, on a body
+  !> of radius R, with the fin-body interference factor 1 + R/(s + R):
+  !>   CN_alpha = (1 + R/(s+R)) 4 N (s/d)^2 / (1 + sqrt(1 + (2 l_f/(cr + ct))^2)),
+  !>   l_f = sqrt(s^2 + (xr + ct/2 - cr/2)^2),
+  !>   x_cp = x_root_le + xr (cr + 2 ct)/(3 (cr + ct)) + (cr + ct - cr ct/(cr + ct))/6.
+  !> At 90 deg the fins act as flat plates: C_N,90 = 1.28 A_proj/S_ref with the
+  !> fin area projected normal to the cross-flow (4 fins in X: 2 sqrt(2) A; 3
+  !> fins: 3 A 2/pi, the mean projection).
+  subroutine barrowman_fins(c)
+    type(rocket_config), intent(inout) :: c
+    real(dp) :: r, s, cr, ct, xr, lf, area, s_ref, d
+    d = c%aero%diameter
+    r = d/2
+    s = c%fin_semi_span; cr = c%fin_root_chord; ct = c%fin_tip_chord; xr = c%fin_sweep
+    lf = sqrt(s**2 + (xr + ct/2 - cr/2)**2)
+    c%aero%cn_alpha_fin = (1 + r/(s + r))*4*c%fin_count*(s/d)**2/(1 + sqrt(1 + (2*lf/(cr + ct))**2))
+    c%aero%x_fin_from_nose = c%fin_root_le_from_nose + xr*(cr + 2*ct)/(3*(cr + ct)) + &
+      (cr + ct - cr*ct/(cr + ct))/6
+    area = s*(cr + ct)/2
+    s_ref = 4.0_dp*atan(1.0_dp)*d**2/4
+    if (c%fin_count == 4) then
+      c%aero%cn_fin_90 = 1.28_dp*2*sqrt(2.0_dp)*area/s_ref
+    else
+      c%aero%cn_fin_90 = 1.28_dp*3*area*2/(4.0_dp*atan(1.0_dp))/s_ref
+    end if
+  end subroutine barrowman_fins
 
   subroutine read_parachute(f, c, echo, error)
     type(nml_file), intent(in) :: f
@@ -434,6 +486,11 @@ contains
       else if (r%diameter > min(b%width, b%height)) then
         call fatal_error(error, f%path // ": &rocket: diameter = " // str(r%diameter) // &
           " is not allowed (the bay is " // str(b%width) // " m wide and " // str(b%height) // " m high)")
+      else if (cfg%rocket%fin_count > 0 .and. 2*(r%diameter/2 + cfg%rocket%fin_semi_span)/sqrt(2.0_dp) > &
+          min(b%width, b%height)) then
+        call fatal_error(error, f%path // ": &rocket: fin_semi_span = " // str(cfg%rocket%fin_semi_span) // &
+          " is not allowed (fins in X span " // str(2*(r%diameter/2 + cfg%rocket%fin_semi_span)/sqrt(2.0_dp)) // &
+          " m across, the bay is " // str(min(b%width, b%height)) // " m)")
       else if (cfg%line%length <= nose_ahead - cfg%rocket%tie_down_from_nose) then
         call fatal_error(error, f%path // ": &line: length = " // str(cfg%line%length) // &
           " is not allowed (shorter than the " // str(nose_ahead - cfg%rocket%tie_down_from_nose) // &
