@@ -87,7 +87,7 @@ program airlaunch
     stop 3, quiet=.true.
   end if
   write(output_unit, '(a)') summary
-  write(output_unit, '(a)') "output: " // trim(run%output)
+  if (run%trajectory) write(output_unit, '(a)') "output: " // trim(run%output)
 
 contains
 
