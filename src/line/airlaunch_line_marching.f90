@@ -216,9 +216,7 @@ contains
     call far_residual(self, h, force, e, x_far, v_far)
     it = 0
     do
-      e_floor = 64*epsilon(1.0_dp)*(norm2(force) + norm2(self%f(:, self%far)) + &
-        norm2(self%x(:, self%far))/(h*h*self%inv_mass(self%far)) + &
-        (self%ends(fe)%mass + 1.0_dp/self%inv_mass(self%far))*norm2(v_far)/h)
+      e_floor = residual_floor(self, h, force, x_far, v_far)
       if (norm2(e) <= max(self%force_tol, e_floor)) exit
       if (it >= self%max_iter) then
         call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
@@ -281,6 +279,28 @@ contains
     end associate
     e = force - fn
   end subroutine far_residual
+
+  !> Round-off level of the far-end residual (64 eps times the size of the
+  !> terms that cancel in it), so that e0 below it cannot stall the iteration.
+  real(dp) function residual_floor(self, h, force, x_far, v_far) result(floor)
+    type(line_marching), intent(in) :: self       !< scheme
+    real(dp), intent(in) :: h                     !< step [s]
+    real(dp), intent(in) :: force(3)              !< current force [N]
+    real(dp), intent(in) :: x_far(3), v_far(3)    !< far node at t+h
+    real(dp) :: m_far, size
+    integer :: fe
+    fe = far_end(self)
+    m_far = 1.0_dp/self%inv_mass(self%far)
+    size = norm2(force) + norm2(self%f(:, self%far))
+    if (self%ends(fe)%is_kinematic()) then
+      ! (m/h^2)(x_target - x_far): positions cancel
+      size = size + m_far*(norm2(self%x_target) + norm2(x_far))/h**2
+    else if (self%ends(fe)%kind == end_point_mass) then
+      ! M (v_far - v)/h: velocities cancel
+      size = size + (self%ends(fe)%mass + m_far)*norm2(v_far)/h
+    end if
+    floor = 64*epsilon(1.0_dp)*size
+  end function residual_floor
 
   !> Weight and drag of a point-mass end.
   function point_load(self, which, x, v) result(f)

@@ -220,7 +220,8 @@ contains
         u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
         ut = dot_product(u, t)*t
         un = u - ut
-        rho_a = rho_lo*exp(log_slope*(0.5_dp*(x(2, k-1) + x(2, k)) - y_lo))
+        rho_a = rho_lo
+        if (log_slope /= 0.0_dp) rho_a = rho_lo*exp(log_slope*(0.5_dp*(x(2, k-1) + x(2, k)) - y_lo))
         drag = rho_a*ell*(qn*norm2(un)*un + qt*norm2(ut)*ut)
         f(:, k-1) = f(:, k-1) + 0.5_dp*drag
         f(:, k) = f(:, k) + 0.5_dp*drag
