@@ -102,7 +102,7 @@ contains
     type(line_scene_config) :: cfg
     type(line_scene) :: scene
     type(error_type), allocatable :: error
-    character(len=32) :: a
+    character(len=16) :: a
     integer :: n, mo
     real(dp) :: x
     call get_command_argument(2, a)

@@ -50,6 +50,7 @@ program test_line_catenary
   cfg%output_interval = 1.0_dp
   cfg%integration%rtol = 1.0e-7_dp
   cfg%integration%atol = 1.0e-8_dp
+  cfg%integration%max_order = 5   ! tight tolerance: the steps resolve the line's oscillations
   call scene%init(cfg, error)
   call check(.not. allocated(error), "init")
   call scene%run(error)

@@ -52,6 +52,7 @@ contains
       position=length*(1 + mass*g0*cos(th)/ea)*[sin(th), -cos(th), 0.0_dp])
     cfg%integration%rtol = rtol
     cfg%integration%atol = 1.0e-2_dp*rtol
+    cfg%integration%max_order = 5   ! tight tolerance: the steps resolve the line's oscillations
     cfg%t_end = 20.0_dp
     cfg%output_interval = 0.01_dp
     cfg%record_nodes = .false.

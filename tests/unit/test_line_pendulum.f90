@@ -65,6 +65,7 @@ contains
     cfg%integration%scheme = scheme
     cfg%integration%rtol = 1.0e-8_dp
     cfg%integration%atol = 1.0e-10_dp
+    cfg%integration%max_order = 5   ! tight tolerance: the steps resolve the line's oscillations
     cfg%t_end = 1.3_dp*2*pi*sqrt(length/g0)*1.1_dp
     cfg%output_interval = 1.0e-3_dp
     cfg%record_nodes = .false.

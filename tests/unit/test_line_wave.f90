@@ -51,6 +51,7 @@ contains
     cfg%integration%scheme = scheme
     cfg%integration%rtol = 1.0e-6_dp
     cfg%integration%atol = 1.0e-9_dp
+    cfg%integration%max_order = 5   ! tight tolerance: the steps resolve the line's oscillations
     cfg%t_end = 1.25_dp*length/c
     cfg%output_interval = 1.0e-4_dp
     cfg%record_nodes = .false.
