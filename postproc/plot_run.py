@@ -60,6 +60,9 @@ def plot_airlaunch(ds, fig):
     ax2.set_ylabel("z [m]")
     ax2.set_zlabel("y [m]")
     ax2.set_title("3-D track (Fig. 10)")
+    # equal-ish scaling of the lateral axis (the scenario is symmetric: z ~ 0)
+    zr = max(1.0, float(abs(ds["rocket_position"].sel(xyz=2)).max()))
+    ax2.set_ylim(-max(zr, 50.0), max(zr, 50.0))
     ax2.legend(fontsize=7)
     ax3 = fig.add_subplot(1, 3, 3)
     for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):

@@ -108,7 +108,7 @@ contains
       fx(r%pitch_rate_at_separation_deg_s, 2) // " deg/s" // nl // &
       "first rocket pitch maximum: t = " // fx(r%pitch_max_time, 3) // " s, pitch " // fx(r%pitch_max_deg, 2) // &
       " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg)" // nl // &
-      "minimum rocket-aircraft clearance: " // fx(merge(r%min_clearance, -1.0d0, r%min_clearance < 1.0d300), 2) // &
+      "minimum rocket-empennage clearance: " // fx(merge(r%min_clearance, -1.0d0, r%min_clearance < 1.0d300), 2) // &
       " m" // nl // &
       "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at t = " // fx(r%peak_tension_time, 3) // " s" // nl // &
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &

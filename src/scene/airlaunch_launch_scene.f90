@@ -236,7 +236,8 @@ contains
     integer :: nmax, nrec, n
     real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
       load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
-      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:)
+      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
+      edge_clearance(:)
     real(dp) :: tout
     integer :: k
 
@@ -263,7 +264,7 @@ contains
       allocate(time(nmax), phase(nmax), ac_pos(3, nmax), ac_eul(3, nmax), ac_alpha(nmax), ac_q(nmax), &
         elev(nmax), load_factor(nmax), rk_pos(3, nmax), rk_vel(3, nmax), rk_eul(3, nmax), rk_rate(nmax), &
         rk_elev(nmax), pc_pos(3, nmax), t_rocket(nmax), t_chute(nmax), nodes(3, 0:n, nmax), &
-        cforce(6, nmax), normal(nmax), friction(nmax), clearance(nmax), residual(nmax))
+        cforce(6, nmax), normal(nmax), friction(nmax), clearance(nmax), residual(nmax), edge_clearance(nmax))
     end if
     nrec = 0
     call record()
@@ -339,7 +340,7 @@ contains
     !> Sample the state at the solver's time (outputs and milestones).
     subroutine record()
       integer :: status
-      real(dp) :: ea(3), er(3), rate, nz, cl, edge(3), amag
+      real(dp) :: ea(3), er(3), rate, nz, cl, ecl, edge(3), tail(3), nose(3), aft(3), amag
       type(error_type), allocatable :: eval_error
       call sys%prepare(solver%t, solver%y, status)
       call sys%sep%evaluate(solver%t, sys%yabs(1:rigid_size), eval_error)
@@ -349,11 +350,15 @@ contains
         rate = sys%euler_pitch_rate()
         ! load factor along the aircraft's y axis: specific force / g
         nz = dot_product(b0%c(:, 2), sys%sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
+        ! clearances of the rocket's surface (its axis segment less the radius)
+        ! from the aircraft's empennage point and from the ramp edge
+        nose = b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp])
+        aft = b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])
         edge = b0%r + matmul(b0%c, [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp])
-        cl = segment_distance(edge, b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp]), &
-          b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])) &
-          - cfg%rocket%aero%diameter/2
-        if (sys%sep%phase /= phase_free) cl = 0.0_dp
+        tail = b0%r + matmul(b0%c, [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp])
+        cl = segment_distance(tail, nose, aft) - cfg%rocket%aero%diameter/2
+        ecl = segment_distance(edge, nose, aft) - cfg%rocket%aero%diameter/2
+        if (sys%sep%phase /= phase_free) ecl = 0.0_dp
         if (sys%sep%phase == phase_free) res%min_clearance = min(res%min_clearance, cl)
         if (maxval(sys%tension) > res%peak_tension) then
           res%peak_tension = maxval(sys%tension)
@@ -391,6 +396,7 @@ contains
         normal(nrec) = sys%sep%normal_force
         friction(nrec) = sys%sep%friction_force
         clearance(nrec) = cl
+        edge_clearance(nrec) = ecl
         residual(nrec) = sys%sep%js%res_position
         amag = 0.0_dp
       end associate
@@ -446,6 +452,8 @@ contains
       call w%add_var_1d("friction_force_N", ["time"], friction(1:nrec), "N", &
         "friction on the rocket along the exit direction", werr)
       call w%add_var_1d("clearance_m", ["time"], clearance(1:nrec), "m", &
+        "distance from the rocket's surface to the aircraft's empennage (&bay tail_x, tail_y)", werr)
+      call w%add_var_1d("edge_clearance_m", ["time"], edge_clearance(1:nrec), "m", &
         "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
       call w%add_var_1d("constraint_residual_m", ["time"], residual(1:nrec), "m", &
         "position residual of the cut-joint constraints", werr)

@@ -49,6 +49,8 @@ module airlaunch_scenario_config
     real(dp) :: release_time = 0.5_dp    !< t0 [s]: end of Case 0
     real(dp) :: l0 = 10.0_dp             !< rocket CG ahead of the ramp edge at release [m]
     character(len=16) :: edge_contact = "one_sided"  !< Case 2 contact: "one_sided" or "bilateral"
+    real(dp) :: tail_x = -24.0_dp        !< empennage point (horizontal tail), aircraft axes [m]
+    real(dp) :: tail_y = 6.0_dp
   end type bay_config
 
   !> Rocket (payload).
@@ -229,19 +231,20 @@ contains
     type(bay_config), intent(inout) :: c
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
-    real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0
+    real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, tail_x, tail_y
     character(len=16) :: edge_contact
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
-    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact
-    type(nml_var), parameter :: vars(9) = [nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
+    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
+      tail_x, tail_y
+    type(nml_var), parameter :: vars(11) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
       nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
       nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real"), &
       nml_var("edge_contact", "string")]
     ramp_edge_x = c%ramp_edge_x; floor_y = c%floor_y; length = c%length; width = c%width
     height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0
-    edge_contact = c%edge_contact
+    edge_contact = c%edge_contact; tail_x = c%tail_x; tail_y = c%tail_y
     call open_group(f, "bay", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -260,7 +263,8 @@ contains
     call require_positive(f, "bay", "l0", l0, "m", error)
     call require_choice(f, "bay", "edge_contact", edge_contact, [character(len=16) :: "one_sided", "bilateral"], error)
     if (allocated(error)) return
-    c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact)
+    c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
+      tail_x, tail_y)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=bay)
     call echo_namelist_unit(u, echo)
