@@ -71,7 +71,7 @@ program airlaunch
     block
       type(scenario_config) :: cfg
       type(launch_result) :: res
-      call read_scenario_config(f, cfg, echo, error)
+      call read_scenario_config(f, cfg, echo, error, run%t_end)
       if (allocated(error)) call fail_input(error%message)
       call run_launch(run, cfg, echo, res, error)
       summary = launch_summary(res)

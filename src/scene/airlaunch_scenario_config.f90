@@ -93,11 +93,12 @@ module airlaunch_scenario_config
 contains
 
   !> Read and validate all groups; `echo` receives the resolved input.
-  subroutine read_scenario_config(f, cfg, echo, error)
+  subroutine read_scenario_config(f, cfg, echo, error, t_end)
     type(nml_file), intent(in) :: f
     type(scenario_config), intent(out) :: cfg
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
+    real(dp), intent(in), optional :: t_end   !< end of the run [s], for the schedule checks
     call f%check_groups(scenario_groups, error)
     if (.not. allocated(error)) call read_flight(f, cfg%flight, echo, error)
     if (.not. allocated(error)) call read_aircraft(f, cfg%aircraft, echo, error)
@@ -106,6 +107,14 @@ contains
     if (.not. allocated(error)) call read_parachute(f, cfg%chute, echo, error)
     if (.not. allocated(error)) call read_line(f, cfg%line, echo, error)
     if (.not. allocated(error)) call check_geometry(f, cfg, error)
+    if (allocated(error) .or. .not. present(t_end)) return
+    if (cfg%chute%deploy_time >= t_end) then
+      call fatal_error(error, f%path // ": &parachute: deploy_time = " // str(cfg%chute%deploy_time) // &
+        " is not allowed (the parachute would never inflate: the run ends at t_end = " // str(t_end) // " s)")
+    else if (cfg%bay%release_time >= t_end) then
+      call fatal_error(error, f%path // ": &bay: release_time = " // str(cfg%bay%release_time) // &
+        " is not allowed (the rocket would never be released: the run ends at t_end = " // str(t_end) // " s)")
+    end if
   end subroutine read_scenario_config
 
   !> Read one group: check names, read, diagnose.  `present` false: defaults.

@@ -6,7 +6,7 @@ import subprocess
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-BIN = ROOT / "build" / "release" / "bin"
+BIN = pathlib.Path(os.environ.get("AIRLAUNCH_BIN", ROOT / "build" / "release" / "bin"))
 
 
 @pytest.fixture(scope="session")

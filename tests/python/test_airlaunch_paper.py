@@ -109,6 +109,7 @@ def _variant(tmp_path, edits):
     ([(r"^  drag_area = 10.0 .*$", "  drag_area = 0.0")], "&parachute: drag_area = 0.0 is not allowed"),
     ([(r"^  l0 = 10.0 .*$", "  l0 = 5.0")], "&bay: l0 = 5.0 is not allowed"),
     ([(r"^  fin_semi_span = 1.34 .*$", "  fin_semi_span = 2.0")], "&rocket: fin_semi_span = 2.0 is not allowed"),
+    ([(r"^  deploy_time = -1.0 .*$", "  deploy_time = 20.0")], "the parachute would never inflate"),
 ])
 def test_impossible_scenarios_give_one_clear_line(airlaunch_exe, tmp_path, edits, fragment):
     nml = _variant(tmp_path, edits)
@@ -137,3 +138,23 @@ def test_one_sided_edge_separates_early(airlaunch_exe, tmp_path, paper_run):
         assert t_sep == pytest.approx(paper.attrs["edge_pull_time_s"], abs=1e-3)
         # after the early separation the contact force is zero
         assert np.all(ds["edge_normal_force_N"].values[ds["time"].values > t_sep + 1e-9] == 0.0)
+
+
+def test_numerical_failure_keeps_readable_output(airlaunch_exe, tmp_path):
+    """A run that fails (here: the rocket, dropped from 300 m and falling for
+    40 s, leaves the atmosphere model at -2 km) ends with status 3 and one line
+    naming the phase, the time and the quantity; what was computed is kept,
+    readable, with status = "failed"."""
+    nml = _variant(tmp_path, [(r"^  altitude = 10000.0 .*$", "  altitude = 300.0"),
+                              (r"^  t_end = 15.0 .*$", "  t_end = 40.0")])
+    out = tmp_path / "fail.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 3, res.stderr
+    first = res.stderr.strip().splitlines()[0]
+    assert "free flight" in first.lower() and "t = " in first and "altitude" in first, first
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "failed"
+        assert "altitude" in ds.attrs["failure"]
+        t_fail = float(re.search(r"t = ([0-9.]+) s", first).group(1))
+        assert ds["time"].values[-1] <= t_fail + 1e-9
+        assert ds["time"].values[-1] > 10.0

@@ -1,0 +1,373 @@
+!> airlaunch-sweep: run the cases of a sweep under MPI (docs/sweep.md).
+!>
+!>   mpirun -np K airlaunch-sweep SWEEP.nml [--restart]
+!>   airlaunch-sweep SWEEP.nml --check
+!>   airlaunch-sweep SWEEP.nml --case-namelist ID
+!>
+!> Every rank computes cases; the next case goes to the first free rank (a
+!> shared counter).  Finished rows go to the journal at once; a rerun of the
+!> same command skips them.  Rank 0 prints a progress line every few seconds,
+!> writes the summary (sorted by case id) atomically and prints the tally.
+!> Exit status: 0 done (failed cases are results, counted in the tally),
+!> 2 bad input (one line on stderr, before any case runs), 4 a file or MPI
+!> error while running.
+program airlaunch_sweep
+  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use, intrinsic :: iso_c_binding, only: c_int
+  use mpi_f08
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_version, only: code_version
+  use airlaunch_sweep_definition, only: sweep_definition
+  use airlaunch_sweep_files, only: make_dir, file_exists
+  use airlaunch_sweep_case, only: run_case, case_namelist
+  use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
+  use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
+  use airlaunch_sweep_summary, only: write_summary
+  use airlaunch_sweep_scheduler, only: sweep_scheduler
+  use airlaunch_sweep_plan, only: sweep_setup, load_sweep, fingerprint_text, trajectory_ids
+  implicit none
+
+  interface
+    integer(c_int) function c_usleep(usec) bind(C, name="usleep")
+      import :: c_int
+      integer(c_int), value :: usec
+    end function c_usleep
+  end interface
+
+  integer, parameter :: exit_ok = 0, exit_input = 2, exit_runtime = 4
+  type(sweep_setup) :: s
+  type(error_type), allocatable :: error
+  character(len=:), allocatable :: path, scratch
+  integer :: rank, nranks, status, case_id, n_resumed, k
+  logical :: check_only, restart
+  integer, allocatable :: pending(:), keep(:)
+  type(sweep_row), allocatable :: rows(:)
+  real(dp) :: t_start, t_run
+
+  call MPI_Init()
+  call MPI_Comm_rank(MPI_COMM_WORLD, rank)
+  call MPI_Comm_size(MPI_COMM_WORLD, nranks)
+  call parse_arguments()
+  t_start = MPI_Wtime()
+
+  ! --- rank 0 validates everything before any case runs
+  status = exit_ok
+  n_resumed = 0
+  if (rank == 0) then
+    call load_sweep(path, .not. check_only, s, error)
+    if (allocated(error)) status = exit_input
+    if (status == exit_ok .and. case_id >= 0) then
+      if (case_id >= s%table%n_cases) then
+        call fatal_error(error, path // ": --case-namelist " // str(case_id) // " is not a case id (0 .. " // &
+          str(s%table%n_cases - 1) // ")")
+        status = exit_input
+      end if
+    end if
+    if (status == exit_ok .and. .not. check_only .and. case_id < 0) call prepare_run()
+  end if
+  call MPI_Bcast(status, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+  if (status /= exit_ok) then
+    if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // error%message
+    call finish(status)
+  end if
+  if (check_only .or. case_id >= 0) then
+    if (rank == 0) call report_check()
+    call finish(exit_ok)
+  end if
+
+  ! --- every rank: the same sweep, the list of pending cases
+  if (rank /= 0) then
+    call load_sweep(path, .true., s, error)
+    if (allocated(error)) call die("rank " // str(rank) // ": " // error%message)
+  end if
+  call broadcast_ids(pending)
+  scratch = s%def%work_dir() // "/case_rank" // str(rank) // ".nml"
+
+  ! --- the cases
+  t_run = MPI_Wtime()
+  call run_pass(pending, .false.)
+  if (rank == 0) then
+    call collect_rows()
+    call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
+    if (allocated(error)) call die(error%message)
+    call report_tally(size(pending), MPI_Wtime() - t_run)
+    keep = trajectory_ids(s%def, rows)
+    keep = pack(keep, [(.not. file_exists(s%def%trajectory_path(keep(k))), k = 1, size(keep))])
+  end if
+
+  ! --- full trajectories of the cases the definition keeps
+  call broadcast_ids(keep)
+  if (size(keep) > 0) then
+    if (rank == 0) call make_dir(s%def%trajectory_dir(), error)
+    if (allocated(error)) call die(error%message)
+    call MPI_Barrier(MPI_COMM_WORLD)
+    call run_pass(keep, .true.)
+    if (rank == 0) write(output_unit, '(a)') "trajectories: " // str(size(keep)) // " written to " // &
+      s%def%trajectory_dir()
+  end if
+  call finish(exit_ok)
+
+contains
+
+  !> Run the cases ids(:) over all ranks (dynamic assignment).  With
+  !> `trajectory`, each case writes its full output and nothing is journaled.
+  subroutine run_pass(ids, trajectory)
+    integer, intent(in) :: ids(:)
+    logical, intent(in) :: trajectory
+    type(sweep_scheduler) :: sched
+    type(journal_writer) :: journal
+    type(sweep_row) :: row
+    integer :: position, id, done, failed
+    real(dp) :: t0, last, now
+    if (.not. trajectory) then
+      call journal%open(s%def%journal_dir(), rank, error)
+      if (allocated(error)) call die(error%message)
+    end if
+    ! every rank file exists before any row is written (journal invariant)
+    call sched%init(MPI_COMM_WORLD, error)
+    if (allocated(error)) call die(error%message)
+    t0 = MPI_Wtime()
+    last = t0
+    do
+      call sched%next(position)
+      if (position >= size(ids)) exit
+      id = ids(position + 1)
+      if (trajectory) then
+        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), row)
+      else
+        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row)
+        call journal%append(row, error)
+        if (allocated(error)) call die(error%message)
+      end if
+      call sched%finished(row%status /= status_ok)
+      now = MPI_Wtime()
+      if (rank == 0 .and. .not. trajectory .and. now - last >= s%def%progress_interval) then
+        call sched%counts(done, failed)
+        call report_progress(done, failed, size(ids), MPI_Wtime() - t0)
+        last = MPI_Wtime()
+      end if
+    end do
+    ! rank 0 keeps reporting while the others finish their last cases
+    if (rank == 0 .and. .not. trajectory) then
+      do
+        call sched%counts(done, failed)
+        if (done >= size(ids)) exit
+        now = MPI_Wtime()
+        if (now - last >= s%def%progress_interval) then
+          call report_progress(done, failed, size(ids), MPI_Wtime() - t0)
+          last = MPI_Wtime()
+        end if
+        if (c_usleep(100000_c_int) /= 0) continue
+      end do
+    end if
+    call sched%free()
+    if (.not. trajectory) call journal%close()
+  end subroutine run_pass
+
+  !> Rank 0, before any case: directories, --restart, fingerprint, resume.
+  subroutine prepare_run()
+    logical, allocatable :: done(:)
+    type(sweep_row), allocatable :: old(:)
+    integer :: duplicates, bad
+    call make_dir(s%def%journal_dir(), error)
+    if (.not. allocated(error)) call make_dir(s%def%work_dir(), error)
+    if (allocated(error)) then
+      status = exit_runtime
+      return
+    end if
+    if (restart) call remove_journal(s%def%journal_dir())
+    call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error)
+    if (allocated(error)) then
+      status = exit_input
+      return
+    end if
+    call read_journals(s%def%journal_dir(), s%table%n_cases, old, done, duplicates, bad, error)
+    if (allocated(error)) then
+      status = exit_runtime
+      return
+    end if
+    n_resumed = count(done)
+    pending = pack([(k - 1, k = 1, s%table%n_cases)], .not. done)
+    if (n_resumed > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": resuming: " // str(n_resumed) // &
+      " of " // str(s%table%n_cases) // " cases already in the journal"
+    if (bad > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(bad) // &
+      " torn journal lines ignored (their cases run again)"
+    write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(size(pending)) // " cases to run on " // &
+      str(nranks) // " rank" // trim(merge("s", " ", nranks > 1)) // " (" // s%def%design // ", " // &
+      str(size(s%def%inputs)) // " inputs, t_end " // str(merge(s%def%t_end, s%base%t_end, s%def%t_end > 0)) // &
+      " s)"
+    flush(output_unit)
+  end subroutine prepare_run
+
+  !> Rank 0: all rows from the journal; every case must be there.
+  subroutine collect_rows()
+    logical, allocatable :: done(:)
+    integer :: duplicates, bad
+    call read_journals(s%def%journal_dir(), s%table%n_cases, rows, done, duplicates, bad, error)
+    if (allocated(error)) call die(error%message)
+    if (.not. all(done)) call die(s%def%journal_dir() // ": " // str(count(.not. done)) // &
+      " cases have no row after the run (a journal write was lost)")
+  end subroutine collect_rows
+
+  !> Broadcast a list of case ids from rank 0.
+  subroutine broadcast_ids(ids)
+    integer, allocatable, intent(inout) :: ids(:)
+    integer :: n
+    n = 0
+    if (rank == 0) n = size(ids)
+    call MPI_Bcast(n, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+    if (rank /= 0) then
+      if (allocated(ids)) deallocate(ids)
+      allocate(ids(n))
+    end if
+    if (n > 0) call MPI_Bcast(ids, n, MPI_INTEGER, 0, MPI_COMM_WORLD)
+  end subroutine broadcast_ids
+
+  subroutine report_progress(done, failed, total, elapsed)
+    integer, intent(in) :: done, failed, total
+    real(dp), intent(in) :: elapsed
+    real(dp) :: rate, eta
+    rate = done/max(elapsed, 1.0e-9_dp)
+    eta = -1.0_dp
+    if (done > 0) eta = (total - done)/rate
+    write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(n_resumed + done) // "/" // &
+      str(s%table%n_cases) // " done, " // str(failed) // " failed, " // fx(rate, 2) // " cases/s, ETA " // &
+      duration(eta)
+    flush(output_unit)
+  end subroutine report_progress
+
+  subroutine report_tally(n_run, elapsed)
+    integer, intent(in) :: n_run
+    real(dp), intent(in) :: elapsed
+    write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(size(rows)) // " cases: " // &
+      str(count(rows%status == status_ok)) // " ok, " // str(count(rows%status == status_failed)) // &
+      " failed, " // str(count(rows%status == status_invalid)) // " invalid input; " // str(n_run) // &
+      " run now on " // str(nranks) // " rank" // trim(merge("s", " ", nranks > 1)) // " in " // &
+      fx(elapsed, 2) // " s (" // fx(n_run/max(elapsed, 1.0e-9_dp), 3) // " cases/s), " // str(n_resumed) // &
+      " from the journal"
+    write(output_unit, '(a)') "summary: " // s%def%summary_path()
+    flush(output_unit)
+  end subroutine report_tally
+
+  subroutine report_check()
+    integer :: j
+    if (case_id >= 0) then
+      write(output_unit, '(a)', advance="no") case_namelist(s%def, s%base, case_id, s%table%values(:, case_id + 1))
+      return
+    end if
+    write(output_unit, '(a)') "airlaunch-sweep: " // path // ": ok: design " // s%def%design // ", " // &
+      str(s%def%n_cases) // " cases, inputs:"
+    do j = 1, size(s%def%inputs)
+      write(output_unit, '(a)') "  " // s%def%inputs(j)%name // " (" // s%def%inputs(j)%distribution // ")"
+    end do
+    if (s%table%n_cases > 0) then
+      write(output_unit, '(a)') "table: " // s%def%table_path() // " matches the definition"
+    else
+      write(output_unit, '(a)') "table: " // s%def%table_path() // " not made yet"
+    end if
+  end subroutine report_check
+
+  subroutine parse_arguments()
+    character(len=4096) :: arg
+    integer :: i, nargs, ios
+    path = ""
+    check_only = .false.
+    restart = .false.
+    case_id = -1
+    nargs = command_argument_count()
+    i = 1
+    do while (i <= nargs)
+      call get_command_argument(i, arg)
+      select case (trim(arg))
+      case ("-h", "--help")
+        if (rank == 0) call usage()
+        call finish(exit_ok)
+      case ("-V", "--version")
+        if (rank == 0) write(output_unit, '(a)') "airlaunch-sweep " // code_version
+        call finish(exit_ok)
+      case ("--check")
+        check_only = .true.
+      case ("--restart")
+        restart = .true.
+      case ("--case-namelist")
+        i = i + 1
+        call get_command_argument(i, arg)
+        read(arg, *, iostat=ios) case_id
+        if (ios /= 0 .or. i > nargs .or. case_id < 0) call fail_input("--case-namelist needs a case id (an integer >= 0)")
+      case default
+        if (arg(1:1) == "-") call fail_input("unknown option " // trim(arg) // " (see airlaunch-sweep --help)")
+        if (len(path) > 0) call fail_input("more than one sweep definition given")
+        path = trim(arg)
+      end select
+      i = i + 1
+    end do
+    if (len(path) == 0) then
+      if (rank == 0) call usage()
+      call fail_input("no sweep definition given")
+    end if
+  end subroutine parse_arguments
+
+  subroutine usage()
+    write(output_unit, '(a)') "usage: mpirun -np K airlaunch-sweep SWEEP.nml [--restart]"
+    write(output_unit, '(a)') "       airlaunch-sweep SWEEP.nml --check | --case-namelist ID"
+    write(output_unit, '(a)') "  runs the cases of the sweep's table (docs/sweep.md); a rerun resumes"
+  end subroutine usage
+
+  !> Bad command line: one line, exit 2.
+  subroutine fail_input(msg)
+    character(len=*), intent(in) :: msg
+    if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // msg
+    call finish(exit_input)
+  end subroutine fail_input
+
+  !> A file or MPI failure while running: stop every rank.
+  subroutine die(msg)
+    character(len=*), intent(in) :: msg
+    write(error_unit, '(a)') "airlaunch-sweep: error: " // msg
+    flush(error_unit)
+    call MPI_Abort(MPI_COMM_WORLD, exit_runtime)
+    stop exit_runtime, quiet=.true.
+  end subroutine die
+
+  subroutine finish(code)
+    integer, intent(in) :: code
+    call MPI_Finalize()
+    if (code == exit_ok) stop
+    stop code, quiet=.true.
+  end subroutine finish
+
+  !> Fixed-point number with d decimals.
+  function fx(x, d) result(r)
+    real(dp), intent(in) :: x
+    integer, intent(in) :: d
+    character(len=:), allocatable :: r
+    character(len=40) :: buf, fmt
+    write(fmt, '("(f0.",i0,")")') d
+    write(buf, fmt) x
+    r = trim(adjustl(buf))
+    if (r(1:1) == ".") r = "0" // r
+  end function fx
+
+  !> "1 h 02 min", "3 min 07 s", "12 s"; "?" if unknown.
+  function duration(t) result(r)
+    real(dp), intent(in) :: t
+    character(len=:), allocatable :: r
+    character(len=40) :: buf
+    integer :: sec
+    if (t < 0.0_dp .or. t /= t .or. t > 1.0e8_dp) then
+      r = "?"
+      return
+    end if
+    sec = nint(t)
+    if (sec >= 3600) then
+      write(buf, '(i0," h ",i2.2," min")') sec/3600, mod(sec, 3600)/60
+    else if (sec >= 60) then
+      write(buf, '(i0," min ",i2.2," s")') sec/60, mod(sec, 60)
+    else
+      write(buf, '(i0," s")') sec
+    end if
+    r = trim(buf)
+  end function duration
+end program airlaunch_sweep
