@@ -334,7 +334,7 @@ contains
   subroutine finish(code)
     integer, intent(in) :: code
     call MPI_Finalize()
-    if (code == exit_ok) stop
+    if (code == exit_ok) stop, quiet=.true.
     stop code, quiet=.true.
   end subroutine finish
 

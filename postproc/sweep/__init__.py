@@ -1,0 +1,16 @@
+"""Monte Carlo sweeps of the air-launch scenario: case tables, safety envelopes, figures.
+
+The chain (docs/sweep.md):
+
+1. ``python -m postproc.sweep table SWEEP.nml`` draws the case table (scipy.stats.qmc);
+2. ``mpirun -np K build/release/bin/airlaunch-sweep SWEEP.nml`` runs the cases;
+3. ``python -m postproc.sweep envelope SWEEP.nml`` evaluates the safety criteria and
+   draws the figures.
+
+Every module here is free of global state: functions take what they need and
+return new objects.
+"""
+
+from .definition import DefinitionError, InputSpec, SweepDefinition, read_definition
+
+__all__ = ["DefinitionError", "InputSpec", "SweepDefinition", "read_definition"]

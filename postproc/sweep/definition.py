@@ -1,0 +1,304 @@
+"""The sweep definition: a namelist file with one ``&sweep`` group and one ``&input``
+group per varied input (docs/sweep.md documents every variable).
+
+The Fortran program ``airlaunch-sweep`` reads the same file and applies the same
+rules (src/sweep/airlaunch_sweep_definition.f90); names of the varied scenario
+variables are checked there, against the scenario readers themselves.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import pathlib
+
+import f90nml
+
+DESIGNS = ("lhs", "sobol", "grid")
+DISTRIBUTIONS = ("uniform", "normal", "truncnorm", "list")
+WORST_BY = ("min_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg",
+            "max_load_factor_excursion")
+
+SWEEP_VARS = ("name", "base", "output_dir", "design", "n_cases", "seed", "t_end", "keep_failed",
+              "keep_worst", "worst_by", "keep_ids", "criteria", "progress_interval")
+INPUT_VARS = ("name", "distribution", "lower", "upper", "mean", "std", "values", "levels", "units",
+              "description")
+MAX_SEED = 2**31 - 1
+
+
+class DefinitionError(ValueError):
+    """Bad sweep definition: the message is one line naming file, group and value."""
+
+
+@dataclasses.dataclass(frozen=True)
+class InputSpec:
+    """One varied input: a scenario variable ``group%variable`` and its distribution."""
+
+    name: str
+    distribution: str
+    lower: float = math.nan
+    upper: float = math.nan
+    mean: float = math.nan
+    std: float = math.nan
+    values: tuple = ()
+    levels: int = 0
+    units: str = ""
+    description: str = ""
+
+    @property
+    def group(self) -> str:
+        """Namelist group of the scenario variable."""
+        return self.name.split("%", 1)[0]
+
+    @property
+    def variable(self) -> str:
+        """Variable name inside its group."""
+        return self.name.split("%", 1)[1]
+
+    def grid_size(self) -> int:
+        """Number of grid levels of this input (design = 'grid')."""
+        return len(self.values) if self.distribution == "list" else self.levels
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepDefinition:
+    """A validated sweep definition."""
+
+    path: str
+    name: str
+    base: str
+    output_dir: str
+    design: str
+    n_cases: int
+    seed: int
+    inputs: tuple
+    t_end: float = 0.0
+    keep_failed: bool = False
+    keep_worst: int = 0
+    worst_by: str = "min_clearance_m"
+    keep_ids: tuple = ()
+    criteria: str = ""
+    progress_interval: float = 5.0
+
+    @property
+    def table_path(self) -> pathlib.Path:
+        """Case table written by the table step."""
+        return pathlib.Path(self.output_dir) / "table.nc"
+
+    @property
+    def summary_path(self) -> pathlib.Path:
+        """Summary written by airlaunch-sweep."""
+        return pathlib.Path(self.output_dir) / "summary.nc"
+
+    @property
+    def envelope_path(self) -> pathlib.Path:
+        """Envelope written by the envelope step."""
+        return pathlib.Path(self.output_dir) / "envelope.nc"
+
+    @property
+    def figure_dir(self) -> pathlib.Path:
+        """Directory of the envelope figures."""
+        return pathlib.Path(self.output_dir) / "figures"
+
+
+def _suggest(name, allowed):
+    close = difflib.get_close_matches(name, allowed, n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _groups(nml, group):
+    """All occurrences of a group (f90nml gives one Namelist or a Cogroup list)."""
+    if group not in nml:
+        return []
+    value = nml[group]
+    return list(value) if isinstance(value, list) else [value]
+
+
+def _check_names(where, values, allowed, kind="variable"):
+    for key in values:
+        if key not in allowed:
+            raise DefinitionError(f"{where}unknown {kind} '{key}'{_suggest(key, allowed)} "
+                                  f"(allowed: {', '.join(allowed)})")
+
+
+def _real(where, group_vars, key, required=False):
+    if key not in group_vars or group_vars[key] is None:
+        if required:
+            raise DefinitionError(f"{where}missing required value {key}")
+        return math.nan
+    value = group_vars[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DefinitionError(f"{where}{key} = {value!r} is not a real number")
+    value = float(value)
+    if not math.isfinite(value):
+        raise DefinitionError(f"{where}{key} = {value} is not allowed (must be finite)")
+    return value
+
+
+def _int(where, group_vars, key, default=None):
+    if key not in group_vars or group_vars[key] is None:
+        if default is None:
+            raise DefinitionError(f"{where}missing required value {key}")
+        return default
+    value = group_vars[key]
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise DefinitionError(f"{where}{key} = {value!r} is not an integer")
+    return value
+
+
+def _str(where, group_vars, key, default=None):
+    if key not in group_vars or group_vars[key] is None:
+        if default is None:
+            raise DefinitionError(f"{where}missing required value {key}")
+        return default
+    value = group_vars[key]
+    if not isinstance(value, str):
+        raise DefinitionError(f"{where}{key} = {value!r} is not a quoted string")
+    return value.strip()
+
+
+def _choice(where, key, value, choices):
+    if value not in choices:
+        raise DefinitionError(f"{where}{key} = '{value}' is not allowed (one of: {', '.join(choices)})")
+
+
+def _as_list(value):
+    if value is None:
+        return []
+    return list(value) if isinstance(value, list) else [value]
+
+
+def _read_input(path, index, group_vars):
+    """Validate one &input group."""
+    where = f"{path}: &input #{index}: "
+    _check_names(where, group_vars, INPUT_VARS)
+    name = _str(where, group_vars, "name").lower()
+    where = f"{path}: &input #{index} '{name}': "
+    if name.count("%") != 1 or not all(part.replace("_", "a").isalnum() for part in name.split("%")):
+        raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, "
+                              "e.g. 'bay%release_time')")
+    dist = _str(where, group_vars, "distribution").lower()
+    _choice(where, "distribution", dist, DISTRIBUTIONS)
+    spec = dict(name=name, distribution=dist, units=_str(where, group_vars, "units", ""),
+                description=_str(where, group_vars, "description", ""))
+    levels = _int(where, group_vars, "levels", 0)
+    if levels < 0:
+        raise DefinitionError(f"{where}levels = {levels} is not allowed (must be >= 1)")
+    spec["levels"] = levels
+    if dist in ("uniform", "truncnorm"):
+        lower = _real(where, group_vars, "lower", required=True)
+        upper = _real(where, group_vars, "upper", required=True)
+        if not upper > lower:
+            raise DefinitionError(f"{where}upper = {upper:g} is not allowed (must be > lower = {lower:g}: "
+                                  "reversed or empty bounds)")
+        spec.update(lower=lower, upper=upper)
+    if dist in ("normal", "truncnorm"):
+        mean = _real(where, group_vars, "mean", required=True)
+        std = _real(where, group_vars, "std", required=True)
+        if not std > 0:
+            raise DefinitionError(f"{where}std = {std:g} is not allowed (must be > 0)")
+        spec.update(mean=mean, std=std)
+    if dist == "list":
+        raw = _as_list(group_vars.get("values"))
+        if not raw:
+            raise DefinitionError(f"{where}missing required value values (the list of values)")
+        values = []
+        for v in raw:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                raise DefinitionError(f"{where}values: {v!r} is not a finite real number")
+            values.append(float(v))
+        spec["values"] = tuple(values)
+    else:
+        for key in ("values",):
+            if key in group_vars:
+                raise DefinitionError(f"{where}{key} is only used by distribution = 'list'")
+    for key, dists in (("lower", ("uniform", "truncnorm")), ("upper", ("uniform", "truncnorm")),
+                       ("mean", ("normal", "truncnorm")), ("std", ("normal", "truncnorm"))):
+        if key in group_vars and dist not in dists:
+            raise DefinitionError(f"{where}{key} is not used by distribution = '{dist}' "
+                                  f"(only by {' and '.join(dists)})")
+    return InputSpec(**spec)
+
+
+def parse_definition(text, path="<sweep>"):
+    """Validate the text of a sweep definition; return a SweepDefinition."""
+    try:
+        nml = f90nml.reads(text)
+    except Exception as exc:  # f90nml raises several exception types
+        raise DefinitionError(f"{path}: cannot read the namelist: {exc}") from None
+    _check_names(f"{path}: ", list(nml.keys()), ("sweep", "input"), kind="group")
+    sweeps = _groups(nml, "sweep")
+    if len(sweeps) != 1:
+        raise DefinitionError(f"{path}: the group &sweep must appear once (found {len(sweeps)})")
+    sweep = sweeps[0]
+    where = f"{path}: &sweep: "
+    _check_names(where, sweep, SWEEP_VARS)
+    design = _str(where, sweep, "design").lower()
+    _choice(where, "design", design, DESIGNS)
+    base = _str(where, sweep, "base")
+    if not base:
+        raise DefinitionError(f"{where}base = '' is not allowed (the base scenario file)")
+    name = _str(where, sweep, "name", pathlib.Path(path).stem)
+    output_dir = _str(where, sweep, "output_dir", f"output/sweep_{name}")
+    groups = _groups(nml, "input")
+    if not groups:
+        raise DefinitionError(f"{path}: no &input group (at least one varied input is needed)")
+    inputs = tuple(_read_input(path, i + 1, g) for i, g in enumerate(groups))
+    names = [s.name for s in inputs]
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise DefinitionError(f"{path}: &input #{i + 1} '{n}': the input is varied twice")
+    if design == "grid":
+        for i, s in enumerate(inputs):
+            if s.grid_size() < 1:
+                raise DefinitionError(f"{path}: &input #{i + 1} '{s.name}': missing required value levels "
+                                      "(design = 'grid' needs levels >= 1 or a list of values)")
+        n_grid = math.prod(s.grid_size() for s in inputs)
+        n_cases = _int(where, sweep, "n_cases", n_grid)
+        if n_cases != n_grid:
+            raise DefinitionError(f"{where}n_cases = {n_cases} is not allowed (the grid has "
+                                  f"{n_grid} points: the product of the levels)")
+        seed = _int(where, sweep, "seed", 0)
+    else:
+        n_cases = _int(where, sweep, "n_cases")
+        seed = _int(where, sweep, "seed")
+    if n_cases < 1:
+        raise DefinitionError(f"{where}n_cases = {n_cases} is not allowed (must be >= 1: zero cases)")
+    if not 0 <= seed <= MAX_SEED:
+        raise DefinitionError(f"{where}seed = {seed} is not allowed (must be in [0, {MAX_SEED}])")
+    t_end = _real(where, sweep, "t_end")
+    t_end = 0.0 if math.isnan(t_end) else t_end
+    if t_end < 0:
+        raise DefinitionError(f"{where}t_end = {t_end:g} is not allowed (must be > 0 s, or 0 for the "
+                              "base scenario's)")
+    keep_failed = sweep.get("keep_failed", False)
+    if not isinstance(keep_failed, bool):
+        raise DefinitionError(f"{where}keep_failed = {keep_failed!r} is not .true. or .false.")
+    keep_worst = _int(where, sweep, "keep_worst", 0)
+    if keep_worst < 0:
+        raise DefinitionError(f"{where}keep_worst = {keep_worst} is not allowed (must be >= 0)")
+    worst_by = _str(where, sweep, "worst_by", "min_clearance_m")
+    _choice(where, "worst_by", worst_by, WORST_BY)
+    keep_ids = []
+    for v in _as_list(sweep.get("keep_ids")):
+        if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < n_cases:
+            raise DefinitionError(f"{where}keep_ids: {v!r} is not allowed (case ids are integers in "
+                                  f"[0, {n_cases - 1}])")
+        keep_ids.append(v)
+    progress = _real(where, sweep, "progress_interval")
+    progress = 5.0 if math.isnan(progress) else progress
+    if not progress > 0:
+        raise DefinitionError(f"{where}progress_interval = {progress:g} is not allowed (must be > 0 s)")
+    return SweepDefinition(path=str(path), name=name, base=base, output_dir=output_dir, design=design,
+                           n_cases=n_cases, seed=seed, inputs=inputs, t_end=t_end,
+                           keep_failed=keep_failed, keep_worst=keep_worst, worst_by=worst_by,
+                           keep_ids=tuple(keep_ids), criteria=_str(where, sweep, "criteria", ""),
+                           progress_interval=progress)
+
+
+def read_definition(path):
+    """Read and validate a sweep definition file."""
+    p = pathlib.Path(path)
+    if not p.is_file():
+        raise DefinitionError(f"{path}: file does not exist (give the path of a sweep definition)")
+    return parse_definition(p.read_text(), str(path))

@@ -1,0 +1,164 @@
+"""The case table: one row per case, one variable per varied input, drawn with
+scipy.stats.qmc (Latin hypercube, scrambled Sobol) or laid out as a full grid.
+
+The same definition and seed give the same table, bit for bit (for one SciPy
+version: the version is recorded in the table).
+"""
+from __future__ import annotations
+
+import math
+import os
+import pathlib
+import warnings
+
+import numpy as np
+import scipy
+import scipy.stats as st
+import xarray as xr
+from scipy.stats import qmc
+
+from .definition import DefinitionError, InputSpec, SweepDefinition
+
+#: Unit samples are kept this far inside (0, 1) so that unbounded quantile
+#: functions stay finite (a scrambled point at exactly 0 has probability zero,
+#: but the guard costs nothing).
+U_GUARD = 1.0e-12
+
+
+def unit_samples(design: str, n: int, d: int, seed: int) -> np.ndarray:
+    """n points in [0, 1)^d from scipy.stats.qmc, shape (n, d)."""
+    if design == "lhs":
+        return qmc.LatinHypercube(d, scramble=True, rng=seed).random(n)
+    if design == "sobol":
+        sampler = qmc.Sobol(d, scramble=True, rng=seed)
+        m = int(round(math.log2(n)))
+        if 2**m == n:
+            return sampler.random_base2(m)
+        with warnings.catch_warnings():
+            # the balance properties need n = 2^m (docs/sweep.md); the first n
+            # points of the sequence are still a valid (if less even) design
+            warnings.simplefilter("ignore", UserWarning)
+            return sampler.random(n)
+    raise DefinitionError(f"design '{design}' has no unit samples")
+
+
+def quantile(spec: InputSpec, u: np.ndarray) -> np.ndarray:
+    """Map probabilities u in [0, 1) to values of the input's distribution."""
+    u = np.clip(u, U_GUARD, 1.0 - U_GUARD)
+    if spec.distribution == "uniform":
+        return st.uniform(loc=spec.lower, scale=spec.upper - spec.lower).ppf(u)
+    if spec.distribution == "normal":
+        return st.norm(loc=spec.mean, scale=spec.std).ppf(u)
+    if spec.distribution == "truncnorm":
+        a = (spec.lower - spec.mean) / spec.std
+        b = (spec.upper - spec.mean) / spec.std
+        x = st.truncnorm(a, b, loc=spec.mean, scale=spec.std).ppf(u)
+        return np.clip(x, spec.lower, spec.upper)
+    if spec.distribution == "list":
+        k = len(spec.values)
+        idx = np.minimum((u * k).astype(np.int64), k - 1)
+        return np.asarray(spec.values, dtype=float)[idx]
+    raise DefinitionError(f"distribution '{spec.distribution}' is unknown")
+
+
+def grid_levels(spec: InputSpec) -> np.ndarray:
+    """Grid levels of one input: the list's values, linspace(lower, upper) for a
+    uniform input, equal-probability cell midpoints for (truncated) normals."""
+    if spec.distribution == "list":
+        return np.asarray(spec.values, dtype=float)
+    if spec.distribution == "uniform":
+        if spec.levels == 1:
+            return np.array([0.5 * (spec.lower + spec.upper)])
+        return np.linspace(spec.lower, spec.upper, spec.levels)
+    return quantile(spec, (np.arange(spec.levels) + 0.5) / spec.levels)
+
+
+def draw_values(defn: SweepDefinition) -> np.ndarray:
+    """The case values, shape (n_cases, n_inputs)."""
+    if defn.design == "grid":
+        axes = np.meshgrid(*[grid_levels(s) for s in defn.inputs], indexing="ij")
+        return np.stack([a.ravel() for a in axes], axis=1)
+    u = unit_samples(defn.design, defn.n_cases, len(defn.inputs), defn.seed)
+    return np.stack([quantile(s, u[:, j]) for j, s in enumerate(defn.inputs)], axis=1)
+
+
+def input_attrs(spec: InputSpec) -> dict:
+    """Attributes that describe the input's distribution (checked by airlaunch-sweep)."""
+    attrs = {"long_name": spec.description or f"varied input {spec.name}",
+             "units": spec.units or "1", "distribution": spec.distribution}
+    for key in ("lower", "upper", "mean", "std"):
+        value = getattr(spec, key)
+        if not math.isnan(value):
+            attrs[key] = value
+    if spec.distribution == "list":
+        attrs["values"] = np.asarray(spec.values, dtype=float)
+    if spec.levels:
+        attrs["levels"] = np.int32(spec.levels)
+    return attrs
+
+
+def make_table(defn: SweepDefinition) -> xr.Dataset:
+    """The case table of a definition as an xarray Dataset over dimension `case`."""
+    values = draw_values(defn)
+    if values.shape[0] != defn.n_cases:
+        raise DefinitionError(f"{defn.path}: the design gave {values.shape[0]} cases, "
+                              f"n_cases = {defn.n_cases}")
+    data = {s.name: ("case", values[:, j], input_attrs(s)) for j, s in enumerate(defn.inputs)}
+    ds = xr.Dataset(data, coords={"case": ("case", np.arange(defn.n_cases, dtype=np.int32),
+                                           {"long_name": "case id", "units": "1"})})
+    ds.attrs.update({
+        "title": f"airlaunch sweep case table: {defn.name}",
+        "sweep_name": defn.name,
+        "design": defn.design,
+        "seed": np.int32(defn.seed),
+        "n_cases": np.int32(defn.n_cases),
+        "n_inputs": np.int32(len(defn.inputs)),
+        "inputs": " ".join(s.name for s in defn.inputs),
+        "base": defn.base,
+        "sampler": {"lhs": "scipy.stats.qmc.LatinHypercube(scramble=True)",
+                    "sobol": "scipy.stats.qmc.Sobol(scramble=True)",
+                    "grid": "full grid (first input varies slowest)"}[defn.design],
+        "scipy_version": scipy.__version__,
+        "numpy_version": np.__version__,
+    })
+    return ds
+
+
+def encoding(ds: xr.Dataset) -> dict:
+    """No fill values: every case has every input."""
+    return {name: {"_FillValue": None} for name in list(ds.data_vars) + list(ds.coords)}
+
+
+def write_atomic(ds: xr.Dataset, path) -> pathlib.Path:
+    """Write a netCDF-4 file under a temporary name and rename it."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds))
+    os.replace(tmp, path)
+    return path
+
+
+def write_table(defn: SweepDefinition, path=None) -> pathlib.Path:
+    """Draw the table of `defn` and write it (default: OUTPUT_DIR/table.nc)."""
+    return write_atomic(make_table(defn), path or defn.table_path)
+
+
+def check_table(defn: SweepDefinition, path=None) -> None:
+    """Raise DefinitionError unless the table at `path` is exactly the table of `defn`."""
+    path = pathlib.Path(path or defn.table_path)
+    if not path.is_file():
+        raise DefinitionError(f"{path}: case table does not exist (run the table step first)")
+    want = make_table(defn)
+    with xr.open_dataset(path, engine="netcdf4") as have:
+        names = [s.name for s in defn.inputs]
+        if sorted(have.data_vars) != sorted(names):
+            raise DefinitionError(f"{path}: the table's inputs ({', '.join(have.data_vars)}) are not "
+                                  f"those of {defn.path} ({', '.join(names)})")
+        if have.sizes.get("case") != defn.n_cases:
+            raise DefinitionError(f"{path}: the table has {have.sizes.get('case')} cases, {defn.path} "
+                                  f"asks for {defn.n_cases}")
+        for name in names:
+            if not np.array_equal(have[name].values, want[name].values):
+                raise DefinitionError(f"{path}: the values of {name} are not those that {defn.path} "
+                                      "draws (definition changed since the table was made?)")

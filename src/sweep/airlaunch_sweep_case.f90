@@ -1,0 +1,431 @@
+!> One case of a sweep: the base scenario's text with the case's values
+!> written into their groups, read by the standard scenario readers (so every
+!> case is validated exactly like a single run of `airlaunch`) and run in
+!> summary mode.
+!>
+!> How a case is applied: each varied `group%variable = value` is inserted just
+!> before the `/` that closes `&group` in the base text (or a new group is
+!> appended); a namelist read takes the last assignment of a variable, so the
+!> case's value wins over the base's.  Values are written with 17 significant
+!> digits (integers as integers), so they read back bit for bit.
+module airlaunch_sweep_case
+  use, intrinsic :: iso_fortran_env, only: int64
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str, lower
+  use airlaunch_namelist, only: nml_file
+  use airlaunch_run_config, only: run_config, read_run_config
+  use airlaunch_scenario_config, only: scenario_config, read_scenario_config
+  use airlaunch_launch_scene, only: launch_result, run_launch
+  use airlaunch_sweep_definition, only: sweep_definition, sweep_input
+  use airlaunch_sweep_files, only: read_text_file, write_text_file
+  use airlaunch_sweep_row, only: sweep_row, row_from_result, invalid_row
+  implicit none
+  private
+  public :: base_scenario, known_variable, load_base_scenario, check_varied_inputs, case_namelist
+  public :: run_case, inject_assignments, value_text
+
+  !> A variable the scenario readers know (from the resolved input they echo).
+  type :: known_variable
+    character(len=32) :: group = ""
+    character(len=32) :: name = ""
+    character(len=8) :: kind = ""      !< real, integer, logical or string
+  end type known_variable
+
+  !> The base scenario of a sweep.
+  type :: base_scenario
+    character(len=:), allocatable :: path       !< its file
+    character(len=:), allocatable :: text       !< its text, as written
+    character(len=:), allocatable :: echo       !< its fully resolved input
+    type(known_variable), allocatable :: known(:)  !< variables a case may set
+    real(dp) :: t_end = 0.0_dp                  !< its &run t_end [s]
+  end type base_scenario
+
+contains
+
+  !> Read and validate the base scenario.
+  subroutine load_base_scenario(path, base, error)
+    character(len=*), intent(in) :: path                  !< base scenario file
+    type(base_scenario), intent(out) :: base              !< the scenario
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    type(nml_file) :: f
+    type(run_config) :: run
+    type(scenario_config) :: cfg
+
+    base%path = path
+    call f%load(path, error)
+    if (.not. allocated(error)) call read_run_config(f, run, base%echo, error)
+    if (allocated(error)) then
+      error%message = "base scenario " // error%message
+      return
+    end if
+    if (trim(run%scene) /= "airlaunch") then
+      call fatal_error(error, "base scenario " // path // ": &run: scene = '" // trim(run%scene) // &
+        "' cannot be swept (only 'airlaunch')")
+      return
+    end if
+    call read_scenario_config(f, cfg, base%echo, error)
+    if (allocated(error)) then
+      error%message = "base scenario " // error%message
+      return
+    end if
+    base%t_end = run%t_end
+    call read_text_file(path, base%text, error)
+    if (allocated(error)) return
+    base%known = echo_variables(base%echo)
+  end subroutine load_base_scenario
+
+  !> The variables of the resolved input the readers echo: the runtime writes
+  !> a group as `&GROUP`, one ` NAME=value,` per line (continuation lines of
+  !> long arrays start without `NAME=`), and ` /`.
+  function echo_variables(echo) result(known)
+    character(len=*), intent(in) :: echo
+    type(known_variable), allocatable :: known(:)
+    character(len=:), allocatable :: line, group
+    integer :: p, q, eq
+    allocate(known(0))
+    group = ""
+    p = 1
+    do while (p <= len(echo))
+      q = index(echo(p:), new_line("a"))
+      if (q == 0) q = len(echo) - p + 2
+      line = trim(adjustl(echo(p:p+q-2)))
+      p = p + q
+      if (len(line) == 0) cycle
+      if (line(1:1) == "&") then
+        group = lower(line(2:))
+        cycle
+      end if
+      if (line(1:1) == "/") then
+        group = ""
+        cycle
+      end if
+      eq = index(line, "=")
+      if (eq < 2 .or. len(group) == 0) cycle
+      if (verify(lower(line(:eq-1)), "abcdefghijklmnopqrstuvwxyz0123456789_") /= 0) cycle
+      known = [known, known_variable(group, lower(line(:eq-1)), value_kind(line(eq+1:)))]
+    end do
+  end function echo_variables
+
+  !> Every varied input must name a numeric variable of the scenario; an
+  !> integer variable takes integer values only (distribution 'list').
+  subroutine check_varied_inputs(def, base, error)
+    type(sweep_definition), intent(in) :: def             !< the sweep
+    type(base_scenario), intent(in) :: base               !< its base scenario
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    integer :: k, j, hit
+    character(len=:), allocatable :: where, groups, names
+    do k = 1, size(def%inputs)
+      associate(s => def%inputs(k))
+        where = def%path // ":" // str(s%line) // ": &input #" // str(k) // " '" // s%name // "': "
+        if (.not. any(base%known%group == s%group)) then
+          groups = ""
+          do j = 1, size(base%known)
+            if (index(" " // groups // ",", " " // trim(base%known(j)%group) // ",") == 0) &
+              groups = groups // trim(base%known(j)%group) // ", "
+          end do
+          call fatal_error(error, where // "unknown group &" // s%group // " (the scenario's groups: " // &
+            groups(:len(groups)-2) // ")")
+          return
+        end if
+        hit = 0
+        names = ""
+        do j = 1, size(base%known)
+          if (base%known(j)%group /= s%group) cycle
+          names = names // trim(base%known(j)%name) // ", "
+          if (base%known(j)%name == s%variable) hit = j
+        end do
+        if (hit == 0) then
+          call fatal_error(error, where // "unknown variable '" // s%variable // "' in &" // s%group // &
+            closest(s%variable, base%known, s%group) // " (allowed: " // names(:len(names)-2) // ")")
+          return
+        end if
+        select case (trim(base%known(hit)%kind))
+        case ("real")
+        case ("integer")
+          if (s%distribution /= "list") then
+            call fatal_error(error, where // s%name // " is an integer: vary it with distribution = 'list' " // &
+              "of integer values")
+            return
+          end if
+          if (any(s%values /= aint(s%values))) then
+            call fatal_error(error, where // s%name // " is an integer: its values must be integers")
+            return
+          end if
+        case default
+          call fatal_error(error, where // s%name // " is a " // trim(base%known(hit)%kind) // &
+            " variable; only real and integer variables can be varied")
+          return
+        end select
+      end associate
+    end do
+  end subroutine check_varied_inputs
+
+  !> The namelist text of a case: base text + the sweep's t_end + the case's values.
+  function case_namelist(def, base, id, values) result(text)
+    type(sweep_definition), intent(in) :: def   !< the sweep
+    type(base_scenario), intent(in) :: base     !< its base scenario
+    integer, intent(in) :: id                   !< case id (for the comment)
+    real(dp), intent(in) :: values(:)           !< the case's values, in the order of def%inputs
+    character(len=:), allocatable :: text
+    character(len=32) :: groups(size(def%inputs) + 1)
+    character(len=256) :: lines(size(def%inputs) + 1)
+    integer :: k, m
+    m = 0
+    if (def%t_end > 0.0_dp) then
+      m = m + 1
+      groups(m) = "run"
+      lines(m) = "t_end = " // value_text(def%t_end) // "   ! sweep " // def%name
+    end if
+    do k = 1, size(def%inputs)
+      m = m + 1
+      groups(m) = def%inputs(k)%group
+      lines(m) = def%inputs(k)%variable // " = " // value_text(values(k)) // "   ! sweep " // def%name // &
+        ", case " // str(id)
+    end do
+    text = inject_assignments(base%text, groups(1:m), lines(1:m))
+  end function case_namelist
+
+  !> Run case `id`: write its namelist to `scratch`, read it, run it.  A
+  !> trajectory is written to `trajectory` unless it is "".
+  subroutine run_case(def, base, id, values, scratch, trajectory, row)
+    type(sweep_definition), intent(in) :: def   !< the sweep
+    type(base_scenario), intent(in) :: base     !< its base scenario
+    integer, intent(in) :: id                   !< case id
+    real(dp), intent(in) :: values(:)           !< the case's values
+    character(len=*), intent(in) :: scratch     !< per-rank scratch file for the namelist
+    character(len=*), intent(in) :: trajectory  !< trajectory file ("" for summary mode)
+    type(sweep_row), intent(out) :: row         !< the result
+    type(nml_file) :: f
+    type(run_config) :: run
+    type(scenario_config) :: cfg
+    type(launch_result) :: res
+    type(error_type), allocatable :: error
+    character(len=:), allocatable :: echo
+    integer(int64) :: c0, c1, rate
+
+    call system_clock(c0, rate)
+    call write_text_file(scratch, case_namelist(def, base, id, values), error)
+    if (.not. allocated(error)) call f%load(scratch, error)
+    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
+    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    if (allocated(error)) then
+      call system_clock(c1)
+      row = invalid_row(id, replace(error%message, scratch, "case " // str(id)), real(c1 - c0, dp)/rate)
+      return
+    end if
+    run%trajectory = len(trajectory) > 0
+    if (run%trajectory) run%output = trajectory
+    call run_launch(run, cfg, echo, res, error)
+    call system_clock(c1)
+    if (allocated(error)) then
+      row = row_from_result(id, res, .true., error%message, real(c1 - c0, dp)/rate)
+    else
+      row = row_from_result(id, res, .false., "", real(c1 - c0, dp)/rate)
+    end if
+  end subroutine run_case
+
+  !> Insert line(k) before the end of group groups(k) in `text` (appending
+  !> the group if the text lacks it).  Comments and strings are respected.
+  function inject_assignments(text, groups, lines) result(out)
+    character(len=*), intent(in) :: text         !< namelist text
+    character(len=*), intent(in) :: groups(:)    !< group of each assignment
+    character(len=*), intent(in) :: lines(:)     !< assignments `name = value`
+    character(len=:), allocatable :: out
+    character(len=32), allocatable :: names(:)
+    integer, allocatable :: ends(:)
+    character(len=1), parameter :: nl = new_line("a")
+    character(len=:), allocatable :: extra
+    integer :: k, j, prev
+    logical, allocatable :: used(:)
+
+    call group_ends(text, names, ends)
+    allocate(used(size(groups)))
+    used = .false.
+    out = ""
+    prev = 1
+    do j = 1, size(names)
+      extra = ""
+      do k = 1, size(groups)
+        if (lower(trim(groups(k))) == trim(names(j)) .and. .not. used(k)) then
+          extra = extra // "  " // trim(lines(k)) // nl
+          used(k) = .true.
+        end if
+      end do
+      if (len(extra) > 0) then
+        out = out // text(prev:ends(j)-1) // nl // extra
+        prev = ends(j)
+      end if
+    end do
+    out = out // text(prev:)
+    if (len(out) > 0) then
+      if (out(len(out):) /= nl) out = out // nl
+    end if
+    do k = 1, size(groups)
+      if (used(k)) cycle
+      out = out // "&" // lower(trim(groups(k))) // nl // "  " // trim(lines(k)) // nl
+      used(k) = .true.
+      do j = k + 1, size(groups)
+        if (lower(trim(groups(j))) == lower(trim(groups(k))) .and. .not. used(j)) then
+          out = out // "  " // trim(lines(j)) // nl
+          used(j) = .true.
+        end if
+      end do
+      out = out // "/" // nl
+    end do
+  end function inject_assignments
+
+  !> The groups of a namelist text and the position of the character that
+  !> ends each (its `/`, or the `&` of `&end`).
+  subroutine group_ends(text, names, ends)
+    character(len=*), intent(in) :: text
+    character(len=32), allocatable, intent(out) :: names(:)
+    integer, allocatable, intent(out) :: ends(:)
+    integer :: i, j, n
+    logical :: in_group
+    character :: quote, c
+    allocate(names(0), ends(0))
+    n = len(text)
+    i = 1
+    in_group = .false.
+    quote = " "
+    do while (i <= n)
+      c = text(i:i)
+      if (quote /= " ") then
+        if (c == quote) quote = " "
+        i = i + 1
+        cycle
+      end if
+      if (c == "!") then
+        j = index(text(i:), new_line("a"))
+        if (j == 0) exit
+        i = i + j
+        cycle
+      end if
+      if (c == "&" .or. c == "$") then
+        j = i + 1
+        do while (j <= n)
+          if (.not. is_name_char(text(j:j))) exit
+          j = j + 1
+        end do
+        if (lower(text(i+1:j-1)) == "end") then
+          if (in_group) ends(size(ends)) = i
+          in_group = .false.
+        else if (.not. in_group) then
+          names = [character(len=32) :: names, lower(text(i+1:j-1))]
+          ends = [ends, n + 1]
+          in_group = .true.
+        end if
+        i = j
+        cycle
+      end if
+      if (in_group) then
+        if (c == "'" .or. c == '"') then
+          quote = c
+        else if (c == "/") then
+          ends(size(ends)) = i
+          in_group = .false.
+        end if
+      end if
+      i = i + 1
+    end do
+  end subroutine group_ends
+
+  !> Namelist text of a value: an integer if it is one, else 17 significant
+  !> digits (reads back bit for bit).
+  function value_text(x) result(s)
+    real(dp), intent(in) :: x   !< value
+    character(len=:), allocatable :: s
+    character(len=40) :: buf
+    if (x == aint(x) .and. abs(x) < 1.0e15_dp) then
+      write(buf, '(i0)') int(x, int64)
+    else
+      write(buf, '(es25.16e3)') x
+    end if
+    s = trim(adjustl(buf))
+  end function value_text
+
+  !> Kind of a value as the runtime writes it in the resolved input.
+  pure function value_kind(v) result(k)
+    character(len=*), intent(in) :: v
+    character(len=8) :: k
+    character(len=:), allocatable :: u
+    u = trim(adjustl(v))
+    if (len(u) > 0) then
+      if (u(len(u):) == ",") u = trim(u(:len(u)-1))
+    end if
+    if (len(u) == 0) then
+      k = "string"
+    else if (u(1:1) == "'" .or. u(1:1) == '"') then
+      k = "string"
+    else if (u == "T" .or. u == "F" .or. u == ".TRUE." .or. u == ".FALSE." .or. u == ".true." .or. &
+      u == ".false.") then
+      k = "logical"
+    else if (scan(u, ".eEdD") > 0) then
+      k = "real"
+    else
+      k = "integer"
+    end if
+  end function value_kind
+
+  !> `s` with every occurrence of `old` replaced by `new`.
+  pure function replace(s, old, new) result(t)
+    character(len=*), intent(in) :: s, old, new
+    character(len=:), allocatable :: t
+    integer :: i, p
+    t = ""
+    i = 1
+    if (len(old) == 0) then
+      t = s
+      return
+    end if
+    do
+      p = index(s(i:), old)
+      if (p == 0) exit
+      t = t // s(i:i+p-2) // new
+      i = i + p - 1 + len(old)
+    end do
+    t = t // s(i:)
+  end function replace
+
+  pure logical function is_name_char(c)
+    character, intent(in) :: c
+    is_name_char = (c >= "a" .and. c <= "z") .or. (c >= "A" .and. c <= "Z") .or. (c >= "0" .and. c <= "9") &
+      .or. c == "_"
+  end function is_name_char
+
+  !> " (did you mean 'x'?)" for the nearest variable of the group (edit distance <= 2).
+  function closest(name, known, group) result(s)
+    character(len=*), intent(in) :: name, group
+    type(known_variable), intent(in) :: known(:)
+    character(len=:), allocatable :: s
+    integer :: j, d, best
+    s = ""
+    best = 3
+    do j = 1, size(known)
+      if (known(j)%group /= group) cycle
+      d = edit_distance(name, trim(known(j)%name))
+      if (d < best) then
+        best = d
+        s = " (did you mean '" // trim(known(j)%name) // "'?)"
+      end if
+    end do
+  end function closest
+
+  pure integer function edit_distance(a, b) result(d)
+    character(len=*), intent(in) :: a, b
+    integer :: m(0:len(a), 0:len(b)), i, j
+    do i = 0, len(a)
+      m(i, 0) = i
+    end do
+    do j = 0, len(b)
+      m(0, j) = j
+    end do
+    do j = 1, len(b)
+      do i = 1, len(a)
+        m(i, j) = min(m(i-1, j) + 1, m(i, j-1) + 1, m(i-1, j-1) + merge(0, 1, a(i:i) == b(j:j)))
+      end do
+    end do
+    d = m(len(a), len(b))
+  end function edit_distance
+end module airlaunch_sweep_case

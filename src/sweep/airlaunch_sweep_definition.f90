@@ -1,0 +1,470 @@
+!> The sweep definition: a namelist file with one &sweep group (what to run,
+!> where to write, the design) and one &input group per varied input (the
+!> scenario variable group%variable and its distribution), docs/sweep.md.
+!>
+!> postproc/sweep/definition.py applies the same rules when it draws the case
+!> table; here they are applied again so that airlaunch-sweep never runs a
+!> table against a definition it does not satisfy.
+module airlaunch_sweep_definition
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str, lower
+  use airlaunch_namelist, only: nml_file, nml_var, unset_real, unset_int
+  implicit none
+  private
+  public :: sweep_input, sweep_definition, read_sweep_definition
+  public :: design_names, distribution_names, worst_by_names, max_list_values
+
+  !> Largest number of values of a 'list' input and of keep_ids.
+  integer, parameter :: max_list_values = 4096
+  character(len=8), parameter :: design_names(3) = [character(len=8) :: "lhs", "sobol", "grid"]
+  character(len=16), parameter :: distribution_names(4) = [character(len=16) :: "uniform", "normal", &
+    "truncnorm", "list"]
+  !> Summary variables that can rank the worst cases (keep_worst), with the
+  !> direction in which they get worse.
+  character(len=40), parameter :: worst_by_names(4) = [character(len=40) :: "min_clearance_m", &
+    "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion"]
+
+  !> One varied input.
+  type :: sweep_input
+    character(len=:), allocatable :: name          !< group%variable (lower case)
+    character(len=:), allocatable :: group         !< namelist group of the scenario
+    character(len=:), allocatable :: variable      !< variable inside the group
+    character(len=:), allocatable :: distribution  !< uniform, normal, truncnorm or list
+    character(len=:), allocatable :: units         !< units (documentation only)
+    real(dp) :: lower = unset_real, upper = unset_real   !< bounds (uniform, truncnorm)
+    real(dp) :: mean = unset_real, std = unset_real      !< normal, truncnorm
+    real(dp), allocatable :: values(:)                   !< list
+    integer :: levels = 0                                !< grid levels (design = 'grid')
+    integer :: line = 0                                  !< line of the group in the file
+  end type sweep_input
+
+  !> A validated sweep definition.
+  type :: sweep_definition
+    character(len=:), allocatable :: path        !< the definition file
+    character(len=:), allocatable :: name        !< label of the sweep
+    character(len=:), allocatable :: base        !< base scenario file
+    character(len=:), allocatable :: output_dir  !< table, journal, summary, trajectories
+    character(len=:), allocatable :: design      !< lhs, sobol or grid
+    character(len=:), allocatable :: worst_by    !< summary variable ranking the worst cases
+    character(len=:), allocatable :: criteria    !< criteria file of the envelope step
+    integer :: n_cases = 0                       !< number of cases
+    integer :: seed = 0                          !< seed of the design
+    integer :: keep_worst = 0                    !< keep the trajectories of the k worst cases
+    logical :: keep_failed = .false.             !< keep the trajectories of failed cases
+    integer, allocatable :: keep_ids(:)          !< keep the trajectories of these cases
+    real(dp) :: t_end = 0.0_dp                   !< simulated time per case [s] (0: the base's)
+    real(dp) :: progress_interval = 5.0_dp       !< seconds between progress lines
+    type(sweep_input), allocatable :: inputs(:)  !< the varied inputs
+  contains
+    procedure :: table_path => def_table_path
+    procedure :: summary_path => def_summary_path
+    procedure :: journal_dir => def_journal_dir
+    procedure :: work_dir => def_work_dir
+    procedure :: trajectory_dir => def_trajectory_dir
+    procedure :: trajectory_path => def_trajectory_path
+  end type sweep_definition
+
+contains
+
+  !> Read and validate the sweep definition `path`.
+  subroutine read_sweep_definition(path, def, error)
+    character(len=*), intent(in) :: path                  !< definition file
+    type(sweep_definition), intent(out) :: def            !< validated definition
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    type(nml_file) :: f
+    integer :: i, n_sweep, n_input
+
+    call f%load(path, error)
+    if (allocated(error)) return
+    def%path = path
+    n_sweep = 0
+    n_input = 0
+    do i = 1, size(f%groups)
+      select case (trim(f%groups(i)))
+      case ("sweep")
+        n_sweep = n_sweep + 1
+      case ("input")
+        n_input = n_input + 1
+      case default
+        call fatal_error(error, path // ":" // str(f%group_lines(i)) // ": unknown group &" // &
+          trim(f%groups(i)) // " (allowed: sweep, input)")
+        return
+      end select
+    end do
+    if (n_sweep /= 1) then
+      call fatal_error(error, path // ": the group &sweep must appear once (found " // str(n_sweep) // ")")
+      return
+    end if
+    if (n_input == 0) then
+      call fatal_error(error, path // ": no &input group (at least one varied input is needed)")
+      return
+    end if
+    call read_inputs(f, def, n_input, error)
+    if (allocated(error)) return
+    call read_sweep_group(f, def, error)
+  end subroutine read_sweep_definition
+
+  !> The &sweep group (after the inputs: grid sizes need them).
+  subroutine read_sweep_group(f, def, error)
+    type(nml_file), intent(in) :: f
+    type(sweep_definition), intent(inout) :: def
+    type(error_type), allocatable, intent(inout) :: error
+    character(len=256) :: name, base, output_dir, design, worst_by, criteria
+    integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_grid, n_ids
+    real(dp) :: t_end, progress_interval
+    logical :: keep_failed, present
+    character(len=512) :: msg
+    character(len=:), allocatable :: where
+    namelist /sweep/ name, base, output_dir, design, n_cases, seed, t_end, keep_failed, keep_worst, &
+      worst_by, keep_ids, criteria, progress_interval
+    type(nml_var), parameter :: vars(13) = [nml_var("name", "string"), nml_var("base", "string"), &
+      nml_var("output_dir", "string"), nml_var("design", "string"), nml_var("n_cases", "integer"), &
+      nml_var("seed", "integer"), nml_var("t_end", "real"), nml_var("keep_failed", "logical"), &
+      nml_var("keep_worst", "integer"), nml_var("worst_by", "string"), nml_var("keep_ids", "integer_list"), &
+      nml_var("criteria", "string"), nml_var("progress_interval", "real")]
+
+    where = f%path // ": &sweep: "
+    name = ""; base = ""; output_dir = ""; design = ""; worst_by = "min_clearance_m"; criteria = ""
+    n_cases = unset_int; seed = unset_int; keep_worst = 0; keep_ids = unset_int
+    t_end = 0.0_dp; progress_interval = 5.0_dp; keep_failed = .false.
+    call f%check_group("sweep", vars, error)
+    if (allocated(error)) return
+    call f%position("sweep", u, present)
+    read(u, nml=sweep, iostat=ios, iomsg=msg)
+    close(u)
+    if (ios /= 0) then
+      call f%diagnose("sweep", vars, msg, error)
+      return
+    end if
+    def%design = lower(trim(design))
+    if (len_trim(design) == 0) then
+      call fatal_error(error, where // "missing required value design (one of: lhs, sobol, grid)")
+      return
+    end if
+    if (.not. any(design_names == def%design)) then
+      call fatal_error(error, where // "design = '" // def%design // "' is not allowed (one of: lhs, sobol, grid)")
+      return
+    end if
+    if (len_trim(base) == 0) then
+      call fatal_error(error, where // "missing required value base (the base scenario file)")
+      return
+    end if
+    def%base = trim(base)
+    def%name = trim(name)
+    if (len(def%name) == 0) def%name = stem(f%path)
+    def%output_dir = trim(output_dir)
+    if (len(def%output_dir) == 0) def%output_dir = "output/sweep_" // def%name
+    if (def%design == "grid") then
+      n_grid = 1
+      do i = 1, size(def%inputs)
+        associate(s => def%inputs(i))
+          if (s%distribution == "list") then
+            n_grid = n_grid*size(s%values)
+          else if (s%levels < 1) then
+            call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
+              "': missing required value levels (design = 'grid' needs levels >= 1 or a list of values)")
+            return
+          else
+            n_grid = n_grid*s%levels
+          end if
+        end associate
+      end do
+      if (n_cases == unset_int) n_cases = n_grid
+      if (n_cases /= n_grid) then
+        call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (the grid has " // &
+          str(n_grid) // " points: the product of the levels)")
+        return
+      end if
+      if (seed == unset_int) seed = 0
+    else
+      if (n_cases == unset_int) then
+        call fatal_error(error, where // "missing required value n_cases")
+        return
+      end if
+      if (seed == unset_int) then
+        call fatal_error(error, where // "missing required value seed")
+        return
+      end if
+    end if
+    if (n_cases < 1) then
+      call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (must be >= 1: zero cases)")
+      return
+    end if
+    if (seed < 0) then
+      call fatal_error(error, where // "seed = " // str(seed) // " is not allowed (must be in [0, 2147483647])")
+      return
+    end if
+    if (t_end < 0.0_dp .or. t_end /= t_end) then
+      call fatal_error(error, where // "t_end = " // str(t_end) // " is not allowed (must be > 0 s, or 0 for " // &
+        "the base scenario's)")
+      return
+    end if
+    if (keep_worst < 0) then
+      call fatal_error(error, where // "keep_worst = " // str(keep_worst) // " is not allowed (must be >= 0)")
+      return
+    end if
+    if (.not. any(worst_by_names == worst_by)) then
+      call fatal_error(error, where // "worst_by = '" // trim(worst_by) // "' is not allowed (one of: " // &
+        join(worst_by_names) // ")")
+      return
+    end if
+    if (.not. (progress_interval > 0.0_dp)) then
+      call fatal_error(error, where // "progress_interval = " // str(progress_interval) // &
+        " is not allowed (must be > 0 s)")
+      return
+    end if
+    n_ids = count_set(keep_ids)
+    do i = 1, n_ids
+      if (keep_ids(i) < 0 .or. keep_ids(i) >= n_cases) then
+        call fatal_error(error, where // "keep_ids: " // str(keep_ids(i)) // " is not allowed (case ids are " // &
+          "integers in [0, " // str(n_cases - 1) // "])")
+        return
+      end if
+    end do
+    def%n_cases = n_cases
+    def%seed = seed
+    def%t_end = t_end
+    def%keep_failed = keep_failed
+    def%keep_worst = keep_worst
+    def%worst_by = trim(worst_by)
+    def%keep_ids = keep_ids(1:n_ids)
+    def%criteria = trim(criteria)
+    def%progress_interval = progress_interval
+  end subroutine read_sweep_group
+
+  !> The &input groups, in the order of the file.
+  subroutine read_inputs(f, def, n_input, error)
+    type(nml_file), intent(in) :: f
+    type(sweep_definition), intent(inout) :: def
+    integer, intent(in) :: n_input
+    type(error_type), allocatable, intent(inout) :: error
+    character(len=128) :: name, distribution, units
+    character(len=1024) :: description
+    real(dp) :: lower, upper, mean, std, values(max_list_values)
+    integer :: levels, u, ios, k, j, nv
+    integer, allocatable :: lines(:)
+    character(len=512) :: msg
+    character(len=:), allocatable :: where
+    namelist /input/ name, distribution, lower, upper, mean, std, values, levels, units, description
+    type(nml_var), parameter :: vars(10) = [nml_var("name", "string"), nml_var("distribution", "string"), &
+      nml_var("lower", "real"), nml_var("upper", "real"), nml_var("mean", "real"), nml_var("std", "real"), &
+      nml_var("values", "real_list"), nml_var("levels", "integer"), nml_var("units", "string"), &
+      nml_var("description", "string")]
+
+    call f%check_group("input", vars, error)
+    if (allocated(error)) return
+    lines = pack(f%group_lines, f%groups == "input")
+    allocate(def%inputs(n_input))
+    open(newunit=u, file=f%path, status="old", action="read")
+    do k = 1, n_input
+      name = ""; distribution = ""; units = ""; description = ""
+      lower = unset_real; upper = unset_real; mean = unset_real; std = unset_real
+      values = unset_real; levels = 0
+      read(u, nml=input, iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+        close(u)
+        call f%diagnose("input", vars, msg, error)
+        return
+      end if
+      where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // ": "
+      if (len_trim(name) == 0) then
+        call fatal_error(error, where // "missing required value name (group%variable, e.g. 'bay%release_time')")
+        exit
+      end if
+      associate(s => def%inputs(k))
+        s%name = lower_trim(name)
+        s%line = lines(k)
+        where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // s%name // "': "
+        if (.not. valid_name(s%name)) then
+          call fatal_error(error, where // "name = '" // s%name // "' is not allowed (write group%variable, " // &
+            "e.g. 'bay%release_time')")
+          exit
+        end if
+        s%group = s%name(:index(s%name, "%") - 1)
+        s%variable = s%name(index(s%name, "%") + 1:)
+        s%distribution = lower_trim(distribution)
+        s%units = trim(units)
+        s%levels = levels
+        if (len(s%distribution) == 0) then
+          call fatal_error(error, where // "missing required value distribution (one of: uniform, normal, " // &
+            "truncnorm, list)")
+          exit
+        end if
+        if (.not. any(distribution_names == s%distribution)) then
+          call fatal_error(error, where // "distribution = '" // s%distribution // "' is not allowed (one of: " // &
+            "uniform, normal, truncnorm, list)")
+          exit
+        end if
+        if (levels < 0) then
+          call fatal_error(error, where // "levels = " // str(levels) // " is not allowed (must be >= 1)")
+          exit
+        end if
+        if (s%distribution == "uniform" .or. s%distribution == "truncnorm") then
+          if (lower == unset_real .or. upper == unset_real) then
+            call fatal_error(error, where // "missing required value " // trim(merge("lower", "upper", &
+              lower == unset_real)))
+            exit
+          end if
+          if (.not. (upper > lower)) then
+            call fatal_error(error, where // "upper = " // str(upper) // " is not allowed (must be > lower = " // &
+              str(lower) // ": reversed or empty bounds)")
+            exit
+          end if
+          s%lower = lower
+          s%upper = upper
+        else if (lower /= unset_real .or. upper /= unset_real) then
+          call fatal_error(error, where // trim(merge("lower", "upper", lower /= unset_real)) // &
+            " is not used by distribution = '" // s%distribution // "' (only by uniform and truncnorm)")
+          exit
+        end if
+        if (s%distribution == "normal" .or. s%distribution == "truncnorm") then
+          if (mean == unset_real .or. std == unset_real) then
+            call fatal_error(error, where // "missing required value " // trim(merge("mean", "std ", &
+              mean == unset_real)))
+            exit
+          end if
+          if (.not. (std > 0.0_dp)) then
+            call fatal_error(error, where // "std = " // str(std) // " is not allowed (must be > 0)")
+            exit
+          end if
+          s%mean = mean
+          s%std = std
+        else if (mean /= unset_real .or. std /= unset_real) then
+          call fatal_error(error, where // trim(merge("mean", "std ", mean /= unset_real)) // &
+            " is not used by distribution = '" // s%distribution // "' (only by normal and truncnorm)")
+          exit
+        end if
+        nv = count_set_real(values)
+        if (s%distribution == "list") then
+          if (nv == 0) then
+            call fatal_error(error, where // "missing required value values (the list of values)")
+            exit
+          end if
+          s%values = values(1:nv)
+        else
+          if (nv > 0) then
+            call fatal_error(error, where // "values is only used by distribution = 'list'")
+            exit
+          end if
+          allocate(s%values(0))
+        end if
+      end associate
+      do j = 1, k - 1
+        if (def%inputs(j)%name == def%inputs(k)%name) then
+          call fatal_error(error, f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // &
+            def%inputs(k)%name // "': the input is varied twice")
+          exit
+        end if
+      end do
+      if (allocated(error)) exit
+    end do
+    close(u)
+  end subroutine read_inputs
+
+  ! ---------------------------------------------------------------------
+
+  !> OUTPUT_DIR/table.nc
+  function def_table_path(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/table.nc"
+  end function def_table_path
+
+  !> OUTPUT_DIR/summary.nc
+  function def_summary_path(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/summary.nc"
+  end function def_summary_path
+
+  !> OUTPUT_DIR/journal: one append-only file of finished rows per rank.
+  function def_journal_dir(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/journal"
+  end function def_journal_dir
+
+  !> OUTPUT_DIR/work: the per-rank case namelists.
+  function def_work_dir(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/work"
+  end function def_work_dir
+
+  !> OUTPUT_DIR/trajectories
+  function def_trajectory_dir(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/trajectories"
+  end function def_trajectory_dir
+
+  !> OUTPUT_DIR/trajectories/case_NNNNNN.nc
+  function def_trajectory_path(self, id) result(p)
+    class(sweep_definition), intent(in) :: self
+    integer, intent(in) :: id   !< case id
+    character(len=:), allocatable :: p
+    character(len=16) :: buf
+    write(buf, '(i6.6)') id
+    p = self%trajectory_dir() // "/case_" // trim(buf) // ".nc"
+  end function def_trajectory_path
+
+  ! ---------------------------------------------------------------------
+
+  !> group%variable with letters, digits and underscores on both sides.
+  pure logical function valid_name(s)
+    character(len=*), intent(in) :: s
+    integer :: p
+    p = index(s, "%")
+    valid_name = p > 1 .and. p < len(s) .and. index(s(p+1:), "%") == 0 .and. &
+      verify(s, "abcdefghijklmnopqrstuvwxyz0123456789_%") == 0
+  end function valid_name
+
+  pure function lower_trim(s) result(t)
+    character(len=*), intent(in) :: s
+    character(len=:), allocatable :: t
+    t = trim(adjustl(lower(s)))
+  end function lower_trim
+
+  !> File name without directory and extension.
+  pure function stem(path) result(s)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: s
+    integer :: i, j
+    i = index(path, "/", back=.true.)
+    s = path(i+1:)
+    j = index(s, ".", back=.true.)
+    if (j > 1) s = s(:j-1)
+  end function stem
+
+  !> Number of leading set entries of a sentinel-filled integer array.
+  pure integer function count_set(a) result(n)
+    integer, intent(in) :: a(:)
+    n = 0
+    do while (n < size(a))
+      if (a(n+1) == unset_int) exit
+      n = n + 1
+    end do
+  end function count_set
+
+  !> Number of leading set entries of a sentinel-filled real array.
+  pure integer function count_set_real(a) result(n)
+    real(dp), intent(in) :: a(:)
+    n = 0
+    do while (n < size(a))
+      if (a(n+1) == unset_real) exit
+      n = n + 1
+    end do
+  end function count_set_real
+
+  pure function join(names) result(s)
+    character(len=*), intent(in) :: names(:)
+    character(len=:), allocatable :: s
+    integer :: i
+    s = ""
+    do i = 1, size(names)
+      if (i > 1) s = s // ", "
+      s = s // trim(names(i))
+    end do
+  end function join
+end module airlaunch_sweep_definition

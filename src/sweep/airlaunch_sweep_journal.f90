@@ -1,0 +1,228 @@
+!> The journal of a sweep: OUTPUT_DIR/journal/rank_NNNN.txt, one append-only
+!> file per rank, one line per finished case (airlaunch_sweep_row), flushed
+!> after each case, so a kill loses only the cases in flight.  Every run
+!> creates the files of its ranks before any case runs, so the files present
+!> are always rank_0000 ... rank_M-1 and a reader finds them all by counting.
+!>
+!> OUTPUT_DIR/journal/fingerprint.txt records what the rows were computed from
+!> (code version, base scenario text, table values, t_end); a rerun with a
+!> different fingerprint refuses to mix its rows with the old ones.
+module airlaunch_sweep_journal
+  use, intrinsic :: iso_fortran_env, only: int64
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
+  use airlaunch_sweep_files, only: file_exists, delete_file, read_text_file, write_text_file
+  use airlaunch_sweep_row, only: sweep_row, format_row, parse_row
+  implicit none
+  private
+  public :: journal_writer, journal_file, read_journals, check_fingerprint, remove_journal, fnv1a
+
+  !> Largest number of rank files looked for.
+  integer, parameter :: max_rank_files = 100000
+
+  !> One rank's open journal.
+  type :: journal_writer
+    integer :: unit = -1
+    character(len=:), allocatable :: path
+  contains
+    procedure :: open => jw_open
+    procedure :: append => jw_append
+    procedure :: close => jw_close
+  end type journal_writer
+
+contains
+
+  !> DIR/rank_NNNN.txt
+  function journal_file(dir, rank) result(p)
+    character(len=*), intent(in) :: dir   !< journal directory
+    integer, intent(in) :: rank           !< MPI rank
+    character(len=:), allocatable :: p
+    character(len=16) :: buf
+    write(buf, '(i4.4)') rank
+    p = dir // "/rank_" // trim(buf) // ".txt"
+  end function journal_file
+
+  !> Open (create or append to) the rank's journal.  A last line cut short by
+  !> a kill is closed with a new line first, so the next row starts clean.
+  subroutine jw_open(self, dir, rank, error)
+    class(journal_writer), intent(inout) :: self
+    character(len=*), intent(in) :: dir                   !< journal directory
+    integer, intent(in) :: rank                           !< MPI rank
+    type(error_type), allocatable, intent(inout) :: error !< set if not writable
+    integer :: ios, fsize
+    character(len=1) :: last
+    self%path = journal_file(dir, rank)
+    last = new_line("a")
+    if (file_exists(self%path)) then
+      open(newunit=self%unit, file=self%path, access="stream", form="unformatted", status="old", &
+        action="read", iostat=ios)
+      if (ios == 0) then
+        inquire(unit=self%unit, size=fsize)
+        if (fsize > 0) read(self%unit, pos=fsize, iostat=ios) last
+        close(self%unit)
+      end if
+    end if
+    open(newunit=self%unit, file=self%path, access="stream", form="formatted", position="append", &
+      action="write", iostat=ios)
+    if (ios /= 0) then
+      call fatal_error(error, self%path // ": cannot open the journal for appending")
+      self%unit = -1
+      return
+    end if
+    if (last /= new_line("a")) write(self%unit, '(a)') ""
+    flush(self%unit)
+  end subroutine jw_open
+
+  !> Append one row and flush it to the operating system.
+  subroutine jw_append(self, row, error)
+    class(journal_writer), intent(inout) :: self
+    type(sweep_row), intent(in) :: row                    !< finished case
+    type(error_type), allocatable, intent(inout) :: error !< set if the write fails
+    integer :: ios
+    write(self%unit, '(a)', iostat=ios) format_row(row)
+    if (ios == 0) flush(self%unit, iostat=ios)
+    if (ios /= 0) call fatal_error(error, self%path // ": cannot write to the journal (disk full?)")
+  end subroutine jw_append
+
+  !> Close the journal.
+  subroutine jw_close(self)
+    class(journal_writer), intent(inout) :: self
+    if (self%unit >= 0) close(self%unit)
+    self%unit = -1
+  end subroutine jw_close
+
+  !> Read every rank file of `dir`: rows(id+1) and done(id+1) for the valid
+  !> rows with ids in [0, n_cases); a second valid row of an id counts in
+  !> `duplicates`, a torn or corrupt line in `bad`.
+  subroutine read_journals(dir, n_cases, rows, done, duplicates, bad, error)
+    character(len=*), intent(in) :: dir                   !< journal directory
+    integer, intent(in) :: n_cases                        !< number of cases
+    type(sweep_row), allocatable, intent(out) :: rows(:)  !< rows by id + 1
+    logical, allocatable, intent(out) :: done(:)          !< finished, by id + 1
+    integer, intent(out) :: duplicates                    !< extra rows of finished ids
+    integer, intent(out) :: bad                           !< lines that are not rows
+    type(error_type), allocatable, intent(inout) :: error !< set if a file is unreadable
+    integer :: r, unit, ios
+    character(len=:), allocatable :: path, line
+    type(sweep_row) :: row
+    logical :: ok
+    allocate(rows(n_cases), done(n_cases))
+    done = .false.
+    duplicates = 0
+    bad = 0
+    do r = 0, max_rank_files - 1
+      path = journal_file(dir, r)
+      if (.not. file_exists(path)) exit
+      open(newunit=unit, file=path, status="old", action="read", iostat=ios)
+      if (ios /= 0) then
+        call fatal_error(error, path // ": cannot read the journal")
+        return
+      end if
+      do
+        call read_line(unit, line, ios)
+        if (ios /= 0) exit
+        if (len_trim(line) == 0) cycle
+        call parse_row(line, row, ok)
+        if (ok) ok = row%id < n_cases
+        if (.not. ok) then
+          bad = bad + 1
+        else if (done(row%id + 1)) then
+          duplicates = duplicates + 1
+        else
+          rows(row%id + 1) = row
+          done(row%id + 1) = .true.
+        end if
+      end do
+      close(unit)
+    end do
+  end subroutine read_journals
+
+  !> Compare the journal's fingerprint with `text`; write it if there is none.
+  subroutine check_fingerprint(dir, text, error)
+    character(len=*), intent(in) :: dir                   !< journal directory
+    character(len=*), intent(in) :: text                  !< this sweep's fingerprint
+    type(error_type), allocatable, intent(inout) :: error !< set if they differ
+    character(len=:), allocatable :: path, have
+    path = dir // "/fingerprint.txt"
+    if (file_exists(path)) then
+      call read_text_file(path, have, error)
+      if (allocated(error)) return
+      if (have /= text) then
+        call fatal_error(error, dir // ": the journal holds cases of a different sweep (" // &
+          first_difference(have, text) // "); rerun with --restart to discard them, or use another output_dir")
+      end if
+    else
+      call write_text_file(path, text, error)
+    end if
+  end subroutine check_fingerprint
+
+  !> Delete the journal files and the fingerprint (--restart).
+  subroutine remove_journal(dir)
+    character(len=*), intent(in) :: dir   !< journal directory
+    integer :: r
+    do r = 0, max_rank_files - 1
+      if (.not. file_exists(journal_file(dir, r))) exit
+      call delete_file(journal_file(dir, r))
+    end do
+    call delete_file(dir // "/fingerprint.txt")
+  end subroutine remove_journal
+
+  !> 64-bit FNV-1a hash of a string, as 16 hex digits.
+  function fnv1a(s) result(h)
+    character(len=*), intent(in) :: s   !< bytes to hash
+    character(len=16) :: h
+    integer(int64) :: x
+    integer(int64), parameter :: prime = 1099511628211_int64
+    integer :: i
+    x = -3750763034362895579_int64   ! 14695981039346656037 as a signed 64-bit integer
+    do i = 1, len(s)
+      x = ieor(x, int(iachar(s(i:i)), int64))
+      x = x*prime                    ! wraps modulo 2^64 (two's complement)
+    end do
+    write(h, '(z16.16)') x
+  end function fnv1a
+
+  !> "name: old -> new" of the first line that differs.
+  function first_difference(a, b) result(s)
+    character(len=*), intent(in) :: a, b
+    character(len=:), allocatable :: s, la, lb
+    integer :: pa, pb, qa, qb
+    pa = 1
+    pb = 1
+    s = "fingerprints differ"
+    do while (pa <= len(a) .and. pb <= len(b))
+      qa = index(a(pa:), new_line("a"))
+      qb = index(b(pb:), new_line("a"))
+      if (qa == 0) qa = len(a) - pa + 2
+      if (qb == 0) qb = len(b) - pb + 2
+      la = a(pa:pa+qa-2)
+      lb = b(pb:pb+qb-2)
+      if (la /= lb) then
+        s = "was " // la // ", now " // lb
+        return
+      end if
+      pa = pa + qa
+      pb = pb + qb
+    end do
+  end function first_difference
+
+  !> Read one line of any length.
+  subroutine read_line(unit, line, ios)
+    integer, intent(in) :: unit
+    character(len=:), allocatable, intent(out) :: line
+    integer, intent(out) :: ios
+    character(len=4096) :: buf
+    integer :: n
+    line = ""
+    do
+      read(unit, '(a)', advance="no", iostat=ios, size=n) buf
+      line = line // buf(:n)
+      if (is_iostat_eor(ios)) then
+        ios = 0
+        return
+      end if
+      if (ios /= 0) return
+    end do
+  end subroutine read_line
+end module airlaunch_sweep_journal

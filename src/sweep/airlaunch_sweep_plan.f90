@@ -1,0 +1,102 @@
+!> A sweep ready to run: its definition, base scenario and case table, all
+!> validated together before any case runs; what its journal must match; and
+!> which cases keep a trajectory.
+module airlaunch_sweep_plan
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type
+  use airlaunch_strings, only: str
+  use airlaunch_version, only: code_version
+  use airlaunch_sweep_definition, only: sweep_definition, read_sweep_definition
+  use airlaunch_sweep_table, only: case_table, read_case_table
+  use airlaunch_sweep_case, only: base_scenario, load_base_scenario, check_varied_inputs
+  use airlaunch_sweep_journal, only: fnv1a
+  use airlaunch_sweep_row, only: sweep_row, status_ok, metric_index
+  implicit none
+  private
+  public :: sweep_setup, load_sweep, fingerprint_text, trajectory_ids
+
+  !> Everything a rank needs to run cases.
+  type :: sweep_setup
+    type(sweep_definition) :: def    !< the definition
+    type(base_scenario) :: base      !< its base scenario
+    type(case_table) :: table        !< its cases
+  end type sweep_setup
+
+contains
+
+  !> Read and check definition, base scenario and table; `need_table` false
+  !> skips a missing table (for --check before the table step).
+  subroutine load_sweep(path, need_table, setup, error)
+    character(len=*), intent(in) :: path                  !< sweep definition
+    logical, intent(in) :: need_table                     !< the table must exist
+    type(sweep_setup), intent(out) :: setup               !< the sweep
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    logical :: exists
+    call read_sweep_definition(path, setup%def, error)
+    if (allocated(error)) return
+    call load_base_scenario(setup%def%base, setup%base, error)
+    if (allocated(error)) return
+    call check_varied_inputs(setup%def, setup%base, error)
+    if (allocated(error)) return
+    inquire(file=setup%def%table_path(), exist=exists)
+    if (.not. need_table .and. .not. exists) return
+    call read_case_table(setup%def%table_path(), setup%def, setup%table, error)
+  end subroutine load_sweep
+
+  !> What the journal's rows depend on: a row is reused only if all of this
+  !> is unchanged.
+  function fingerprint_text(setup) result(s)
+    type(sweep_setup), intent(in) :: setup
+    character(len=:), allocatable :: s
+    character(len=1), parameter :: nl = new_line("a")
+    character(len=:), allocatable :: bytes
+    integer :: k
+    real(dp), allocatable :: flat(:)
+    flat = reshape(setup%table%values, [size(setup%table%values)])
+    allocate(character(len=8*max(1, size(flat))) :: bytes)
+    bytes = transfer(flat, bytes)
+    s = "code_version = " // code_version // nl // &
+      "base = " // setup%def%base // nl // &
+      "base_text_fnv1a = " // fnv1a(setup%base%text) // nl // &
+      "t_end = " // str(setup%def%t_end) // nl // &
+      "n_cases = " // str(setup%table%n_cases) // nl // "inputs ="
+    do k = 1, size(setup%def%inputs)
+      s = s // " " // setup%def%inputs(k)%name
+    end do
+    s = s // nl // "table_values_fnv1a = " // fnv1a(bytes) // nl
+  end function fingerprint_text
+
+  !> Cases that keep a full trajectory: failed ones (keep_failed), the
+  !> keep_worst worst by worst_by among the ok ones, and keep_ids; sorted,
+  !> each once.
+  function trajectory_ids(def, rows) result(ids)
+    type(sweep_definition), intent(in) :: def   !< the sweep
+    type(sweep_row), intent(in) :: rows(:)      !< all rows, by id
+    integer, allocatable :: ids(:)
+    logical :: keep(size(rows))
+    real(dp) :: key(size(rows)), sgn
+    integer :: m, k, j, best
+    keep = .false.
+    if (def%keep_failed) keep = rows%status /= status_ok
+    do k = 1, size(def%keep_ids)
+      keep(def%keep_ids(k) + 1) = .true.
+    end do
+    if (def%keep_worst > 0) then
+      m = metric_index(def%worst_by)
+      ! smaller clearance is worse; larger loads and excursions are worse
+      sgn = merge(1.0_dp, -1.0_dp, def%worst_by == "min_clearance_m")
+      do k = 1, size(rows)
+        key(k) = huge(1.0_dp)
+        if (rows(k)%status == status_ok .and. rows(k)%metrics(m) == rows(k)%metrics(m)) &
+          key(k) = sgn*rows(k)%metrics(m)
+      end do
+      do j = 1, min(def%keep_worst, size(rows))
+        best = minloc(key, dim=1)
+        if (key(best) == huge(1.0_dp)) exit
+        keep(best) = .true.
+        key(best) = huge(1.0_dp)
+      end do
+    end if
+    ids = pack([(k - 1, k = 1, size(rows))], keep)
+  end function trajectory_ids
+end module airlaunch_sweep_plan

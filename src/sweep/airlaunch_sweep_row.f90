@@ -1,0 +1,227 @@
+!> One summary row of a sweep: the case id, its status (ok, failed, invalid
+!> input), the failure message and the metrics of airlaunch_launch_scene's
+!> launch_result, with the row's text form in the journal.
+!>
+!> Journal line: `<adler32> <id> <status> <n> <m_1> ... <m_n> <message>`, the
+!> checksum (8 hex digits) covering everything after it, the reals written
+!> with 17 significant digits so that they read back bit for bit.  A line cut
+!> short by a kill fails the checksum and is ignored (its case runs again).
+module airlaunch_sweep_row
+  use, intrinsic :: iso_fortran_env, only: int64
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+  use airlaunch_kinds, only: dp
+  use airlaunch_launch_scene, only: launch_result
+  implicit none
+  private
+  public :: sweep_row, n_metrics, metric_names, metric_units, metric_long_names, metric_is_integer
+  public :: row_from_result, invalid_row, format_row, parse_row, metric_index, row_nan
+  public :: status_ok, status_failed, status_invalid, status_names
+
+  integer, parameter :: status_ok = 0       !< the case ran to its end time
+  integer, parameter :: status_failed = 1   !< the integration failed (message kept)
+  integer, parameter :: status_invalid = 2  !< the case's input was rejected by the scenario reader
+  character(len=16), parameter :: status_names(0:2) = [character(len=16) :: "ok", "failed", "invalid_input"]
+
+  integer, parameter :: n_metrics = 27
+  !> Summary variable names (the single run's milestone attribute names).
+  character(len=40), parameter :: metric_names(n_metrics) = [character(len=40) :: &
+    "trim_alpha_deg", "trim_elevator_deg", "trim_thrust_N", &
+    "release_time_s", "edge_time_s", "separation_time_s", "early_separation", "edge_pull_time_s", &
+    "pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", &
+    "pitch_max_time_s", "pitch_max_deg", "nose_elevation_at_pitch_max_deg", &
+    "min_clearance_m", "peak_line_tension_N", "peak_line_tension_time_s", &
+    "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", "max_constraint_residual_m", &
+    "end_time_s", "steps", "rhs_evals", "jac_evals", "nonlin_iters", "nonlin_fails", "err_test_fails", &
+    "wall_time_s"]
+  character(len=12), parameter :: metric_units(n_metrics) = [character(len=12) :: &
+    "degree", "degree", "N", "s", "s", "s", "1", "s", "degree", "degree s-1", "s", "degree", "degree", &
+    "m", "N", "s", "degree", "1", "m", "s", "1", "1", "1", "1", "1", "1", "s"]
+  character(len=100), parameter :: metric_long_names(n_metrics) = [character(len=100) :: &
+    "trim angle of attack (Case 0)", "trim elevator deflection", "trim thrust", &
+    "release: Case 0 -> 1 (NaN: not reached)", "rocket CG at the ramp edge: Case 1 -> 2 (NaN: not reached)", &
+    "separation: Case 2 -> 3 (NaN: not reached)", "1 if the rocket left the edge early (normal force zero)", &
+    "bilateral edge: first time the edge had to pull (NaN: never)", &
+    "rocket Euler pitch at separation", "rocket Euler pitch rate at separation", &
+    "time of the first rocket pitch maximum after separation (the firing moment; NaN: not reached)", &
+    "rocket Euler pitch at its first maximum", "rocket nose elevation at the first pitch maximum", &
+    "minimum distance from the rocket's surface to the ramp edge after separation (NaN: not separated)", &
+    "peak line tension", "time of the peak line tension", &
+    "largest aircraft pitch excursion from trim", "largest aircraft load factor excursion from 1", &
+    "largest cut-joint position residual", "simulated time reached", &
+    "CVODE steps", "right-hand-side evaluations", "Jacobian evaluations", "Newton iterations", &
+    "Newton convergence failures", "error-test failures", "wall time of the case on its rank"]
+  logical, parameter :: metric_is_integer(n_metrics) = [.false., .false., .false., .false., .false., .false., &
+    .true., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., &
+    .false., .false., .true., .true., .true., .true., .true., .true., .false.]
+
+  !> One finished case.
+  type :: sweep_row
+    integer :: id = -1                               !< case id
+    integer :: status = status_ok                    !< status_ok, status_failed, status_invalid
+    real(dp) :: metrics(n_metrics) = 0.0_dp          !< values in the order of metric_names
+    character(len=:), allocatable :: message         !< failure message ("" if ok)
+  end type sweep_row
+
+contains
+
+  !> Quiet NaN: "not reached" / "not defined".
+  real(dp) function row_nan()
+    row_nan = ieee_value(1.0_dp, ieee_quiet_nan)
+  end function row_nan
+
+  !> Position of a metric in metric_names (0 if unknown).
+  integer function metric_index(name)
+    character(len=*), intent(in) :: name   !< summary variable name
+    integer :: i
+    metric_index = 0
+    do i = 1, n_metrics
+      if (trim(metric_names(i)) == name) metric_index = i
+    end do
+  end function metric_index
+
+  !> The row of a case that ran (completed or failed).
+  function row_from_result(id, res, failed, message, wall) result(row)
+    integer, intent(in) :: id                  !< case id
+    type(launch_result), intent(in) :: res     !< its milestones
+    logical, intent(in) :: failed              !< the run returned an error
+    character(len=*), intent(in) :: message    !< the error message ("" if none)
+    real(dp), intent(in) :: wall               !< wall time [s]
+    type(sweep_row) :: row
+    real(dp) :: nan
+    nan = row_nan()
+    row%id = id
+    row%status = merge(status_failed, status_ok, failed)
+    row%message = one_line(message)
+    row%metrics = [res%trim_alpha_deg, res%trim_elevator_deg, res%trim_thrust_n, &
+      event(res%release_time), event(res%edge_time), event(res%separation_time), &
+      merge(1.0_dp, 0.0_dp, res%early_separation), event(res%edge_pull_time), &
+      merge(res%pitch_at_separation_deg, nan, res%separation_time >= 0.0_dp), &
+      merge(res%pitch_rate_at_separation_deg_s, nan, res%separation_time >= 0.0_dp), &
+      event(res%pitch_max_time), merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
+      merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
+      merge(res%min_clearance, nan, res%min_clearance < huge(1.0_dp)), &
+      res%peak_tension, event(res%peak_tension_time), &
+      res%max_aircraft_pitch_excursion_deg, res%max_load_factor_excursion, res%max_constraint_residual, &
+      res%end_time, real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
+      real(res%stats%nonlin_iters, dp), real(res%stats%nonlin_fails, dp), real(res%stats%err_test_fails, dp), &
+      wall]
+  contains
+    real(dp) function event(t)
+      real(dp), intent(in) :: t
+      event = merge(t, nan, t >= 0.0_dp)
+    end function event
+  end function row_from_result
+
+  !> The row of a case whose input the scenario reader rejected.
+  function invalid_row(id, message, wall) result(row)
+    integer, intent(in) :: id                  !< case id
+    character(len=*), intent(in) :: message    !< the reader's message
+    real(dp), intent(in) :: wall               !< wall time [s]
+    type(sweep_row) :: row
+    row%id = id
+    row%status = status_invalid
+    row%message = one_line(message)
+    row%metrics = row_nan()
+    row%metrics(n_metrics) = wall
+  end function invalid_row
+
+  !> The journal line of a row (no new-line character).
+  function format_row(row) result(line)
+    type(sweep_row), intent(in) :: row
+    character(len=:), allocatable :: line, body
+    character(len=32) :: buf
+    integer :: i
+    write(buf, '(i0,1x,i0,1x,i0)') row%id, row%status, n_metrics
+    body = trim(buf)
+    do i = 1, n_metrics
+      write(buf, '(es25.16e3)') row%metrics(i)
+      body = body // " " // trim(adjustl(buf))
+    end do
+    if (allocated(row%message)) then
+      if (len(row%message) > 0) body = body // " " // row%message
+    end if
+    write(buf, '(z8.8)') adler32(body)
+    line = trim(buf) // " " // body
+  end function format_row
+
+  !> Parse a journal line; `ok` is false for a torn, corrupt or foreign line.
+  subroutine parse_row(line, row, ok)
+    character(len=*), intent(in) :: line    !< journal line
+    type(sweep_row), intent(out) :: row     !< the row (if ok)
+    logical, intent(out) :: ok              !< the line is a complete row
+    integer :: p, q, i, ios, n
+    integer(int64) :: sum_want
+    character(len=:), allocatable :: body
+    ok = .false.
+    p = index(line, " ")
+    if (p /= 9) return
+    read(line(1:8), '(z8)', iostat=ios) sum_want
+    if (ios /= 0) return
+    body = line(10:len_trim(line))
+    if (adler32(body) /= sum_want) return
+    p = 1
+    call next_token(body, p, q)
+    read(body(p:q), *, iostat=ios) row%id
+    if (ios /= 0) return
+    p = q + 1
+    call next_token(body, p, q)
+    read(body(p:q), *, iostat=ios) row%status
+    if (ios /= 0) return
+    p = q + 1
+    call next_token(body, p, q)
+    read(body(p:q), *, iostat=ios) n
+    if (ios /= 0 .or. n /= n_metrics) return
+    do i = 1, n_metrics
+      p = q + 1
+      call next_token(body, p, q)
+      if (q < p) return
+      read(body(p:q), *, iostat=ios) row%metrics(i)
+      if (ios /= 0) return
+    end do
+    row%message = ""
+    if (q + 2 <= len(body)) row%message = body(q+2:)
+    ok = row%id >= 0 .and. row%status >= status_ok .and. row%status <= status_invalid
+  end subroutine parse_row
+
+  !> Token of `s` starting at or after p (blanks skipped): s(p:q).
+  pure subroutine next_token(s, p, q)
+    character(len=*), intent(in) :: s
+    integer, intent(inout) :: p
+    integer, intent(out) :: q
+    do while (p <= len(s))
+      if (s(p:p) /= " ") exit
+      p = p + 1
+    end do
+    q = p - 1
+    do while (q < len(s))
+      if (s(q+1:q+1) == " ") exit
+      q = q + 1
+    end do
+  end subroutine next_token
+
+  !> Adler-32 checksum of a string (RFC 1950).
+  pure integer(int64) function adler32(s) result(h)
+    character(len=*), intent(in) :: s
+    integer(int64) :: a, b
+    integer :: i
+    a = 1
+    b = 0
+    do i = 1, len(s)
+      a = mod(a + iachar(s(i:i)), 65521_int64)
+      b = mod(b + a, 65521_int64)
+    end do
+    h = ior(ishft(b, 16), a)
+  end function adler32
+
+  !> Message on one line (new lines and tabs to blanks, trimmed).
+  pure function one_line(s) result(t)
+    character(len=*), intent(in) :: s
+    character(len=:), allocatable :: t
+    integer :: i
+    t = s
+    do i = 1, len(t)
+      if (iachar(t(i:i)) < 32) t(i:i) = " "
+    end do
+    t = trim(adjustl(t))
+  end function one_line
+end module airlaunch_sweep_row
