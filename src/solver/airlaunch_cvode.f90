@@ -23,6 +23,7 @@ module airlaunch_cvode
   use fsunlinsol_band_mod
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
+  use airlaunch_lapack_band, only: new_lapack_band_solver
   implicit none
   private
   public :: cvode_options, cvode_solver, cvode_stats
@@ -30,7 +31,7 @@ module airlaunch_cvode
   !> How to integrate.
   type :: cvode_options
     character(len=16) :: method = "bdf"          !< "bdf" (stiff) or "adams"
-    character(len=16) :: linear_solver = "dense" !< "dense", "band" or "none" (fixed point)
+    character(len=16) :: linear_solver = "dense" !< "dense", "band" (LAPACK), "sundials_band" or "none" (fixed point)
     integer :: upper_bandwidth = 0               !< band solver: upper half-bandwidth
     integer :: lower_bandwidth = 0               !< band solver: lower half-bandwidth
     real(dp) :: rtol = 1.0e-6_dp                 !< relative tolerance
@@ -156,6 +157,13 @@ contains
       self%ls => FSUNLinSol_Dense(self%nv_y, self%mat, self%ctx)
       ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
     case ("band")
+      ! band Newton matrix factored by LAPACK (airlaunch_lapack_band)
+      self%mat => FSUNBandMatrix(neq, int(opts%upper_bandwidth, c_long), &
+        int(opts%lower_bandwidth, c_long), self%ctx)
+      self%ls => new_lapack_band_solver(self%mat, self%ctx)
+      ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
+    case ("sundials_band")
+      ! SUNDIALS' own band LU (kept for comparison in the benchmarks)
       self%mat => FSUNBandMatrix(neq, int(opts%upper_bandwidth, c_long), &
         int(opts%lower_bandwidth, c_long), self%ctx)
       self%ls => FSUNLinSol_Band(self%nv_y, self%mat, self%ctx)
@@ -165,7 +173,7 @@ contains
       ierr = FCVodeSetNonlinearSolver(self%mem, self%nls)
     case default
       call fatal_error(error, "CVODE: unknown linear solver '" // trim(opts%linear_solver) // &
-        "' (allowed: dense, band, none)")
+        "' (allowed: dense, band, sundials_band, none)")
       return
     end select
     if (ierr /= 0) then

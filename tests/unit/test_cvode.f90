@@ -57,12 +57,12 @@ program test_cvode
   type(cvode_solver) :: solver
   type(cvode_options) :: opts
   type(error_type), allocatable :: error
-  character(len=8), parameter :: solvers(3) = [character(len=8) :: "dense", "band", "none"]
-  character(len=8), parameter :: methods(3) = [character(len=8) :: "bdf", "bdf", "adams"]
+  character(len=16), parameter :: solvers(4) = [character(len=16) :: "dense", "band", "sundials_band", "none"]
+  character(len=8), parameter :: methods(4) = [character(len=8) :: "bdf", "bdf", "bdf", "adams"]
   logical :: event
   integer :: which(1), k
 
-  do k = 1, 3
+  do k = 1, 4
     call section("oscillator, " // trim(methods(k)) // " + " // trim(solvers(k)))
     opts = cvode_options(method=methods(k), linear_solver=solvers(k), upper_bandwidth=1, &
       lower_bandwidth=1, rtol=1e-10_dp, atol=1e-12_dp)
