@@ -23,6 +23,7 @@ SWEEP_VARS = ("name", "base", "output_dir", "design", "n_cases", "seed", "t_end"
               "keep_worst", "worst_by", "keep_ids", "criteria", "progress_interval")
 INPUT_VARS = ("name", "distribution", "lower", "upper", "mean", "std", "values", "levels", "units",
               "description")
+FIXED_VARS = ("name", "value")
 MAX_SEED = 2**31 - 1
 
 
@@ -79,6 +80,7 @@ class SweepDefinition:
     keep_ids: tuple = ()
     criteria: str = ""
     progress_interval: float = 5.0
+    fixed: tuple = ()
 
     @property
     def table_path(self) -> pathlib.Path:
@@ -168,13 +170,35 @@ def _as_list(value):
     return list(value) if isinstance(value, list) else [value]
 
 
+def _valid_name(name):
+    return name.count("%") == 1 and all(part and part.replace("_", "a").isalnum() for part in name.split("%"))
+
+
+def _read_fixed(path, index, group_vars, varied):
+    """Validate one &fixed group: (name, value text)."""
+    where = f"{path}: &fixed #{index}: "
+    _check_names(where, group_vars, FIXED_VARS)
+    name = _str(where, group_vars, "name").lower()
+    if not _valid_name(name):
+        raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, e.g. "
+                              "'flight%trim_mode')")
+    where = f"{path}: &fixed #{index} '{name}': "
+    value = _str(where, group_vars, "value", "")
+    if not value:
+        raise DefinitionError(f"{where}missing required value value (the value as namelist text: a number, "
+                              "or a string with its own quotes)")
+    if name in varied:
+        raise DefinitionError(f"{where}{name} is also a varied input")
+    return name, value
+
+
 def _read_input(path, index, group_vars):
     """Validate one &input group."""
     where = f"{path}: &input #{index}: "
     _check_names(where, group_vars, INPUT_VARS)
     name = _str(where, group_vars, "name").lower()
     where = f"{path}: &input #{index} '{name}': "
-    if name.count("%") != 1 or not all(part.replace("_", "a").isalnum() for part in name.split("%")):
+    if not _valid_name(name):
         raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, "
                               "e.g. 'bay%release_time')")
     dist = _str(where, group_vars, "distribution").lower()
@@ -226,7 +250,7 @@ def parse_definition(text, path="<sweep>"):
         nml = f90nml.reads(text)
     except Exception as exc:  # f90nml raises several exception types
         raise DefinitionError(f"{path}: cannot read the namelist: {exc}") from None
-    _check_names(f"{path}: ", list(nml.keys()), ("sweep", "input"), kind="group")
+    _check_names(f"{path}: ", list(nml.keys()), ("sweep", "input", "fixed"), kind="group")
     sweeps = _groups(nml, "sweep")
     if len(sweeps) != 1:
         raise DefinitionError(f"{path}: the group &sweep must appear once (found {len(sweeps)})")
@@ -248,6 +272,11 @@ def parse_definition(text, path="<sweep>"):
     for i, n in enumerate(names):
         if n in names[:i]:
             raise DefinitionError(f"{path}: &input #{i + 1} '{n}': the input is varied twice")
+    fixed = tuple(_read_fixed(path, i + 1, g, names) for i, g in enumerate(_groups(nml, "fixed")))
+    fixed_names = [n for n, _ in fixed]
+    for i, n in enumerate(fixed_names):
+        if n in fixed_names[:i]:
+            raise DefinitionError(f"{path}: &fixed #{i + 1} '{n}': {n} is fixed twice")
     if design == "grid":
         for i, s in enumerate(inputs):
             if s.grid_size() < 1:
@@ -293,7 +322,7 @@ def parse_definition(text, path="<sweep>"):
                            n_cases=n_cases, seed=seed, inputs=inputs, t_end=t_end,
                            keep_failed=keep_failed, keep_worst=keep_worst, worst_by=worst_by,
                            keep_ids=tuple(keep_ids), criteria=_str(where, sweep, "criteria", ""),
-                           progress_interval=progress)
+                           progress_interval=progress, fixed=fixed)
 
 
 def read_definition(path):

@@ -56,7 +56,7 @@ program airlaunch_sweep
   status = exit_ok
   n_resumed = 0
   if (rank == 0) then
-    call load_sweep(path, .not. check_only, s, error)
+    call load_sweep(path, .not. check_only, "rank0", s, error)
     if (allocated(error)) status = exit_input
     if (status == exit_ok .and. case_id >= 0) then
       if (case_id >= s%table%n_cases) then
@@ -79,7 +79,7 @@ program airlaunch_sweep
 
   ! --- every rank: the same sweep, the list of pending cases
   if (rank /= 0) then
-    call load_sweep(path, .true., s, error)
+    call load_sweep(path, .true., "rank" // str(rank), s, error)
     if (allocated(error)) call die("rank " // str(rank) // ": " // error%message)
   end if
   call broadcast_ids(pending)

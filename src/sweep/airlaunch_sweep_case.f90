@@ -23,7 +23,7 @@ module airlaunch_sweep_case
   implicit none
   private
   public :: base_scenario, known_variable, load_base_scenario, check_varied_inputs, case_namelist
-  public :: run_case, inject_assignments, value_text
+  public :: run_case, inject_assignments, value_text, check_common_settings
 
   !> A variable the scenario readers know (from the resolved input they echo).
   type :: known_variable
@@ -159,17 +159,64 @@ contains
         end select
       end associate
     end do
+    do k = 1, size(def%fixed)
+      associate(x => def%fixed(k))
+        where = def%path // ":" // str(x%line) // ": &fixed #" // str(k) // " '" // x%name // "': "
+        if (.not. any(base%known%group == x%group)) then
+          call fatal_error(error, where // "unknown group &" // x%group // " in the base scenario")
+          return
+        end if
+        if (.not. any(base%known%group == x%group .and. base%known%name == x%variable)) then
+          call fatal_error(error, where // "unknown variable '" // x%variable // "' in &" // x%group // &
+            closest(x%variable, base%known, x%group))
+          return
+        end if
+      end associate
+    end do
   end subroutine check_varied_inputs
 
-  !> The namelist text of a case: base text + the sweep's t_end + the case's values.
+  !> Read the base scenario with the sweep's t_end and &fixed values (no
+  !> varied input) through the scenario readers, so that a bad fixed value
+  !> stops the sweep before any case runs.  `scratch` is a writable file name.
+  subroutine check_common_settings(def, base, scratch, error)
+    type(sweep_definition), intent(in) :: def             !< the sweep
+    type(base_scenario), intent(in) :: base               !< its base scenario
+    character(len=*), intent(in) :: scratch               !< scratch file
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    type(nml_file) :: f
+    type(run_config) :: run
+    type(scenario_config) :: cfg
+    character(len=:), allocatable :: echo
+    call write_text_file(scratch, sweep_namelist(def, base, -1, [real(dp) ::], .false.), error)
+    if (allocated(error)) return
+    call f%load(scratch, error)
+    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
+    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    if (allocated(error)) error%message = replace(error%message, scratch, def%path // &
+      " (base scenario with the sweep's t_end and &fixed values)")
+  end subroutine check_common_settings
+
+  !> The namelist text of a case: base text + the sweep's t_end + the fixed
+  !> values + the case's values.
   function case_namelist(def, base, id, values) result(text)
     type(sweep_definition), intent(in) :: def   !< the sweep
     type(base_scenario), intent(in) :: base     !< its base scenario
     integer, intent(in) :: id                   !< case id (for the comment)
     real(dp), intent(in) :: values(:)           !< the case's values, in the order of def%inputs
     character(len=:), allocatable :: text
-    character(len=32) :: groups(size(def%inputs) + 1)
-    character(len=256) :: lines(size(def%inputs) + 1)
+    text = sweep_namelist(def, base, id, values, .true.)
+  end function case_namelist
+
+  !> Base text + t_end + fixed values (+ the case's values if `varied`).
+  function sweep_namelist(def, base, id, values, varied) result(text)
+    type(sweep_definition), intent(in) :: def
+    type(base_scenario), intent(in) :: base
+    integer, intent(in) :: id
+    real(dp), intent(in) :: values(:)
+    logical, intent(in) :: varied
+    character(len=:), allocatable :: text
+    character(len=32) :: groups(size(def%inputs) + size(def%fixed) + 1)
+    character(len=1200) :: lines(size(def%inputs) + size(def%fixed) + 1)
     integer :: k, m
     m = 0
     if (def%t_end > 0.0_dp) then
@@ -177,14 +224,21 @@ contains
       groups(m) = "run"
       lines(m) = "t_end = " // value_text(def%t_end) // "   ! sweep " // def%name
     end if
-    do k = 1, size(def%inputs)
+    do k = 1, size(def%fixed)
       m = m + 1
-      groups(m) = def%inputs(k)%group
-      lines(m) = def%inputs(k)%variable // " = " // value_text(values(k)) // "   ! sweep " // def%name // &
-        ", case " // str(id)
+      groups(m) = def%fixed(k)%group
+      lines(m) = def%fixed(k)%variable // " = " // def%fixed(k)%value // "   ! sweep " // def%name // ", fixed"
     end do
+    if (varied) then
+      do k = 1, size(def%inputs)
+        m = m + 1
+        groups(m) = def%inputs(k)%group
+        lines(m) = def%inputs(k)%variable // " = " // value_text(values(k)) // "   ! sweep " // def%name // &
+          ", case " // str(id)
+      end do
+    end if
     text = inject_assignments(base%text, groups(1:m), lines(1:m))
-  end function case_namelist
+  end function sweep_namelist
 
   !> Run case `id`: write its namelist to `scratch`, read it, run it.  A
   !> trajectory is written to `trajectory` unless it is "".

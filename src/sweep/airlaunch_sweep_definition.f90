@@ -12,7 +12,7 @@ module airlaunch_sweep_definition
   use airlaunch_namelist, only: nml_file, nml_var, unset_real, unset_int
   implicit none
   private
-  public :: sweep_input, sweep_definition, read_sweep_definition
+  public :: sweep_input, sweep_fixed, sweep_definition, read_sweep_definition
   public :: design_names, distribution_names, worst_by_names, max_list_values
 
   !> Largest number of values of a 'list' input and of keep_ids.
@@ -39,6 +39,15 @@ module airlaunch_sweep_definition
     integer :: line = 0                                  !< line of the group in the file
   end type sweep_input
 
+  !> A scenario variable set to the same value in every case (&fixed).
+  type :: sweep_fixed
+    character(len=:), allocatable :: name       !< group%variable (lower case)
+    character(len=:), allocatable :: group      !< namelist group of the scenario
+    character(len=:), allocatable :: variable   !< variable inside the group
+    character(len=:), allocatable :: value      !< value as namelist text, e.g. 'fly' or 0.3656
+    integer :: line = 0                         !< line of the group in the file
+  end type sweep_fixed
+
   !> A validated sweep definition.
   type :: sweep_definition
     character(len=:), allocatable :: path        !< the definition file
@@ -56,6 +65,7 @@ module airlaunch_sweep_definition
     real(dp) :: t_end = 0.0_dp                   !< simulated time per case [s] (0: the base's)
     real(dp) :: progress_interval = 5.0_dp       !< seconds between progress lines
     type(sweep_input), allocatable :: inputs(:)  !< the varied inputs
+    type(sweep_fixed), allocatable :: fixed(:)   !< variables set in every case
   contains
     procedure :: table_path => def_table_path
     procedure :: summary_path => def_summary_path
@@ -73,22 +83,25 @@ contains
     type(sweep_definition), intent(out) :: def            !< validated definition
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
     type(nml_file) :: f
-    integer :: i, n_sweep, n_input
+    integer :: i, n_sweep, n_input, n_fixed
 
     call f%load(path, error)
     if (allocated(error)) return
     def%path = path
     n_sweep = 0
     n_input = 0
+    n_fixed = 0
     do i = 1, size(f%groups)
       select case (trim(f%groups(i)))
       case ("sweep")
         n_sweep = n_sweep + 1
       case ("input")
         n_input = n_input + 1
+      case ("fixed")
+        n_fixed = n_fixed + 1
       case default
         call fatal_error(error, path // ":" // str(f%group_lines(i)) // ": unknown group &" // &
-          trim(f%groups(i)) // " (allowed: sweep, input)")
+          trim(f%groups(i)) // " (allowed: sweep, input, fixed)")
         return
       end select
     end do
@@ -102,8 +115,74 @@ contains
     end if
     call read_inputs(f, def, n_input, error)
     if (allocated(error)) return
+    call read_fixed(f, def, n_fixed, error)
+    if (allocated(error)) return
     call read_sweep_group(f, def, error)
   end subroutine read_sweep_definition
+
+  !> The &fixed groups: name = 'group%variable', value = 'namelist text'.
+  subroutine read_fixed(f, def, n_fixed, error)
+    type(nml_file), intent(in) :: f
+    type(sweep_definition), intent(inout) :: def
+    integer, intent(in) :: n_fixed
+    type(error_type), allocatable, intent(inout) :: error
+    character(len=128) :: name
+    character(len=1024) :: value
+    integer :: u, ios, k, j
+    integer, allocatable :: lines(:)
+    character(len=512) :: msg
+    character(len=:), allocatable :: where
+    namelist /fixed/ name, value
+    type(nml_var), parameter :: vars(2) = [nml_var("name", "string"), nml_var("value", "string")]
+    allocate(def%fixed(n_fixed))
+    if (n_fixed == 0) return
+    call f%check_group("fixed", vars, error)
+    if (allocated(error)) return
+    lines = pack(f%group_lines, f%groups == "fixed")
+    open(newunit=u, file=f%path, status="old", action="read")
+    do k = 1, n_fixed
+      name = ""
+      value = ""
+      read(u, nml=fixed, iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+        call f%diagnose("fixed", vars, msg, error)
+        exit
+      end if
+      where = f%path // ":" // str(lines(k)) // ": &fixed #" // str(k) // ": "
+      associate(x => def%fixed(k))
+        x%name = lower_trim(name)
+        x%line = lines(k)
+        if (.not. valid_name(x%name)) then
+          call fatal_error(error, where // "name = '" // x%name // "' is not allowed (write group%variable, " // &
+            "e.g. 'flight%trim_mode')")
+          exit
+        end if
+        x%group = x%name(:index(x%name, "%") - 1)
+        x%variable = x%name(index(x%name, "%") + 1:)
+        x%value = trim(adjustl(value))
+        if (len(x%value) == 0) then
+          call fatal_error(error, where // "missing required value value (the value as namelist text: " // &
+            "a number, or a string with its own quotes)")
+          exit
+        end if
+      end associate
+      do j = 1, size(def%inputs)
+        if (def%inputs(j)%name == def%fixed(k)%name) then
+          call fatal_error(error, where // def%fixed(k)%name // " is also a varied input (&input #" // str(j) // ")")
+          exit
+        end if
+      end do
+      if (allocated(error)) exit
+      do j = 1, k - 1
+        if (def%fixed(j)%name == def%fixed(k)%name) then
+          call fatal_error(error, where // def%fixed(k)%name // " is fixed twice")
+          exit
+        end if
+      end do
+      if (allocated(error)) exit
+    end do
+    close(u)
+  end subroutine read_fixed
 
   !> The &sweep group (after the inputs: grid sizes need them).
   subroutine read_sweep_group(f, def, error)

@@ -8,7 +8,8 @@ module airlaunch_sweep_plan
   use airlaunch_version, only: code_version
   use airlaunch_sweep_definition, only: sweep_definition, read_sweep_definition
   use airlaunch_sweep_table, only: case_table, read_case_table
-  use airlaunch_sweep_case, only: base_scenario, load_base_scenario, check_varied_inputs
+  use airlaunch_sweep_case, only: base_scenario, load_base_scenario, check_varied_inputs, check_common_settings
+  use airlaunch_sweep_files, only: make_dir
   use airlaunch_sweep_journal, only: fnv1a
   use airlaunch_sweep_row, only: sweep_row, status_ok, metric_index
   implicit none
@@ -26,9 +27,10 @@ contains
 
   !> Read and check definition, base scenario and table; `need_table` false
   !> skips a missing table (for --check before the table step).
-  subroutine load_sweep(path, need_table, setup, error)
+  subroutine load_sweep(path, need_table, tag, setup, error)
     character(len=*), intent(in) :: path                  !< sweep definition
     logical, intent(in) :: need_table                     !< the table must exist
+    character(len=*), intent(in) :: tag                   !< names this process's scratch file
     type(sweep_setup), intent(out) :: setup               !< the sweep
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
     logical :: exists
@@ -37,6 +39,11 @@ contains
     call load_base_scenario(setup%def%base, setup%base, error)
     if (allocated(error)) return
     call check_varied_inputs(setup%def, setup%base, error)
+    if (allocated(error)) return
+    call make_dir(setup%def%work_dir(), error)
+    if (allocated(error)) return
+    call check_common_settings(setup%def, setup%base, setup%def%work_dir() // "/check_" // tag // ".nml", &
+      error)
     if (allocated(error)) return
     inquire(file=setup%def%table_path(), exist=exists)
     if (.not. need_table .and. .not. exists) return
@@ -63,7 +70,11 @@ contains
     do k = 1, size(setup%def%inputs)
       s = s // " " // setup%def%inputs(k)%name
     end do
-    s = s // nl // "table_values_fnv1a = " // fnv1a(bytes) // nl
+    s = s // nl
+    do k = 1, size(setup%def%fixed)
+      s = s // "fixed " // setup%def%fixed(k)%name // " = " // setup%def%fixed(k)%value // nl
+    end do
+    s = s // "table_values_fnv1a = " // fnv1a(bytes) // nl
   end function fingerprint_text
 
   !> Cases that keep a full trajectory: failed ones (keep_failed), the

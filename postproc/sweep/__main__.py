@@ -1,0 +1,103 @@
+"""Command line of the sweep post-processing (run from the repository root):
+
+    python -m postproc.sweep table SWEEP.nml [--check]
+    python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures]
+
+Exit status 0 on success, 2 for bad input (one line on stderr).
+"""
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+
+from .definition import DefinitionError, read_definition
+
+
+def cmd_table(args) -> int:
+    """Draw the case table (or check an existing one against the definition)."""
+    from .table import check_table, write_table
+
+    defn = read_definition(args.definition)
+    if args.check:
+        check_table(defn)
+        print(f"table: {defn.table_path} is the table of {defn.path}")
+        return 0
+    path = write_table(defn)
+    print(f"table: {path} ({defn.n_cases} cases, {len(defn.inputs)} inputs, design {defn.design}, "
+          f"seed {defn.seed})")
+    if defn.design == "sobol" and defn.n_cases & (defn.n_cases - 1):
+        print(f"note: {defn.n_cases} is not a power of 2: the Sobol points lose their balance properties")
+    return 0
+
+
+def cmd_envelope(args) -> int:
+    """Evaluate the criteria on the summary; write the envelope and the figures."""
+    import xarray as xr
+
+    from .criteria import read_criteria
+    from .envelope import evaluate, worst_case_table
+    from .table import write_atomic
+
+    defn = read_definition(args.definition)
+    criteria_path = args.criteria or defn.criteria
+    if not criteria_path:
+        raise DefinitionError(f"{defn.path}: &sweep: no criteria file (set criteria = 'FILE' or give --criteria)")
+    criteria = read_criteria(criteria_path)
+    summary_path = pathlib.Path(args.summary or defn.summary_path)
+    if not summary_path.is_file():
+        raise DefinitionError(f"{summary_path}: summary does not exist (run airlaunch-sweep first)")
+    with xr.open_dataset(summary_path) as summary:
+        names = [s.name for s in defn.inputs]
+        if summary.attrs.get("inputs", "").split() != names:
+            raise DefinitionError(f"{summary_path}: the summary's inputs ({summary.attrs.get('inputs', '')}) are "
+                                  f"not those of {defn.path} ({' '.join(names)})")
+        env = evaluate(summary.load(), criteria)
+    env.attrs["criteria_file"] = str(criteria_path)
+    env.attrs["summary"] = str(summary_path)
+    out = write_atomic(env, defn.envelope_path)
+    print(f"envelope: {out}")
+    all_ = env.sel(criterion="all")
+    print(f"probability of success (all criteria): {float(all_['probability']):.4f} "
+          f"(95% Wilson [{float(all_['wilson_low']):.4f}, {float(all_['wilson_high']):.4f}], "
+          f"Clopper-Pearson [{float(all_['clopper_pearson_low']):.4f}, "
+          f"{float(all_['clopper_pearson_high']):.4f}]) over {env.sizes['case']} cases")
+    for c in env["criterion"].values[:-1]:
+        row = env.sel(criterion=c)
+        print(f"  {c:16s} {float(row['probability']):.4f} "
+              f"[{float(row['wilson_low']):.4f}, {float(row['wilson_high']):.4f}]")
+    if not args.no_figures:
+        from .figures import draw_all
+
+        paths = draw_all(env, defn.figure_dir)
+        print(f"figures: {defn.figure_dir} ({', '.join(p.name for p in paths.values())})")
+    print("worst cases:")
+    print(worst_case_table(env, 10), end="")
+    return 0
+
+
+def main(argv=None) -> int:
+    """Parse the command line and run one step; bad input is one line and status 2."""
+    parser = argparse.ArgumentParser(prog="python -m postproc.sweep", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="step", required=True)
+    p = sub.add_parser("table", help="draw the case table of a sweep definition")
+    p.add_argument("definition")
+    p.add_argument("--check", action="store_true", help="check that the existing table is the definition's")
+    p.set_defaults(func=cmd_table)
+    p = sub.add_parser("envelope", help="safety envelope and figures from the summary")
+    p.add_argument("definition")
+    p.add_argument("--criteria", help="criteria file (default: the definition's)")
+    p.add_argument("--summary", help="summary file (default: OUTPUT_DIR/summary.nc)")
+    p.add_argument("--no-figures", action="store_true")
+    p.set_defaults(func=cmd_envelope)
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except DefinitionError as exc:
+        print(f"sweep: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,144 @@
+"""Separation safety criteria: a namelist file with one ``&criteria`` group.
+
+Every criterion is optional; the ones the file sets are evaluated.  Each gives,
+per case, a margin in its own units (positive: passes) and a relative margin
+(the margin divided by the criterion's scale), so cases can be ranked across
+criteria.  docs/sweep.md documents the variables.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import pathlib
+
+import f90nml
+import numpy as np
+
+from .definition import DefinitionError
+
+#: Variables of &criteria (what each limits is in docs/sweep.md).
+CRITERIA_VARS = ("min_clearance_m", "line_strength_n", "line_safety_factor",
+                 "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion",
+                 "firing_pitch_min_deg", "firing_pitch_max_deg", "firing_time_max_s")
+
+
+@dataclasses.dataclass(frozen=True)
+class Criterion:
+    """One evaluated criterion: name, what it limits, and how to compute its margin."""
+
+    name: str
+    description: str
+    units: str
+    scale: float
+    metrics: tuple
+    limits: dict
+
+    def margin(self, summary) -> np.ndarray:
+        """Margin per case in the criterion's units (NaN where the metric is undefined)."""
+        m = {k: np.asarray(summary[k].values, dtype=float) for k in self.metrics}
+        lim = self.limits
+        if self.name == "clearance":
+            return m["min_clearance_m"] - lim["min_clearance_m"]
+        if self.name == "line_tension":
+            return lim["line_strength_n"] / lim["line_safety_factor"] - m["peak_line_tension_N"]
+        if self.name == "aircraft_pitch":
+            return lim["max_aircraft_pitch_excursion_deg"] - m["max_aircraft_pitch_excursion_deg"]
+        if self.name == "load_factor":
+            return lim["max_load_factor_excursion"] - m["max_load_factor_excursion"]
+        if self.name == "firing_attitude":
+            p = m["pitch_max_deg"]
+            lower = p - lim["firing_pitch_min_deg"]
+            if lim["firing_pitch_max_deg"] >= 90.0:
+                # the Euler pitch never exceeds 90 deg: a window ending at 90 has no upper side
+                return lower
+            return np.minimum(lower, lim["firing_pitch_max_deg"] - p)
+        if self.name == "firing_time":
+            return lim["firing_time_max_s"] - m["pitch_max_time_s"]
+        raise DefinitionError(f"criterion {self.name} has no margin")
+
+
+def _number(path, key, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
+        raise DefinitionError(f"{path}: &criteria: {key} = {value!r} is not a finite real number")
+    return float(value)
+
+
+def parse_criteria(text, path="<criteria>"):
+    """Validate a criteria namelist text; return the list of Criterion."""
+    try:
+        nml = f90nml.reads(text)
+    except Exception as exc:  # f90nml raises several exception types
+        raise DefinitionError(f"{path}: cannot read the namelist: {exc}") from None
+    for group in nml:
+        if group != "criteria":
+            raise DefinitionError(f"{path}: unknown group &{group} (allowed: criteria)")
+    if "criteria" not in nml or isinstance(nml["criteria"], list):
+        raise DefinitionError(f"{path}: the group &criteria must appear once")
+    raw = nml["criteria"]
+    for key in raw:
+        if key not in CRITERIA_VARS:
+            close = difflib.get_close_matches(key, CRITERIA_VARS, n=1, cutoff=0.6)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise DefinitionError(f"{path}: &criteria: unknown criterion '{key}'{hint} "
+                                  f"(allowed: {', '.join(CRITERIA_VARS)})")
+    v = {k: _number(path, k, raw[k]) for k in raw}
+    where = f"{path}: &criteria: "
+    out = []
+    if "min_clearance_m" in v:
+        if v["min_clearance_m"] < 0:
+            raise DefinitionError(f"{where}min_clearance_m = {v['min_clearance_m']:g} is not allowed (must be >= 0 m)")
+        out.append(Criterion("clearance", "minimum rocket-aircraft clearance after separation >= limit",
+                             "m", max(v["min_clearance_m"], 1.0), ("min_clearance_m",),
+                             {"min_clearance_m": v["min_clearance_m"]}))
+    if "line_strength_n" in v or "line_safety_factor" in v:
+        if "line_strength_n" not in v:
+            raise DefinitionError(f"{where}line_safety_factor needs line_strength_n (the line's breaking strength, N)")
+        strength = v["line_strength_n"]
+        factor = v.get("line_safety_factor", 1.0)
+        if not strength > 0:
+            raise DefinitionError(f"{where}line_strength_n = {strength:g} is not allowed (must be > 0 N)")
+        if not factor >= 1:
+            raise DefinitionError(f"{where}line_safety_factor = {factor:g} is not allowed (must be >= 1)")
+        out.append(Criterion("line_tension", "peak line tension <= strength / safety factor", "N",
+                             strength / factor, ("peak_line_tension_N",),
+                             {"line_strength_n": strength, "line_safety_factor": factor}))
+    if "max_aircraft_pitch_excursion_deg" in v:
+        lim = v["max_aircraft_pitch_excursion_deg"]
+        if not lim > 0:
+            raise DefinitionError(f"{where}max_aircraft_pitch_excursion_deg = {lim:g} is not allowed (must be > 0)")
+        out.append(Criterion("aircraft_pitch", "largest aircraft pitch excursion from trim <= limit", "degree",
+                             lim, ("max_aircraft_pitch_excursion_deg",),
+                             {"max_aircraft_pitch_excursion_deg": lim}))
+    if "max_load_factor_excursion" in v:
+        lim = v["max_load_factor_excursion"]
+        if not lim > 0:
+            raise DefinitionError(f"{where}max_load_factor_excursion = {lim:g} is not allowed (must be > 0)")
+        out.append(Criterion("load_factor", "largest aircraft load factor excursion from 1 g <= limit", "1",
+                             lim, ("max_load_factor_excursion",), {"max_load_factor_excursion": lim}))
+    if "firing_pitch_min_deg" in v or "firing_pitch_max_deg" in v:
+        lo = v.get("firing_pitch_min_deg", -90.0)
+        hi = v.get("firing_pitch_max_deg", 90.0)
+        if not hi > lo:
+            raise DefinitionError(f"{where}firing_pitch_max_deg = {hi:g} is not allowed (must be > "
+                                  f"firing_pitch_min_deg = {lo:g}: reversed window)")
+        out.append(Criterion("firing_attitude", "rocket Euler pitch at its first maximum (the firing moment) "
+                             "inside [min, max]", "degree", (hi - lo) / 2, ("pitch_max_deg",),
+                             {"firing_pitch_min_deg": lo, "firing_pitch_max_deg": hi}))
+    if "firing_time_max_s" in v:
+        lim = v["firing_time_max_s"]
+        if not lim > 0:
+            raise DefinitionError(f"{where}firing_time_max_s = {lim:g} is not allowed (must be > 0 s)")
+        out.append(Criterion("firing_time", "the firing moment (first pitch maximum) comes by the limit", "s",
+                             lim, ("pitch_max_time_s",), {"firing_time_max_s": lim}))
+    if not out:
+        raise DefinitionError(f"{path}: &criteria sets no criterion (allowed: {', '.join(CRITERIA_VARS)})")
+    return out
+
+
+def read_criteria(path):
+    """Read and validate a criteria file."""
+    p = pathlib.Path(path)
+    if not p.is_file():
+        raise DefinitionError(f"{path}: file does not exist (give the path of a criteria file)")
+    return parse_criteria(p.read_text(), str(path))

@@ -1,0 +1,193 @@
+"""Separation safety envelopes from a sweep summary and a criteria file.
+
+- ``evaluate``: pass/fail and margin per criterion and case (an xarray Dataset,
+  written as OUTPUT_DIR/envelope.nc);
+- ``success_probability``: the fraction of cases that pass, with a 95 % Wilson
+  score interval and the exact Clopper-Pearson interval;
+- ``pass_probability_map``: the probability of passing over a pair of inputs
+  (Gaussian-kernel regression of the pass indicator, bandwidth by
+  leave-one-out likelihood), whose 0.5 level is the boundary of the safe region;
+- ``worst_cases``: the cases with the smallest relative margin.
+
+A case that failed numerically or whose input was invalid passes no criterion
+(its margins are NaN): a sweep never counts what it could not compute as safe.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.stats as st
+import xarray as xr
+
+from .criteria import Criterion
+
+Z95 = st.norm.ppf(0.975)
+
+
+def input_names(summary: xr.Dataset) -> list:
+    """The varied inputs of a summary (its `inputs` attribute, in order)."""
+    return summary.attrs["inputs"].split()
+
+
+def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
+    """Pass/fail and margins of every case against every criterion (and 'all')."""
+    ok = summary["status"].values == 0
+    names = [c.name for c in criteria] + ["all"]
+    n = summary.sizes["case"]
+    margin = np.full((len(names), n), np.nan)
+    relative = np.full((len(names), n), np.nan)
+    for i, c in enumerate(criteria):
+        m = np.where(ok, c.margin(summary), np.nan)
+        margin[i] = m
+        relative[i] = m / c.scale
+    # NaN (not computed, or the event never happened) counts as failing
+    passed = np.where(np.isnan(margin), False, margin >= 0.0)
+    passed[-1] = passed[:-1].all(axis=0) & ok
+    rel = np.where(np.isnan(relative[:-1]), -np.inf, relative[:-1])
+    relative[-1] = rel.min(axis=0)
+    worst = np.where(ok, np.array(names[:-1])[rel.argmin(axis=0)], "not computed")
+    ds = xr.Dataset(coords={"case": summary["case"], "criterion": ("criterion", names)})
+    for name in input_names(summary):
+        ds[name] = summary[name]
+    ds["status"] = summary["status"]
+    ds["passed"] = (("criterion", "case"), passed.astype(np.int8),
+                    {"long_name": "1 if the case meets the criterion ('all': every criterion)", "units": "1"})
+    ds["margin"] = (("criterion", "case"), margin,
+                    {"long_name": "margin in the criterion's units (>= 0 passes; NaN: not computed or event "
+                                  "not reached)", "units": "criterion units (see criterion_units)"})
+    ds["relative_margin"] = (("criterion", "case"), relative,
+                             {"long_name": "margin / criterion scale ('all': the smallest; -inf: not computed)",
+                              "units": "1"})
+    ds["worst_criterion"] = (("case",), worst.astype(str), {"long_name": "criterion with the smallest relative margin"})
+    ds["criterion_units"] = (("criterion",), np.array([c.units for c in criteria] + ["1"]))
+    ds["criterion_scale"] = (("criterion",), np.array([c.scale for c in criteria] + [1.0]))
+    ds["criterion_description"] = (("criterion",), np.array([c.description for c in criteria]
+                                                           + ["every criterion above"]))
+    k = passed.sum(axis=1)
+    n_all = np.full(len(names), n)
+    p = k / n_all
+    wl, wh = wilson_interval(k, n_all)
+    cl, ch = clopper_pearson_interval(k, n_all)
+    ds["probability"] = (("criterion",), p, {"long_name": "fraction of cases that pass", "units": "1"})
+    ds["wilson_low"] = (("criterion",), wl, {"long_name": "95% Wilson score interval, low", "units": "1"})
+    ds["wilson_high"] = (("criterion",), wh, {"long_name": "95% Wilson score interval, high", "units": "1"})
+    ds["clopper_pearson_low"] = (("criterion",), cl, {"long_name": "95% Clopper-Pearson interval, low", "units": "1"})
+    ds["clopper_pearson_high"] = (("criterion",), ch, {"long_name": "95% Clopper-Pearson interval, high",
+                                                       "units": "1"})
+    for c in criteria:
+        for key, value in c.limits.items():
+            ds.attrs[f"limit_{key}"] = value
+    ds.attrs.update({"title": f"airlaunch separation safety envelope: {summary.attrs.get('sweep_name', '')}",
+                     "inputs": summary.attrs["inputs"], "n_cases": np.int32(n),
+                     "n_not_ok": np.int32((~ok).sum()),
+                     "probability_note": "fraction of the table's cases that pass: an estimate of the "
+                                         "probability of success under the table's input distributions; "
+                                         "cases not computed count as failing"})
+    return ds
+
+
+def wilson_interval(k, n, z=Z95):
+    """Wilson score interval for k successes in n trials (arrays allowed)."""
+    k = np.asarray(k, dtype=float)
+    n = np.asarray(n, dtype=float)
+    p = k / n
+    denom = 1 + z**2 / n
+    centre = (p + z**2 / (2 * n)) / denom
+    half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / denom
+    return np.clip(centre - half, 0, 1), np.clip(centre + half, 0, 1)
+
+
+def clopper_pearson_interval(k, n, alpha=0.05):
+    """Exact (Clopper-Pearson) interval from the beta distribution."""
+    k = np.asarray(k, dtype=float)
+    n = np.asarray(n, dtype=float)
+    low = np.where(k > 0, st.beta.ppf(alpha / 2, k, n - k + 1), 0.0)
+    high = np.where(k < n, st.beta.ppf(1 - alpha / 2, k + 1, n - k), 1.0)
+    return low, high
+
+
+def _normalise(v, lo, hi):
+    return (v - lo) / (hi - lo) if hi > lo else np.zeros_like(v)
+
+
+def choose_bandwidth(points, passed, candidates=None, max_points=2000):
+    """Bandwidth (in normalised units) maximising the leave-one-out Bernoulli
+    likelihood (on an evenly strided subset of at most max_points points)."""
+    if candidates is None:
+        # from about the mean spacing of the points (below it the estimate
+        # follows single points) to half the box (nearly flat)
+        candidates = np.geomspace(max(0.6 / math.sqrt(len(points)), 0.01), 0.5, 14)
+    if len(points) > max_points:
+        step = int(math.ceil(len(points) / max_points))
+        points, passed = points[::step], passed[::step]
+    d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+    y = passed.astype(float)
+    best, best_ll = candidates[0], -np.inf
+    for h in candidates:
+        w = np.exp(-0.5 * d2 / h**2)
+        np.fill_diagonal(w, 0.0)
+        wsum = w.sum(axis=1)
+        p = (w @ y + 0.5) / (wsum + 1.0)   # a weak prior keeps p inside (0, 1)
+        ll = np.sum(y * np.log(p) + (1 - y) * np.log(1 - p))
+        if ll > best_ll:
+            best, best_ll = h, ll
+    return best
+
+
+def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None):
+    """P(pass) over the (x, y) box of the samples: Nadaraya-Watson regression of
+    the pass indicator with a Gaussian kernel on inputs scaled to [0, 1].
+
+    Returns (gx, gy, prob) with prob[j, i] at (gx[i], gy[j]), and the bandwidth.
+    The 0.5 level of prob is the estimated boundary of the safe region; when
+    other inputs vary too, it is the boundary of the probability averaged over them.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    passed = np.asarray(passed, dtype=bool)
+    lo = np.array([x.min(), y.min()])
+    hi = np.array([x.max(), y.max()])
+    pts = np.stack([_normalise(x, lo[0], hi[0]), _normalise(y, lo[1], hi[1])], axis=1)
+    h = bandwidth if bandwidth is not None else choose_bandwidth(pts, passed)
+    u = np.linspace(0.0, 1.0, n_grid)
+    gu, gv = np.meshgrid(u, u)
+    grid = np.stack([gu.ravel(), gv.ravel()], axis=1)
+    d2 = ((grid[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2)
+    w = np.exp(-0.5 * d2 / h**2)
+    prob = (w @ passed.astype(float)) / np.maximum(w.sum(axis=1), 1e-300)
+    gx = lo[0] + u * (hi[0] - lo[0])
+    gy = lo[1] + u * (hi[1] - lo[1])
+    return gx, gy, prob.reshape(n_grid, n_grid), h
+
+
+def worst_cases(env: xr.Dataset, k=10):
+    """Case ids of the k cases with the smallest overall relative margin
+    (not computed first), worst first."""
+    rel = env["relative_margin"].sel(criterion="all").values
+    key = np.where(env["status"].values != 0, -np.inf, rel)
+    order = np.lexsort((env["case"].values, key))
+    return env["case"].values[order[:k]]
+
+
+def worst_case_table(env: xr.Dataset, k=10) -> str:
+    """The worst cases as a Markdown table: inputs, status, worst criterion, margins."""
+    ids = worst_cases(env, k)
+    inputs = env.attrs["inputs"].split()
+    crit = [c for c in env["criterion"].values if c != "all"]
+    units = dict(zip(env["criterion"].values, env["criterion_units"].values))
+    head = ["case", "status"] + inputs + ["worst"] + [f"{c} [{units[c]}]" for c in crit]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    status_names = {0: "ok", 1: "failed", 2: "invalid input"}
+    for cid in ids:
+        row = env.sel(case=cid)
+        cells = [str(int(cid)), status_names.get(int(row["status"]), "?")]
+        cells += [f"{float(row[name]):.6g}" for name in inputs]
+        cells.append(str(row["worst_criterion"].values) if int(row["status"]) == 0 else "-")
+        cells += [_fmt(float(row["margin"].sel(criterion=c))) for c in crit]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _fmt(v):
+    return "n/a" if math.isnan(v) else f"{v:.4g}"

@@ -1,0 +1,160 @@
+"""Figures of a separation safety envelope (matplotlib, Agg backend):
+
+- ``passfail_map.png``: for every pair of varied inputs, the cases (pass / fail /
+  not computed), the estimated probability of passing every criterion and its
+  0.5 level, the boundary of the safe region;
+- ``margins.png``: each criterion's margin against each input;
+- ``probability.png``: probability of success per criterion with 95 % intervals;
+- ``worst_cases.png`` (and ``worst_cases.md``): the table of the worst cases.
+"""
+from __future__ import annotations
+
+import itertools
+import pathlib
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .envelope import pass_probability_map, worst_case_table  # noqa: E402
+
+PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
+
+
+def _label(env, name):
+    units = env[name].attrs.get("units", "1")
+    return f"{name} [{units}]" if units not in ("", "1") else name
+
+
+def _padded(v, frac=0.03):
+    lo, hi = float(np.min(v)), float(np.max(v))
+    pad = frac * (hi - lo) if hi > lo else 0.5
+    return lo - pad, hi + pad
+
+
+def passfail_map(env, path, criterion="all"):
+    """Pass/fail map with the boundary of the safe region for every pair of inputs."""
+    inputs = env.attrs["inputs"].split()
+    pairs = list(itertools.combinations(inputs, 2))
+    ok = env["status"].values == 0
+    passed = env["passed"].sel(criterion=criterion).values.astype(bool)
+    if not pairs:
+        pairs = [(inputs[0], None)]
+    ncol = min(3, len(pairs))
+    nrow = int(np.ceil(len(pairs) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
+    for ax, (a, b) in zip(axes.ravel(), pairs):
+        x = env[a].values
+        if b is None:
+            ax.scatter(x[passed], np.zeros(passed.sum()), s=10, c=PASS_COLOUR, label="pass")
+            ax.scatter(x[~passed & ok], np.zeros((~passed & ok).sum()), s=10, c=FAIL_COLOUR, label="fail")
+            ax.set_xlabel(_label(env, a))
+            ax.set_yticks([])
+            continue
+        y = env[b].values
+        if np.ptp(x) > 0 and np.ptp(y) > 0:
+            gx, gy, prob, h = pass_probability_map(x, y, passed)
+            cs = ax.contourf(gx, gy, prob, levels=np.linspace(0, 1, 11), cmap="RdYlGn", alpha=0.35)
+            if prob.min() < 0.5 < prob.max():
+                ax.contour(gx, gy, prob, levels=[0.5], colors="k", linewidths=1.6)
+            fig.colorbar(cs, ax=ax, label="P(pass)")
+            ax.set_title(f"{criterion}: boundary P(pass) = 0.5 (kernel h = {h:.3f})", fontsize=9)
+        ax.scatter(x[passed], y[passed], s=9, c=PASS_COLOUR, edgecolors="none", label="pass")
+        ax.scatter(x[~passed & ok], y[~passed & ok], s=9, c=FAIL_COLOUR, edgecolors="none", label="fail")
+        if (~ok).any():
+            ax.scatter(x[~ok], y[~ok], s=22, c=NC_COLOUR, marker="x", label="not computed")
+        ax.set_xlabel(_label(env, a))
+        ax.set_ylabel(_label(env, b))
+        ax.set_xlim(*_padded(x))
+        ax.set_ylim(*_padded(y))
+        ax.legend(fontsize=7, loc="best")
+    for ax in axes.ravel()[len(pairs):]:
+        ax.axis("off")
+    fig.suptitle(f"separation safety envelope ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def margins(env, path):
+    """Margin of each criterion against each input (one panel per pair)."""
+    inputs = env.attrs["inputs"].split()
+    crit = [c for c in env["criterion"].values if c != "all"]
+    units = dict(zip(env["criterion"].values, env["criterion_units"].values))
+    fig, axes = plt.subplots(len(crit), len(inputs), figsize=(3.6 * len(inputs), 2.6 * len(crit)),
+                             squeeze=False, sharex="col")
+    for i, c in enumerate(crit):
+        m = env["margin"].sel(criterion=c).values
+        p = env["passed"].sel(criterion=c).values.astype(bool)
+        for j, name in enumerate(inputs):
+            ax = axes[i, j]
+            x = env[name].values
+            ax.scatter(x[p], m[p], s=6, c=PASS_COLOUR, edgecolors="none")
+            ax.scatter(x[~p], m[~p], s=6, c=FAIL_COLOUR, edgecolors="none")
+            ax.axhline(0.0, color="k", lw=0.8)
+            if j == 0:
+                ax.set_ylabel(f"{c}\nmargin [{units[c]}]", fontsize=8)
+            if i == len(crit) - 1:
+                ax.set_xlabel(_label(env, name), fontsize=8)
+            ax.tick_params(labelsize=7)
+    fig.suptitle("margins against each input (>= 0 passes; failed cases are not drawn)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def probability(env, path):
+    """Probability of success per criterion with 95 % Wilson intervals."""
+    names = list(env["criterion"].values)
+    p = env["probability"].values
+    lo = env["wilson_low"].values
+    hi = env["wilson_high"].values
+    fig, ax = plt.subplots(figsize=(7, 0.5 * len(names) + 1.5))
+    yy = np.arange(len(names))[::-1]
+    ax.barh(yy, p, color=[PASS_COLOUR if n != "all" else "#1f77b4" for n in names], alpha=0.6)
+    ax.errorbar(p, yy, xerr=[p - lo, hi - p], fmt="none", ecolor="k", capsize=4)
+    for y_, p_, l_, h_ in zip(yy, p, lo, hi):
+        ax.text(1.01, y_, f"{p_:.3f} [{l_:.3f}, {h_:.3f}]", va="center", fontsize=8)
+    ax.set_yticks(yy)
+    ax.set_yticklabels(names)
+    ax.set_xlim(0, 1.35)
+    ax.set_xlabel(f"probability of success (95% Wilson interval), n = {env.sizes['case']} cases")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def worst_table(env, path_png, path_md, k=10):
+    """The worst cases as Markdown and as a picture of the table."""
+    text = worst_case_table(env, k)
+    pathlib.Path(path_md).write_text(text)
+    rows = [line.strip("|").split("|") for line in text.strip().splitlines()]
+    head, body = [c.strip() for c in rows[0]], [[c.strip() for c in r] for r in rows[2:]]
+    fig, ax = plt.subplots(figsize=(min(2 + 1.3 * len(head), 24), 0.4 * len(body) + 1.2))
+    ax.axis("off")
+    if body:
+        table = ax.table(cellText=body, colLabels=head, loc="center", cellLoc="center")
+        table.auto_set_font_size(False)
+        table.set_fontsize(7)
+        table.scale(1, 1.3)
+    ax.set_title(f"the {len(body)} worst cases (smallest relative margin first)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path_png, dpi=110)
+    plt.close(fig)
+    return text
+
+
+def draw_all(env, figure_dir):
+    """Every figure of the envelope into figure_dir; returns the paths."""
+    d = pathlib.Path(figure_dir)
+    d.mkdir(parents=True, exist_ok=True)
+    paths = {"passfail_map": d / "passfail_map.png", "margins": d / "margins.png",
+             "probability": d / "probability.png", "worst_cases": d / "worst_cases.png",
+             "worst_cases_md": d / "worst_cases.md"}
+    passfail_map(env, paths["passfail_map"])
+    margins(env, paths["margins"])
+    probability(env, paths["probability"])
+    worst_table(env, paths["worst_cases"], paths["worst_cases_md"])
+    return paths
