@@ -38,6 +38,7 @@ module airlaunch_launch_scene
     real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
     real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
     real(dp) :: max_constraint_residual = 0.0_dp
+    real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
     real(dp) :: end_time = 0.0_dp
     type(cvode_stats) :: stats
   end type launch_result
@@ -171,7 +172,8 @@ contains
     allocate(r(m), r2(m), ab(2*kl + ku + 1, m), du(m, 1))
     h = 1.0e-5_dp
     call residual(y, r)
-    scale = max(1.0_dp, maxval(abs(r)))
+    ! forces are judged against the line's tension (round-off of EA eps sets the floor)
+    scale = max(1.0_dp, maxval(abs(r)), maxval(sys%tension))
     do it = 1, 30
       if (maxval(abs(r)) <= 1.0e-9_dp*scale) exit
       ab = 0.0_dp
@@ -374,6 +376,8 @@ contains
         res%max_load_factor_excursion = max(res%max_load_factor_excursion, abs(nz - 1.0_dp))
         if (sys%sep%phase /= phase_free) res%max_constraint_residual = max(res%max_constraint_residual, &
           sys%sep%js%res_position)
+        res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(solver%y(7:10)) - 1.0_dp), &
+          abs(norm2(solver%y(20:23)) - 1.0_dp))
         if (.not. run%trajectory) return
         nrec = nrec + 1
         time(nrec) = solver%t
@@ -501,6 +505,7 @@ contains
     call w%add_real_att("/", "max_aircraft_pitch_excursion_deg", res%max_aircraft_pitch_excursion_deg, error)
     call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
     call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)
+    call w%add_real_att("/", "max_quaternion_norm_error", res%max_quaternion_norm_error, error)
   end subroutine write_milestones
 
   !> Accumulate CVODE counters.
