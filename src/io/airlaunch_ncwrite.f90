@@ -44,6 +44,7 @@ module airlaunch_ncwrite
     procedure :: add_real_att => nc_add_real_att
     procedure :: commit => nc_commit
     procedure :: abort => nc_abort
+    procedure :: finish => nc_finish
   end type nc_writer
 
 contains
@@ -187,6 +188,18 @@ contains
     if (c_rename(self%tmp_path // c_null_char, self%path // c_null_char) /= 0) &
       call fatal_error(error, self%path // ": cannot rename " // self%tmp_path // " to it")
   end subroutine nc_commit
+
+  !> End of writing: commit the file if every write succeeded (error not
+  !> set), otherwise discard it, keeping the first error.
+  subroutine nc_finish(self, error)
+    class(nc_writer), intent(inout) :: self
+    type(error_type), allocatable, intent(inout) :: error  !< errors of the writes so far
+    if (allocated(error)) then
+      call self%abort()
+    else
+      call self%commit(error)
+    end if
+  end subroutine nc_finish
 
   !> Close and delete the temporary file (nothing is left under any name).
   subroutine nc_abort(self)

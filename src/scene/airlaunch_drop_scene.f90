@@ -209,13 +209,8 @@ contains
         call w%add_text_att("/", "status", merge("completed", "failed   ", .not. allocated(run_error)), werr)
         if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, werr)
       end if
-      if (allocated(werr)) then
-        call w%abort()
-        if (.not. allocated(run_error)) call move_alloc(werr, run_error)
-      else
-        call w%commit(werr)
-        if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
-      end if
+      call w%finish(werr)
+      if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
     end subroutine write_output
   end subroutine run_drop
 end module airlaunch_drop_scene

@@ -469,13 +469,8 @@ contains
       call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
         "(Zheng & Zhang 2018, §5.2)", echo, werr)
       call write_milestones(w, res, werr)
-      if (allocated(werr)) then
-        call w%abort()
-        if (.not. allocated(run_error)) call move_alloc(werr, run_error)
-      else
-        call w%commit(werr)
-        if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
-      end if
+      call w%finish(werr)
+      if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
     end subroutine write_output
   end subroutine run_launch
 
