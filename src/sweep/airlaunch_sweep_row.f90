@@ -15,7 +15,7 @@ module airlaunch_sweep_row
   private
   public :: sweep_row, n_metrics, metric_names, metric_units, metric_long_names, metric_is_integer
   public :: row_from_result, invalid_row, format_row, parse_row, metric_index, row_nan
-  public :: status_ok, status_failed, status_invalid, status_names
+  public :: status_ok, status_failed, status_invalid, status_names, adler32
 
   integer, parameter :: status_ok = 0       !< the case ran to its end time
   integer, parameter :: status_failed = 1   !< the integration failed (message kept)

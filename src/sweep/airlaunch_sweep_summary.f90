@@ -47,12 +47,15 @@ contains
     call w%create(path, error)
     if (allocated(error)) return
     call add_int_dim(w, "case", [(k, k = 0, n - 1)], "1", "case id (row of the case table)", error)
+    allocate(rbuf(n), ibuf(n))
     do k = 1, size(def%inputs)
-      call w%add_var_1d(def%inputs(k)%name, ["case"], table%values(k, :), units_of(def%inputs(k)%units), &
+      rbuf = table%values(k, :)
+      call w%add_var_1d(def%inputs(k)%name, ["case"], rbuf, units_of(def%inputs(k)%units), &
         "varied input " // def%inputs(k)%name // " (" // def%inputs(k)%distribution // ")", error)
       call w%add_text_att(def%inputs(k)%name, "distribution", def%inputs(k)%distribution, error)
     end do
-    call w%add_int_var_1d("status", ["case"], rows%status, "1", "case status", error)
+    ibuf = rows%status
+    call w%add_int_var_1d("status", ["case"], ibuf, "1", "case status", error)
     call add_int_atts(w, "status", "flag_values", [status_ok, status_failed, status_invalid], error)
     call w%add_text_att("status", "flag_meanings", "ok failed invalid_input", error)
     maxlen = 1
@@ -67,7 +70,6 @@ contains
       end do
       call add_string_var(w, "failure", "case", messages, "failure message (empty if status = ok)", error)
     end block
-    allocate(rbuf(n), ibuf(n))
     do k = 1, n_metrics
       rbuf = [(rows(j)%metrics(k), j = 1, n)]
       if (metric_is_integer(k)) then

@@ -1,0 +1,127 @@
+!> Sweep journal rows and files: checksums against published test vectors,
+!> rows that read back bit for bit (NaN, -0, subnormals, extremes), every
+!> truncation of a line rejected (a kill mid-write never yields a wrong row),
+!> a torn last line closed before the next row, duplicates counted.
+program test_sweep_journal
+  use, intrinsic :: iso_fortran_env, only: int64
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type
+  use airlaunch_sweep_row
+  use airlaunch_sweep_journal
+  use airlaunch_sweep_files, only: make_dir, delete_file
+  use testing
+  implicit none
+  type(sweep_row) :: row, back
+  type(sweep_row), allocatable :: rows(:)
+  logical, allocatable :: done(:)
+  logical :: ok, all_rejected, same
+  character(len=:), allocatable :: line, dir
+  type(journal_writer) :: jw
+  type(error_type), allocatable :: error
+  integer :: i, k, dup, bad, u
+  real(dp) :: nan
+
+  call section("checksums: published test vectors")
+  ! Adler-32 of "Wikipedia" is 0x11E60398 (RFC 1950 algorithm, Wikipedia's example)
+  call check(adler32("Wikipedia") == int(z'11E60398', int64), "adler32('Wikipedia') = 11E60398")
+  call check(adler32("") == 1_int64, "adler32('') = 1")
+  ! FNV-1a 64-bit test vectors (Fowler, Noll, Vo reference code)
+  call check(fnv1a("") == "CBF29CE484222325", "fnv1a64('') = cbf29ce484222325")
+  call check(fnv1a("a") == "AF63DC4C8601EC8C", "fnv1a64('a') = af63dc4c8601ec8c")
+  call check(fnv1a("foobar") == "85944171F73967E8", "fnv1a64('foobar') = 85944171f73967e8")
+
+  call section("a row reads back bit for bit")
+  nan = ieee_value(1.0_dp, ieee_quiet_nan)
+  row%id = 4711
+  row%status = status_failed
+  do k = 1, n_metrics
+    row%metrics(k) = (-1.0_dp)**k*exp(real(k, dp))/3.0_dp
+  end do
+  row%metrics(1) = nan
+  row%metrics(2) = -0.0_dp
+  row%metrics(3) = tiny(1.0_dp)/2**20       ! subnormal
+  row%metrics(4) = huge(1.0_dp)
+  row%metrics(5) = -huge(1.0_dp)
+  row%metrics(6) = 0.1_dp + 0.2_dp
+  row%message = "free flight, t = 12.5 s: altitude -2000.0 m | below the atmosphere model / 100% sure"
+  line = format_row(row)
+  call parse_row(line, back, ok)
+  call check(ok, "the line parses")
+  call check(back%id == row%id .and. back%status == row%status, "id and status")
+  call check(ieee_is_nan(back%metrics(1)), "NaN stays NaN")
+  same = .true.
+  do k = 2, n_metrics
+    same = same .and. transfer(back%metrics(k), 1_int64) == transfer(row%metrics(k), 1_int64)
+  end do
+  call check(same, "every other metric identical bit for bit (-0, subnormal, +-huge, 0.1+0.2)")
+  call check(back%message == row%message, "message kept whole")
+
+  call section("a cut or corrupted line is rejected")
+  all_rejected = .true.
+  do i = 0, len(line) - 1
+    call parse_row(line(1:i), back, ok)
+    all_rejected = all_rejected .and. .not. ok
+  end do
+  call check(all_rejected, "all " // trim(itoa(len(line))) // " truncations rejected")
+  k = index(line, "E+000")
+  call parse_row(line(:k-2) // achar(iachar(line(k-1:k-1)) + 1) // line(k:), back, ok)
+  call check(.not. ok, "one digit changed: rejected")
+
+  call section("journal files: append, torn last line, duplicates")
+  dir = "sweep_journal_test"
+  call make_dir(dir, error)
+  call check(.not. allocated(error), "directory made")
+  call remove_journal(dir)
+  call jw%open(dir, 0, error)
+  row%status = status_ok
+  row%message = ""
+  do i = 0, 2
+    row%id = i
+    call jw%append(row, error)
+  end do
+  call jw%close()
+  ! a kill in the middle of the row of case 3: no new line at the end
+  open(newunit=u, file=journal_file(dir, 0), access="stream", form="unformatted", position="append")
+  row%id = 3
+  line = format_row(row)
+  write(u) line(1:len(line)/2)
+  close(u)
+  call jw%open(dir, 0, error)
+  row%id = 4
+  call jw%append(row, error)
+  row%id = 1                      ! the same case twice (two runs on one directory)
+  call jw%append(row, error)
+  call jw%close()
+  call jw%open(dir, 1, error)     ! a second rank's file
+  row%id = 5
+  call jw%append(row, error)
+  call jw%close()
+  call read_journals(dir, 6, rows, done, dup, bad, error)
+  call check(.not. allocated(error), "journals read")
+  call check(all(done .eqv. [.true., .true., .true., .false., .true., .true.]), &
+    "cases 0, 1, 2, 4 (after the torn line) and 5 (rank 1) done; case 3 not")
+  call check(bad == 1, "one torn line ignored")
+  call check(dup == 1, "one duplicate counted")
+  call check(rows(5)%id == 4 .and. rows(6)%id == 5, "rows stored by id")
+  call remove_journal(dir)
+  call delete_file(dir // "/fingerprint.txt")
+
+  call section("fingerprint")
+  call check_fingerprint(dir, "a = 1" // new_line("a"), error)
+  call check(.not. allocated(error), "first run writes it")
+  call check_fingerprint(dir, "a = 1" // new_line("a"), error)
+  call check(.not. allocated(error), "same sweep: accepted")
+  call check_fingerprint(dir, "a = 2" // new_line("a"), error)
+  call check(allocated(error), "different sweep: refused")
+  if (allocated(error)) call check(index(error%message, "was a = 1, now a = 2") > 0, "message names the change: " &
+    // error%message)
+  call remove_journal(dir)
+  call finish()
+contains
+  function itoa(i) result(s)
+    integer, intent(in) :: i
+    character(len=16) :: s
+    write(s, '(i0)') i
+  end function itoa
+end program test_sweep_journal
