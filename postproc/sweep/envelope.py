@@ -95,7 +95,9 @@ def wilson_interval(k, n, z=Z95):
     denom = 1 + z**2 / n
     centre = (p + z**2 / (2 * n)) / denom
     half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / denom
-    return np.clip(centre - half, 0, 1), np.clip(centre + half, 0, 1)
+    # the interval always contains p (k = 0 or n: an end at 0 or 1); keep it so
+    # against rounding
+    return np.minimum(np.clip(centre - half, 0, 1), p), np.maximum(np.clip(centre + half, 0, 1), p)
 
 
 def clopper_pearson_interval(k, n, alpha=0.05):

@@ -1,0 +1,174 @@
+"""Safety envelopes on synthetic summaries whose answer is known: margins equal
+their defining formulas; the estimated boundary of the safe region follows a
+known curve; the 95 % intervals cover the true probability (once, and about
+95 % of the time on average over p) and agree with SciPy's own binomial
+intervals; cases that did not compute never pass; bad criteria files are one
+line and status 2."""
+import math
+
+import numpy as np
+import pytest
+import scipy.stats as st
+import xarray as xr
+from scipy.stats import qmc
+
+from test_sweep_support import run_python
+
+from postproc.sweep.criteria import parse_criteria
+from postproc.sweep.definition import DefinitionError
+from postproc.sweep.envelope import (clopper_pearson_interval, evaluate, pass_probability_map, wilson_interval,
+                                     worst_cases)
+
+METRICS = ("min_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg",
+           "max_load_factor_excursion", "pitch_max_deg", "pitch_max_time_s")
+
+
+def synthetic_summary(a, b, clearance, status=None, pitch=None):
+    """A summary-shaped dataset: inputs a, b and chosen metrics (others safe)."""
+    n = len(a)
+    status = np.zeros(n, dtype=np.int32) if status is None else status
+    ds = xr.Dataset({"a": ("case", a, {"units": "s"}), "b": ("case", b, {"units": "m2"}),
+                     "status": ("case", status)}, coords={"case": np.arange(n)})
+    ds["min_clearance_m"] = ("case", clearance)
+    ds["peak_line_tension_N"] = ("case", np.full(n, 1.0e5))
+    ds["max_aircraft_pitch_excursion_deg"] = ("case", np.full(n, 1.0))
+    ds["max_load_factor_excursion"] = ("case", np.full(n, 0.2))
+    ds["pitch_max_deg"] = ("case", np.full(n, 89.0) if pitch is None else pitch)
+    ds["pitch_max_time_s"] = ("case", np.full(n, 8.0))
+    ds.attrs.update(inputs="a b", sweep_name="synthetic")
+    return ds
+
+
+CRITERIA = """&criteria
+  min_clearance_m = 1.5
+  line_strength_n = 300e3, line_safety_factor = 1.5
+  max_aircraft_pitch_excursion_deg = 3.0
+  max_load_factor_excursion = 0.5
+  firing_pitch_min_deg = 75.0, firing_pitch_max_deg = 90.0
+  firing_time_max_s = 12.0
+/
+"""
+
+
+def boundary(a):
+    """The known boundary: safe iff b > 0.3 + 0.4 a^2."""
+    return 0.3 + 0.4 * a**2
+
+
+def lhs_points(n, seed):
+    return qmc.LatinHypercube(2, rng=seed).random(n)
+
+
+def test_margins_are_their_formulas():
+    a = np.linspace(0, 1, 7)
+    b = np.linspace(1, 0, 7)
+    clearance = 1.5 + 2.0 * (a - 0.5)
+    pitch = np.array([60.0, 74.0, 75.0, 80.0, 89.9, 90.0, 88.0])
+    ds = synthetic_summary(a, b, clearance, pitch=pitch)
+    env = evaluate(ds, parse_criteria(CRITERIA))
+    np.testing.assert_allclose(env["margin"].sel(criterion="clearance"), 2.0 * (a - 0.5), atol=1e-15)
+    np.testing.assert_allclose(env["margin"].sel(criterion="line_tension"), 2.0e5 - 1.0e5)
+    np.testing.assert_allclose(env["margin"].sel(criterion="aircraft_pitch"), 2.0)
+    # Euler pitch cannot exceed 90 deg: the window [75, 90] has only its lower side
+    np.testing.assert_allclose(env["margin"].sel(criterion="firing_attitude"), pitch - 75.0)
+    np.testing.assert_allclose(env["margin"].sel(criterion="firing_time"), 4.0)
+    passed = env["passed"].sel(criterion="all").values.astype(bool)
+    assert list(passed) == list((a >= 0.5) & (pitch >= 75.0))
+
+
+def test_boundary_of_the_safe_region_is_recovered():
+    """Pass iff b > 0.3 + 0.4 a^2 (a, b on a Latin hypercube): the 0.5 level of
+    the estimated pass probability lies within 0.05 of the curve, and the map
+    classifies the plane like the true rule almost everywhere."""
+    pts = lhs_points(800, seed=4)
+    a, b = pts[:, 0], pts[:, 1]
+    f = b - boundary(a)
+    env = evaluate(synthetic_summary(a, b, 1.5 + 10.0 * f), parse_criteria(CRITERIA))
+    passed = env["passed"].sel(criterion="all").values.astype(bool)
+    assert np.array_equal(passed, f >= 0)
+    gx, gy, prob, h = pass_probability_map(env["a"].values, env["b"].values, passed)
+    truth = gy[:, None] > boundary(gx)[None, :]
+    assert np.mean((prob > 0.5) != truth) < 0.03
+    # along each column inside the box, where the estimate crosses 0.5
+    errors = []
+    for i, x in enumerate(gx):
+        if not 0.05 < x < 0.95:
+            continue
+        col = prob[:, i]
+        j = np.argmax(col > 0.5)
+        y_cross = gy[j - 1] + (0.5 - col[j - 1]) * (gy[j] - gy[j - 1]) / (col[j] - col[j - 1])
+        errors.append(abs(y_cross - boundary(x)))
+    assert max(errors) < 0.05, (max(errors), h)
+
+
+def test_interval_covers_the_true_probability_of_a_known_region():
+    """Pass iff a + b < 1.2 with a, b uniform: P = 1 - 0.8^2/2 = 0.68."""
+    pts = lhs_points(400, seed=9)
+    a, b = pts[:, 0], pts[:, 1]
+    env = evaluate(synthetic_summary(a, b, 1.5 + (1.2 - a - b)), parse_criteria("&criteria min_clearance_m = 1.5 /"))
+    row = env.sel(criterion="all")
+    assert float(row["wilson_low"]) <= 0.68 <= float(row["wilson_high"])
+    assert float(row["clopper_pearson_low"]) <= 0.68 <= float(row["clopper_pearson_high"])
+    assert abs(float(row["probability"]) - 0.68) < 0.03
+
+
+def test_intervals_cover_95_percent_on_average_over_p():
+    """Exact coverage (binomial pmf, n = 60) over p in [0.05, 0.95]: the exact
+    interval never covers less than 95 %; Wilson's covers 95 % on average and
+    never less than 92 % (Brown, Cai & DasGupta 2001, Stat. Sci. 16: 101)."""
+    n = 60
+    k = np.arange(n + 1)
+    wl, wh = wilson_interval(k, np.full_like(k, n))
+    cl, ch = clopper_pearson_interval(k, np.full_like(k, n))
+    ps = np.linspace(0.05, 0.95, 181)
+    wilson = np.array([st.binom.pmf(k, n, p)[(wl <= p) & (p <= wh)].sum() for p in ps])
+    exact = np.array([st.binom.pmf(k, n, p)[(cl <= p) & (p <= ch)].sum() for p in ps])
+    assert exact.min() >= 0.95, exact.min()
+    assert abs(wilson.mean() - 0.95) < 0.005, wilson.mean()
+    assert wilson.min() > 0.92, wilson.min()
+
+
+@pytest.mark.parametrize("k,n", [(0, 20), (7, 20), (20, 20), (613, 1000)])
+def test_intervals_agree_with_scipy(k, n):
+    wl, wh = wilson_interval(k, n)
+    cl, ch = clopper_pearson_interval(k, n)
+    ref_w = st.binomtest(k, n).proportion_ci(0.95, method="wilson")
+    ref_c = st.binomtest(k, n).proportion_ci(0.95, method="exact")
+    assert math.isclose(wl, ref_w.low, abs_tol=1e-12) and math.isclose(wh, ref_w.high, abs_tol=1e-12)
+    assert math.isclose(cl, ref_c.low, abs_tol=1e-12) and math.isclose(ch, ref_c.high, abs_tol=1e-12)
+
+
+def test_cases_not_computed_never_pass_and_come_first_among_the_worst():
+    a = np.array([0.1, 0.2, 0.3, 0.4])
+    status = np.array([0, 1, 0, 2], dtype=np.int32)
+    clearance = np.array([10.0, 10.0, 1.6, 10.0])   # case 1 "looks" safe but failed numerically
+    env = evaluate(synthetic_summary(a, a, clearance, status=status), parse_criteria(CRITERIA))
+    assert env["passed"].sel(case=[1, 3]).values.sum() == 0
+    assert np.isnan(env["margin"].sel(case=1, criterion="clearance"))
+    assert list(worst_cases(env, 4)) == [1, 3, 2, 0]
+    assert float(env["probability"].sel(criterion="all")) == 0.5
+
+
+@pytest.mark.parametrize("text,match", [
+    ("&criteria min_clearence_m = 1.0 /", "unknown criterion 'min_clearence_m' .*did you mean 'min_clearance_m'"),
+    ("&criteria firing_pitch_min_deg = 80, firing_pitch_max_deg = 70 /", "reversed window"),
+    ("&criteria line_safety_factor = 2 /", "needs line_strength_n"),
+    ("&criteria /", "sets no criterion"),
+    ("&limits min_clearance_m = 1.0 /", "unknown group &limits"),
+])
+def test_bad_criteria_are_one_line_errors(text, match):
+    with pytest.raises(DefinitionError, match=match) as exc:
+        parse_criteria(text, "c.nml")
+    assert "\n" not in str(exc.value)
+
+
+def test_unknown_criterion_on_the_command_line(tmp_path):
+    sweep = tmp_path / "s.nml"
+    sweep.write_text("&sweep base = 'b.nml', design = 'lhs', n_cases = 4, seed = 1 /\n"
+                     "&input name = 'bay%release_time', distribution = 'uniform', lower = 0, upper = 1 /\n")
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria max_mach = 0.9 /\n")
+    res = run_python(["envelope", sweep, "--criteria", crit], tmp_path)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "unknown criterion 'max_mach'" in lines[0], res.stderr

@@ -1,0 +1,194 @@
+"""airlaunch-sweep under mpirun: the summary does not depend on the number of
+ranks; a sweep killed with SIGKILL mid-way and run again ends with every case
+exactly once, identical to an uninterrupted run; failed and invalid cases are
+recorded with their message while the sweep goes on, and every case is the
+single run `airlaunch` gives for the same namelist; the whole chain runs from
+scripts/sweep."""
+import os
+import re
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from test_sweep_support import (AIRLAUNCH_EXE, ENV, ROOT, SWEEP_EXE, assert_same_summary, journal_rows,
+                                make_table, mpirun, run_sweep, small_definition)
+
+N_CASES = 40
+
+
+@pytest.fixture(scope="module")
+def exes():
+    for exe in (SWEEP_EXE, AIRLAUNCH_EXE):
+        if not exe.exists():
+            pytest.fail(f"{exe} is missing: run scripts/setup release first")
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory, exes):
+    """The small sweep's definition (output_dir relative: one directory per run)."""
+    d = tmp_path_factory.mktemp("sweep")
+    return small_definition(d / "small.nml", n_cases=N_CASES)
+
+
+@pytest.fixture(scope="module")
+def reference(small, tmp_path_factory):
+    """The uninterrupted sweep on one rank: its summary."""
+    cwd = tmp_path_factory.mktemp("ranks1")
+    make_table(small, cwd)
+    res = run_sweep(small, cwd, 1)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert f"{N_CASES} cases: {N_CASES} ok" in res.stdout, res.stdout
+    return cwd / "out" / "summary.nc"
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_rank_count_does_not_change_the_summary(small, reference, tmp_path, ranks):
+    """Each case depends only on its inputs: 2 and 3 ranks (3 > the 2 cores:
+    oversubscribed, so the work order differs) give the 1-rank summary bit for bit."""
+    make_table(small, tmp_path)
+    res = run_sweep(small, tmp_path, ranks)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert re.search(rf"{N_CASES} run now on {ranks} ranks", res.stdout), res.stdout
+    ids, bad = journal_rows(tmp_path / "out" / "journal")
+    assert sorted(ids) == list(range(N_CASES)) and bad == 0
+    # the work really was shared: every rank wrote rows
+    per_rank = [len((tmp_path / "out" / "journal" / f"rank_{r:04d}.txt").read_text().splitlines())
+                for r in range(ranks)]
+    assert all(n > 0 for n in per_rank), per_rank
+    assert_same_summary(reference, tmp_path / "out" / "summary.nc")
+
+
+def _session_pids(sid):
+    """Processes of a session (mpirun and the ranks it started)."""
+    pids = []
+    for p in os.listdir("/proc"):
+        if not p.isdigit():
+            continue
+        try:
+            with open(f"/proc/{p}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == sid:
+            pids.append(int(p))
+    return pids
+
+
+def test_killed_sweep_resumes_to_the_same_summary(small, reference, tmp_path):
+    """SIGKILL to mpirun and every rank mid-way; the rerun of the same command
+    skips the journaled cases, runs the rest once, and the summary equals the
+    uninterrupted one."""
+    make_table(small, tmp_path)
+    journal = tmp_path / "out" / "journal"
+    proc = subprocess.Popen(mpirun(2) + [str(SWEEP_EXE), str(small)], cwd=tmp_path, env=ENV,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if len(journal_rows(journal)[0]) >= N_CASES // 4:
+            break
+        time.sleep(0.01)
+    pids = _session_pids(proc.pid)
+    for pid in pids:
+        os.kill(pid, signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    done_before, _ = journal_rows(journal)
+    assert N_CASES // 4 <= len(done_before) < N_CASES, "the kill did not land mid-way"
+    assert len(pids) >= 3, pids   # mpirun and both ranks were killed
+    assert not (tmp_path / "out" / "summary.nc").exists()
+
+    res = run_sweep(small, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert f"resuming: {len(set(done_before))} of {N_CASES}" in res.stdout, res.stdout
+    assert f"{N_CASES - len(set(done_before))} run now" in res.stdout, res.stdout
+    ids, bad = journal_rows(journal)
+    assert sorted(ids) == list(range(N_CASES)), "every case exactly once in the journal"
+    assert bad <= 2   # at most one torn line per killed rank
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        assert list(s["case"].values) == list(range(N_CASES))
+    assert_same_summary(reference, tmp_path / "out" / "summary.nc")
+
+
+FAILING_INPUTS = """
+&input name = 'flight%altitude', distribution = 'list', values = 300.0, 3000.0, units = 'm' /
+&input name = 'parachute%drag_area', distribution = 'list', values = 0.0, 10.0, units = 'm2' /
+"""
+
+
+def _single_run(tmp_path, cwd, definition, case):
+    """The case's namelist from airlaunch-sweep, run by airlaunch on its own."""
+    res = run_sweep(definition, cwd, None, "--case-namelist", case)
+    assert res.returncode == 0, res.stderr
+    nml = tmp_path / f"case{case}.nml"
+    nml.write_text(res.stdout)
+    out = tmp_path / f"case{case}.nc"
+    return subprocess.run([str(AIRLAUNCH_EXE), str(nml), "--output", str(out)], capture_output=True, text=True,
+                          env=ENV, timeout=600), out
+
+
+def test_failed_and_invalid_cases_are_recorded_and_the_sweep_goes_on(tmp_path, exes):
+    """Grid of altitude {300, 3000} m x drag area {0, 10} m^2 over 40 s: at 300 m
+    the rocket falls below the atmosphere model (a numerical failure); a zero
+    drag area is rejected by the scenario reader.  Every case gets its row and
+    the one good case completes; each row is what `airlaunch` gives alone."""
+    definition = small_definition(tmp_path / "fail.nml", n_cases=4, design="grid", inputs=FAILING_INPUTS,
+                                  t_end=40.0, extra_sweep="keep_failed = .true.")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "4 cases: 1 ok, 1 failed, 2 invalid input" in res.stdout, res.stdout
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        alt = s["flight%altitude"].values
+        area = s["parachute%drag_area"].values
+        status = s["status"].values
+        failure = list(s["failure"].values)
+        sep = s["separation_time_s"].values
+    # grid order: the first input varies slowest
+    assert list(alt) == [300.0, 300.0, 3000.0, 3000.0] and list(area) == [0.0, 10.0, 0.0, 10.0]
+    assert list(status) == [2, 1, 2, 0]
+    for k in (0, 2):
+        assert "drag_area" in failure[k] and failure[k].startswith(f"case {k}:"), failure[k]
+    assert "altitude" in failure[1], failure[1]
+    assert failure[3] == ""
+
+    # the failed case: the same message and milestones as a single run
+    single, out = _single_run(tmp_path, tmp_path, definition, 1)
+    assert single.returncode == 3, single.stderr
+    assert failure[1] in single.stderr.splitlines()[0], (failure[1], single.stderr)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "failed"
+        assert float(ds.attrs["separation_time_s"]) == sep[1]
+    # the failed case kept its trajectory (keep_failed)
+    with xr.open_dataset(tmp_path / "out" / "trajectories" / "case_000001.nc") as ds:
+        assert ds.attrs["status"] == "failed"
+    # the good case: the same milestones as a single run, to the last bit
+    single, out = _single_run(tmp_path, tmp_path, definition, 3)
+    assert single.returncode == 0, single.stderr
+    with xr.open_dataset(out) as ds, xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        for name in ("separation_time_s", "edge_time_s", "peak_line_tension_N", "pitch_at_separation_deg",
+                     "max_aircraft_pitch_excursion_deg", "trim_alpha_deg"):
+            assert float(ds.attrs[name]) == float(s[name].values[3]), name
+
+
+def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):
+    """scripts/sweep: table -> check -> mpirun -> envelope, with every output."""
+    definition = small_definition(tmp_path / "chain.nml", n_cases=12, output_dir=str(tmp_path / "out"),
+                                  extra_sweep=f"criteria = '{ROOT}/input/criteria_paper.nml'")
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "2"], cwd=tmp_path,
+                         capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 0, res.stdout + res.stderr
+    out = tmp_path / "out"
+    for name in ("table.nc", "summary.nc", "envelope.nc", "figures/passfail_map.png", "figures/margins.png",
+                 "figures/probability.png", "figures/worst_cases.png", "figures/worst_cases.md"):
+        assert (out / name).is_file(), name
+    assert "12 cases: 12 ok" in res.stdout
+    with xr.open_dataset(out / "envelope.nc") as env:
+        assert env.sizes["case"] == 12
+        assert set(env["criterion"].values) >= {"clearance", "line_tension", "firing_attitude", "all"}
+        p = env["probability"].sel(criterion="all").values
+        assert 0.0 <= env["wilson_low"].sel(criterion="all") <= p <= env["wilson_high"].sel(criterion="all") <= 1.0
+        assert np.all(np.isin(env["passed"].values, [0, 1]))
