@@ -8,14 +8,23 @@
 !> If the integration fails (solver failure, non-finite state) `run` returns
 !> the error, naming the time and the quantity, and the records up to the last
 !> good output (`n_out` of them) stay valid.
+!>
+!> From a namelist (scene = 'line' in &run): `read_line_scene_config` reads
+!> and validates the groups &line and &line_scene (docs/line.md lists every
+!> variable), `run_line_scene` runs and writes the netCDF-4 output
+!> (written so far, with status = "failed", if the run fails).
 module airlaunch_line_scene
-  use airlaunch_kinds, only: dp, g0
+  use airlaunch_kinds, only: dp, g0, rad2deg
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
+  use airlaunch_namelist
+  use airlaunch_run_config, only: run_config, echo_namelist_unit
+  use airlaunch_ncwrite, only: nc_writer
+  use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_line
   implicit none
   private
-  public :: line_scene_config, line_scene
+  public :: line_scene_config, line_scene, read_line_scene_config, run_line_scene
 
   !> Inputs of the line scene (namelist groups &line and &line_scene).
   type :: line_scene_config
@@ -230,4 +239,292 @@ contains
     self%completed = .false.
     self%ready = .false.
   end subroutine scene_free
+
+  ! ---------------------------------------------------------------------
+  ! Namelist input and netCDF output
+  ! ---------------------------------------------------------------------
+
+  !> Read and validate &line and &line_scene from `f`; the times, the output
+  !> cadence and (if set in &run) the tolerances and the BDF order come from
+  !> `run`.  `echo` receives the resolved groups.  The scene is built once to
+  !> check the geometry, so every bad value is reported here (exit status 2)
+  !> as one line naming the file, the group, the variable, its value and what
+  !> is allowed.
+  subroutine read_line_scene_config(f, run, cfg, echo, error)
+    type(nml_file), intent(in) :: f                       !< scanned input
+    type(run_config), intent(in) :: run                   !< &run settings
+    type(line_scene_config), intent(out) :: cfg           !< resolved scene
+    character(len=:), allocatable, intent(inout) :: echo  !< resolved input text
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    ! &line
+    real(dp) :: length, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, cd_tangential
+    real(dp) :: wind(3), air_density
+    integer :: n_seg
+    logical :: gravity, air
+    ! &line_scene
+    character(len=16) :: a_kind, b_kind, initial_shape, scheme
+    real(dp) :: a_position(3), a_velocity(3), a_amplitude(3), a_frequency, a_phase_deg, a_t_start, a_mass
+    real(dp) :: a_drag_area, b_position(3), b_velocity(3), b_amplitude(3), b_frequency, b_phase_deg
+    real(dp) :: b_t_start, b_mass, b_drag_area, initial_sag, dt, force_tol
+    integer :: max_iterations
+    logical :: record_tensions
+    namelist /line/ length, n_seg, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, &
+      cd_tangential, gravity, air, wind, air_density
+    namelist /line_scene/ a_kind, a_position, a_velocity, a_amplitude, a_frequency, a_phase_deg, a_t_start, &
+      a_mass, a_drag_area, b_kind, b_position, b_velocity, b_amplitude, b_frequency, b_phase_deg, b_t_start, &
+      b_mass, b_drag_area, initial_shape, initial_sag, scheme, dt, force_tol, max_iterations, record_tensions
+    type(nml_var), parameter :: line_vars(13) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
+      nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
+      nml_var("settling_damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
+      nml_var("cd_tangential", "real"), nml_var("gravity", "logical"), nml_var("air", "logical"), &
+      nml_var("wind", "real_list"), nml_var("air_density", "real")]
+    type(nml_var), parameter :: scene_vars(25) = [nml_var("a_kind", "string"), &
+      nml_var("a_position", "real_list"), nml_var("a_velocity", "real_list"), &
+      nml_var("a_amplitude", "real_list"), nml_var("a_frequency", "real"), nml_var("a_phase_deg", "real"), &
+      nml_var("a_t_start", "real"), nml_var("a_mass", "real"), nml_var("a_drag_area", "real"), &
+      nml_var("b_kind", "string"), nml_var("b_position", "real_list"), nml_var("b_velocity", "real_list"), &
+      nml_var("b_amplitude", "real_list"), nml_var("b_frequency", "real"), nml_var("b_phase_deg", "real"), &
+      nml_var("b_t_start", "real"), nml_var("b_mass", "real"), nml_var("b_drag_area", "real"), &
+      nml_var("initial_shape", "string"), nml_var("initial_sag", "real"), nml_var("scheme", "string"), &
+      nml_var("dt", "real"), nml_var("force_tol", "real"), nml_var("max_iterations", "integer"), &
+      nml_var("record_tensions", "logical")]
+    character(len=16), parameter :: kinds(4) = [character(len=16) :: "fixed", "prescribed", "free", &
+      "point_mass"]
+    type(line_scene_config) :: d
+    integer :: unit, ios, u
+    logical :: present
+    character(len=256) :: msg
+
+    ! defaults
+    length = d%line%length; n_seg = d%line%n_seg; ea = d%line%ea; mass_per_length = d%line%mass_per_length
+    damping = d%line%damping; settling_damping = d%line%settling_damping; diameter = d%line%diameter
+    cd_normal = d%line%cd_normal; cd_tangential = d%line%cd_tangential; gravity = d%line%gravity
+    air = d%line%air; wind = d%line%wind; air_density = d%line%air_density
+    a_kind = "fixed"; a_position = [0.0_dp, 0.0_dp, 0.0_dp]; a_velocity = 0; a_amplitude = 0
+    a_frequency = 0; a_phase_deg = 0; a_t_start = 0; a_mass = 0; a_drag_area = 0
+    b_kind = "free"; b_position = [length, 0.0_dp, 0.0_dp]; b_velocity = 0; b_amplitude = 0
+    b_frequency = 0; b_phase_deg = 0; b_t_start = 0; b_mass = 0; b_drag_area = 0
+    initial_shape = d%initial_shape; initial_sag = d%initial_sag; scheme = d%integration%scheme
+    dt = d%integration%dt; force_tol = d%integration%force_tol; max_iterations = d%integration%max_iterations
+    record_tensions = .true.
+
+    call f%check_group("line", line_vars, error)
+    if (allocated(error)) return
+    call f%check_group("line_scene", scene_vars, error)
+    if (allocated(error)) return
+    call f%position("line", unit, present)
+    if (present) then
+      read(unit, nml=line, iostat=ios, iomsg=msg)
+      close(unit)
+      if (ios /= 0) then
+        call f%diagnose("line", line_vars, msg, error)
+        return
+      end if
+    end if
+    if (.not. f%is_set("line_scene", "b_position")) b_position = [length, 0.0_dp, 0.0_dp]
+    call f%position("line_scene", unit, present)
+    if (present) then
+      read(unit, nml=line_scene, iostat=ios, iomsg=msg)
+      close(unit)
+      if (ios /= 0) then
+        call f%diagnose("line_scene", scene_vars, msg, error)
+        return
+      end if
+    end if
+
+    call require_positive(f, "line", "length", length, "m", error)
+    call require_int_range(f, "line", "n_seg", n_seg, 1, 100000, error)
+    call require_positive(f, "line", "ea", ea, "N", error)
+    call require_positive(f, "line", "mass_per_length", mass_per_length, "kg/m", error)
+    call require_nonnegative(f, "line", "damping", damping, "N s", error)
+    call require_nonnegative(f, "line", "settling_damping", settling_damping, "1/s", error)
+    call require_nonnegative(f, "line", "diameter", diameter, "m", error)
+    call require_nonnegative(f, "line", "cd_normal", cd_normal, "", error)
+    call require_nonnegative(f, "line", "cd_tangential", cd_tangential, "", error)
+    call require_nonnegative(f, "line", "air_density", air_density, "kg/m^3 (0: ISA)", error)
+    call require_choice(f, "line_scene", "a_kind", a_kind, kinds, error)
+    call require_choice(f, "line_scene", "b_kind", b_kind, kinds, error)
+    call require_nonnegative(f, "line_scene", "a_frequency", a_frequency, "Hz", error)
+    call require_nonnegative(f, "line_scene", "b_frequency", b_frequency, "Hz", error)
+    call require_nonnegative(f, "line_scene", "a_drag_area", a_drag_area, "m^2", error)
+    call require_nonnegative(f, "line_scene", "b_drag_area", b_drag_area, "m^2", error)
+    if (trim(a_kind) == "point_mass") call require_positive(f, "line_scene", "a_mass", a_mass, "kg", error)
+    if (trim(b_kind) == "point_mass") call require_positive(f, "line_scene", "b_mass", b_mass, "kg", error)
+    call require_choice(f, "line_scene", "initial_shape", initial_shape, &
+      [character(len=16) :: "straight", "sag"], error)
+    call require_nonnegative(f, "line_scene", "initial_sag", initial_sag, "m", error)
+    call require_choice(f, "line_scene", "scheme", scheme, [character(len=16) :: "cvode", "marching"], error)
+    if (trim(scheme) == "marching") then
+      call require_positive(f, "line_scene", "dt", dt, "s", error)
+      call require_positive(f, "line_scene", "force_tol", force_tol, "N", error)
+      call require_int_range(f, "line_scene", "max_iterations", max_iterations, 1, 1000, error)
+    end if
+    if (allocated(error)) return
+
+    cfg%line = line_params(length=length, n_seg=n_seg, ea=ea, mass_per_length=mass_per_length, &
+      damping=damping, settling_damping=settling_damping, diameter=diameter, cd_normal=cd_normal, &
+      cd_tangential=cd_tangential, gravity=gravity, air=air, wind=wind, air_density=air_density)
+    cfg%end_a = line_end(kind=end_kind_code(a_kind), position=a_position, velocity=a_velocity, &
+      amplitude=a_amplitude, frequency=a_frequency, phase_deg=a_phase_deg, t_start=a_t_start, mass=a_mass, &
+      drag_area=a_drag_area)
+    cfg%end_b = line_end(kind=end_kind_code(b_kind), position=b_position, velocity=b_velocity, &
+      amplitude=b_amplitude, frequency=b_frequency, phase_deg=b_phase_deg, t_start=b_t_start, mass=b_mass, &
+      drag_area=b_drag_area)
+    cfg%initial_shape = initial_shape
+    cfg%initial_sag = initial_sag
+    cfg%integration%scheme = scheme
+    cfg%integration%dt = dt
+    cfg%integration%force_tol = force_tol
+    cfg%integration%max_iterations = max_iterations
+    if (f%is_set("run", "rtol")) cfg%integration%rtol = run%rtol
+    if (f%is_set("run", "atol")) cfg%integration%atol = run%atol
+    if (f%is_set("run", "max_order")) cfg%integration%max_order = run%max_order
+    cfg%t_end = run%t_end
+    cfg%output_interval = run%output_dt
+    cfg%record_nodes = run%trajectory
+    cfg%record_tensions = record_tensions .and. run%trajectory
+
+    ! the geometry and the scheme's stability are checked by building the scene
+    call probe_scene(cfg, error)
+    if (allocated(error)) then
+      if (index(error%message, "line_scene: ") == 1) error%message = error%message(13:)
+      error%message = f%path // ": &line_scene: " // error%message
+      return
+    end if
+
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=line)
+    write(u, nml=line_scene)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_line_scene_config
+
+  !> Build the scene once to check what the single values cannot show (end
+  !> geometry, stability of the marching step).  (A separate procedure: the
+  !> reader's namelist group &line_scene hides the type name there.)
+  subroutine probe_scene(cfg, error)
+    type(line_scene_config), intent(in) :: cfg             !< scene
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    type(line_scene) :: probe
+    type(line_scene_config) :: small
+    small = cfg
+    small%t_end = min(cfg%t_end, cfg%output_interval)   ! no need for the full record arrays
+    call probe%init(small, error)
+    call probe%free()
+  end subroutine probe_scene
+
+  !> Run the scene and write its output file (if &run trajectory); `summary`
+  !> receives the milestones for the program to print.  On a numerical
+  !> failure the output so far is written with status = "failed".
+  subroutine run_line_scene(run, cfg, echo, summary, error)
+    type(run_config), intent(in) :: run                   !< &run settings
+    type(line_scene_config), intent(in) :: cfg            !< the scene
+    character(len=*), intent(in) :: echo                  !< resolved input
+    character(len=:), allocatable, intent(out) :: summary !< milestones, one per line
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    type(line_scene) :: scene
+    type(error_type), allocatable :: run_error
+    integer :: m, i_max(2)
+    character(len=1), parameter :: nl = new_line("a")
+
+    call scene%init(cfg, error)
+    if (allocated(error)) return
+    call scene%run(run_error)
+    m = scene%n_out
+    if (run%trajectory) call write_output(scene, run%output, echo, run_error, error)
+    i_max = maxloc(scene%end_tension(:, 1:m))
+    summary = "line: " // str(cfg%line%length) // " m, " // str(cfg%line%n_seg) // " segments, scheme " // &
+      trim(cfg%integration%scheme) // nl // &
+      "end of run at t = " // str(scene%time(m)) // " s (" // merge("completed", "failed   ", scene%completed) // &
+      "), " // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
+      " force evaluations, wall " // str(scene%wall_time) // " s" // nl // &
+      "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
+      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s" // nl // &
+      "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
+      str(scene%rigid(m)%m_rigid) // " kg, theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
+      str(scene%rigid(m)%phi*rad2deg) // " deg"
+    if (allocated(run_error)) then
+      if (allocated(error)) deallocate(error)
+      call move_alloc(run_error, error)
+    end if
+    call scene%free()
+  end subroutine run_line_scene
+
+  !> Write the records of `scene` as netCDF-4 (docs/line.md, "Output").
+  subroutine write_output(scene, path, echo, run_error, error)
+    type(line_scene), intent(in) :: scene                 !< the run
+    character(len=*), intent(in) :: path, echo            !< output file, resolved input
+    type(error_type), allocatable, intent(in) :: run_error  !< the run's failure, if any
+    type(error_type), allocatable, intent(inout) :: error !< set if writing fails
+    type(nc_writer) :: w
+    integer :: m, n, i, k
+    real(dp), allocatable :: r1(:), r3(:, :)
+    m = scene%n_out
+    n = scene%model%n
+    call w%create(path, error)
+    if (allocated(error)) return
+    call w%add_dim("time", scene%time(1:m), "s", "time", error)
+    call w%add_dim("node", [(real(k, dp), k = 0, n)], "1", "line node index, 0 = end a ... N = end b", error)
+    call w%add_dim("segment", [(real(k, dp), k = 1, n)], "1", "line segment index k (nodes k-1, k)", error)
+    call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
+      "component: 0 = x forward, 1 = y up, 2 = z right (earth), or body axes 0 = x, 1 = y, 2 = z", error)
+    call w%add_dim("end", [0.0_dp, 1.0_dp], "1", "line end: 0 = end a (node 0), 1 = end b (node N)", error)
+    if (allocated(scene%nodes)) call w%add_var_3d("line_node_position", ["xyz    ", "node   ", "time   "], &
+      scene%nodes(:, :, 1:m), "m", "line node positions (earth frame)", error)
+    if (allocated(scene%tensions)) call w%add_var_2d("line_tension", ["segment", "time   "], &
+      scene%tensions(:, 1:m), "N", "segment tensions T = max(0, EA eps + c_d epsdot), 0 when slack", error)
+    call w%add_var_2d("line_end_tension", ["end ", "time"], scene%end_tension(:, 1:m), "N", &
+      "tension of the end segments (segment 1 at end a, segment N at end b)", error)
+    call w%add_var_3d("line_end_force", ["xyz ", "end ", "time"], scene%end_force(:, :, 1:m), "N", &
+      "force of the line on its end nodes: end tension plus the end half-segment's weight and drag", error)
+    call w%add_var_2d("line_tip_position", ["xyz ", "time"], scene%tip(:, 1:m), "m", &
+      "position of node N (end b), earth frame", error)
+    allocate(r1(m), r3(3, m))
+    r1 = scene%energy(1, 1:m)
+    call w%add_var_1d("line_energy_kinetic", ["time"], r1, "J", &
+      "kinetic energy of the line and its point-mass ends", error)
+    r1 = scene%energy(2, 1:m)
+    call w%add_var_1d("line_energy_elastic", ["time"], r1, "J", &
+      "elastic energy of the line, sum of 1/2 EA l0 eps^2 over taut segments", error)
+    r1 = scene%energy(3, 1:m)
+    call w%add_var_1d("line_energy_potential", ["time"], r1, "J", &
+      "gravitational potential energy (zero level y = 0)", error)
+    r1 = [(scene%rigid(i)%d, i = 1, m)]
+    call w%add_var_1d("rigid_d", ["time"], r1, "m", "deformed arc length d of the line, Eq. (18)", error)
+    r1 = [(scene%rigid(i)%d_rigid, i = 1, m)]
+    call w%add_var_1d("rigid_d_rigid", ["time"], r1, "m", "equivalent rigid length d_rigid, Eq. (20)", error)
+    r1 = [(scene%rigid(i)%theta*rad2deg, i = 1, m)]
+    call w%add_var_1d("rigid_theta_deg", ["time"], r1, "degree", "Euler angle theta_rigid, Eq. (24)", error)
+    r1 = [(scene%rigid(i)%phi*rad2deg, i = 1, m)]
+    call w%add_var_1d("rigid_phi_deg", ["time"], r1, "degree", "Euler angle phi_rigid, Eq. (24)", error)
+    r1 = [(scene%rigid(i)%m_rigid, i = 1, m)]
+    call w%add_var_1d("rigid_mass", ["time"], r1, "kg", &
+      "equivalent mass m_rigid, Eq. (31) (translational kinetic-energy equivalence)", error)
+    do i = 1, m
+      r3(:, i) = scene%rigid(i)%j_rigid
+    end do
+    call w%add_var_2d("rigid_inertia", ["xyz ", "time"], r3, "kg m2", &
+      "equivalent moments of inertia about the virtual body's axes, Eq. (32)", error)
+    do i = 1, m
+      r3(:, i) = scene%rigid(i)%omega_body
+    end do
+    call w%add_var_2d("rigid_omega", ["xyz ", "time"], r3, "rad s-1", &
+      "angular velocity omega_rigid in the virtual body's axes (z along the line), Eq. (27)", error)
+    do i = 1, m
+      r3(:, i) = scene%rigid(i)%v_rigid
+    end do
+    call w%add_var_2d("rigid_velocity", ["xyz ", "time"], r3, "m s-1", &
+      "velocity V_rigid of the virtual body's centre (earth frame), Eq. (29)", error)
+    do i = 1, m
+      r3(:, i) = scene%rigid(i)%v_eps
+    end do
+    call w%add_var_2d("rigid_v_eps", ["xyz ", "time"], r3, "m s-1", &
+      "deformation velocity V_eps (earth frame), Eq. (25)", error)
+    call write_run_metadata(w, "line", "airlaunch: standalone flexible line", echo, error)
+    call w%add_text_att("/", "scheme", trim(scene%cfg%integration%scheme), error)
+    call w%add_real_att("/", "wall_time_s", scene%wall_time, error)
+    call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
+    call w%add_text_att("/", "status", merge("completed", "failed   ", scene%completed), error)
+    if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
+    call w%finish(error)
+  end subroutine write_output
 end module airlaunch_line_scene
