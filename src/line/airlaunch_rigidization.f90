@@ -39,13 +39,17 @@
 !>       take the translational part: m_rigid = sum m_k |u_k|^2 / |V_rigid|^2 with
 !>       u_k = v_k - omega x (x_k - x_c), which equals the line mass for any rigid
 !>       motion and (31)-with-the-fix for a pure translation.  The printed form
-!>       with the fix is kept as `m_rigid_eq31`.  If |V_rigid| is ~0 (relative
-!>       1e-9 of the largest node speed) m_rigid falls back to the line mass;
+!>       with the fix is kept as `m_rigid_eq31`.  If |V_rigid| is ~0 (below
+!>       1e-9 of the largest node speed, or below 1 um/s) m_rigid falls back to
+!>       the line mass.  Near that limit (31) is ill-conditioned by nature: a
+!>       deforming line whose centre hardly moves has a huge m_rigid; an owner
+!>       that feeds m_rigid to a rigid-body chain should bound it;
 !>  (32) J_i = sum m_k d_ki^2 w_ki^2 / omega_i^2, d_ki the distance of node k from
 !>       body axis i through the centre, w_k = r_k x (v_k - V_rigid)/|r_k|^2 the
 !>       node's angular velocity about the centre (body components); a rate
-!>       omega_i ~ 0 falls back to the geometric J_i = sum m_k d_ki^2 (the
-!>       inertia of the mass distribution about that axis).
+!>       omega_i ~ 0 (below 1e-9 of the largest rate, or below 1 urad/s) falls
+!>       back to the geometric J_i = sum m_k d_ki^2 (the inertia of the mass
+!>       distribution about that axis).
 module airlaunch_rigidization
   use airlaunch_kinds, only: dp
   use airlaunch_rotation, only: cross
@@ -83,6 +87,10 @@ module airlaunch_rigidization
 
   !> Relative size below which a rate counts as zero.
   real(dp), parameter :: rate_tol = 1.0e-9_dp
+  !> Absolute floors: a centre speed below 1 um/s, an angular rate below
+  !> 1 urad/s count as rest (a settled line keeps round-off motions of order
+  !> 1e-9 m/s whose ratios in (31)-(32) mean nothing).
+  real(dp), parameter :: speed_floor = 1.0e-6_dp, rate_floor = 1.0e-6_dp
 
 contains
 
@@ -165,7 +173,7 @@ contains
       u = v(:, k) - cross(q%omega, x(:, k) - q%centre)
       ke_t = ke_t + model%node_mass(k)*dot_product(u, u)
     end do
-    q%m_fallback = norm2(q%v_rigid) <= rate_tol*vmax .or. vmax == 0.0_dp
+    q%m_fallback = norm2(q%v_rigid) <= max(rate_tol*vmax, speed_floor)
     if (q%m_fallback) then
       q%m_rigid = q%line_mass
       q%m_rigid_eq31 = q%line_mass
@@ -194,7 +202,7 @@ contains
       end do
     end do
     do i = 1, 3
-      q%j_fallback(i) = abs(q%omega_body(i)) <= rate_tol*wmax .or. wmax == 0.0_dp
+      q%j_fallback(i) = abs(q%omega_body(i)) <= max(rate_tol*wmax, rate_floor)
       if (q%j_fallback(i)) then
         q%j_rigid(i) = jgeo(i)
       else
