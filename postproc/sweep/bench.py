@@ -4,14 +4,19 @@ Runs the first N_CASES cases of input/sweep_paper.nml's design (same base,
 fixed settings and ranges; default 48 cases) with airlaunch-sweep under
 mpirun, from a fresh journal each time, and reports cases per second of the
 running phase (from airlaunch-sweep's tally) and the parallel efficiency
-rate(2) / (2 rate(1)).  The load average before each run is printed: on a
-shared machine the other users' work shows up in the numbers.  Ends with one
-line `RESULT {json}`.
+rate(2) / (2 rate(1)).  On a shared machine the other users' work shows up
+in those numbers, so two more figures separate the sweep's own overhead from
+the contention for the cores: the busy fraction (the cases' summed wall time /
+(ranks x running time): 1 means no rank ever waited for work or for the
+others) and the CPU seconds per case (from getrusage of the children: it
+does not grow when the ranks merely share a core with other work).  The load
+average before each run is printed too.  Ends with one line `RESULT {json}`.
 """
 from __future__ import annotations
 
 import json
 import os
+import resource
 import pathlib
 import re
 import statistics
@@ -44,9 +49,19 @@ def bench_definition(n_cases: int, out_dir: pathlib.Path) -> str:
     return text
 
 
-def run(ranks: int, definition: pathlib.Path) -> tuple:
-    """One sweep from a fresh journal; returns (cases/s of the running phase, wall s, load)."""
+def busy_fraction(summary: pathlib.Path, ranks: int, elapsed: float) -> float:
+    """Summed case wall times over ranks x running time."""
+    import xarray as xr
+
+    with xr.open_dataset(summary) as s:
+        return float(s["wall_time_s"].sum()) / (ranks * elapsed)
+
+
+def run(ranks: int, definition: pathlib.Path, summary: pathlib.Path) -> dict:
+    """One sweep from a fresh journal: cases/s of the running phase, wall s,
+    busy fraction, CPU s per case, load before."""
     load = os.getloadavg()[0]
+    cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cmd = ["mpirun"]
     if os.geteuid() == 0:
         cmd.append("--allow-run-as-root")
@@ -57,12 +72,17 @@ def run(ranks: int, definition: pathlib.Path) -> tuple:
     t0 = time.perf_counter()
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
     wall = time.perf_counter() - t0
+    cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
     if res.returncode != 0:
         raise SystemExit(f"bench sweep: {' '.join(cmd)} failed:\n{res.stdout}\n{res.stderr}")
     m = TALLY.search(res.stdout)
     if not m or int(m.group(1)) != ranks:
         raise SystemExit(f"bench sweep: no tally line in the output:\n{res.stdout}")
-    return float(m.group(3)), wall, load
+    n = int(re.search(r"cases: (\d+) ok", res.stdout).group(1)) if "ok," in res.stdout else 0
+    elapsed = float(m.group(2))
+    return {"rate": float(m.group(3)), "wall": wall, "load": load, "busy": busy_fraction(summary, ranks, elapsed),
+            "cpu_per_case": cpu / max(n, 1)}
 
 
 def main(argv) -> int:
@@ -76,28 +96,33 @@ def main(argv) -> int:
         env = dict(os.environ, PYTHONPATH=str(ROOT))
         subprocess.run([sys.executable, "-m", "postproc.sweep", "table", str(definition)], check=True,
                        env=env, capture_output=True)
-        rates = {1: [], 2: []}
-        walls = {1: [], 2: []}
-        loads = []
+        runs = {1: [], 2: []}
         print(f"{n_cases} cases of input/sweep_paper.nml (15 s simulated each), {repeats} runs per rank count")
-        print(f"{'ranks':>5} {'cases/s':>9} {'wall [s]':>9} {'load before':>12}")
+        print(f"{'ranks':>5} {'cases/s':>9} {'wall [s]':>9} {'busy':>6} {'CPU s/case':>11} {'load before':>12}")
         for _ in range(repeats):
             for ranks in (1, 2):
-                rate, wall, load = run(ranks, definition)
-                rates[ranks].append(rate)
-                walls[ranks].append(wall)
-                loads.append(load)
-                print(f"{ranks:5d} {rate:9.3f} {wall:9.2f} {load:12.2f}")
-    r1 = statistics.median(rates[1])
-    r2 = statistics.median(rates[2])
+                r = run(ranks, definition, tmp / "out" / "summary.nc")
+                runs[ranks].append(r)
+                print(f"{ranks:5d} {r['rate']:9.3f} {r['wall']:9.2f} {r['busy']:6.3f} {r['cpu_per_case']:11.3f} "
+                      f"{r['load']:12.2f}")
+
+    def med(ranks, key):
+        return statistics.median(r[key] for r in runs[ranks])
+
+    r1, r2 = med(1, "rate"), med(2, "rate")
     eff = r2 / (2 * r1)
-    print(f"median: 1 rank {r1:.3f} cases/s, 2 ranks {r2:.3f} cases/s, parallel efficiency {100 * eff:.1f} %")
+    print(f"median: 1 rank {r1:.3f} cases/s, 2 ranks {r2:.3f} cases/s, parallel efficiency {100 * eff:.1f} %; "
+          f"busy fraction {med(1, 'busy'):.3f} / {med(2, 'busy'):.3f}, CPU per case {med(1, 'cpu_per_case'):.3f} / "
+          f"{med(2, 'cpu_per_case'):.3f} s")
     print(f"(this machine has {os.cpu_count()} cores; a load above 0 before a run means other work shared them)")
     result = {"bench": "sweep", "cases": n_cases, "repeats": repeats, "cases_per_s_1": round(r1, 4),
               "cases_per_s_2": round(r2, 4), "parallel_efficiency_2": round(eff, 4),
-              "median_wall_s_1": round(statistics.median(walls[1]), 3),
-              "median_wall_s_2": round(statistics.median(walls[2]), 3),
-              "max_load_before": round(max(loads), 2), "cores": os.cpu_count()}
+              "busy_fraction_1": round(med(1, "busy"), 4), "busy_fraction_2": round(med(2, "busy"), 4),
+              "cpu_s_per_case_1": round(med(1, "cpu_per_case"), 4),
+              "cpu_s_per_case_2": round(med(2, "cpu_per_case"), 4),
+              "median_wall_s_1": round(med(1, "wall"), 3), "median_wall_s_2": round(med(2, "wall"), 3),
+              "max_load_before": round(max(r["load"] for v in runs.values() for r in v), 2),
+              "cores": os.cpu_count()}
     print("RESULT " + json.dumps(result))
     return 0
 

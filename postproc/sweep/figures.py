@@ -34,6 +34,13 @@ def _padded(v, frac=0.03):
     return lo - pad, hi + pad
 
 
+def clear_boundary(prob, contrast=0.15):
+    """A boundary is drawn only where the map goes from clearly failing to
+    clearly passing (P below 0.5 - contrast and above 0.5 + contrast): a map
+    that hovers around 0.5 (the pair does not decide) has no boundary to show."""
+    return prob.min() < 0.5 - contrast and prob.max() > 0.5 + contrast
+
+
 def passfail_map(env, path, criterion="all"):
     """Pass/fail map with the boundary of the safe region for every pair of inputs."""
     inputs = env.attrs["inputs"].split()
@@ -56,11 +63,16 @@ def passfail_map(env, path, criterion="all"):
         y = env[b].values
         if np.ptp(x) > 0 and np.ptp(y) > 0:
             gx, gy, prob, h = pass_probability_map(x, y, passed)
-            cs = ax.contourf(gx, gy, prob, levels=np.linspace(0, 1, 11), cmap="RdYlGn", alpha=0.35)
-            if prob.min() < 0.5 < prob.max():
+            levels = np.linspace(0, 1, 11)
+            levels[-1] += 1e-9   # P = 1 exactly belongs to the top band
+            cs = ax.contourf(gx, gy, np.clip(prob, 0, 1), levels=levels, cmap="RdYlGn", alpha=0.35)
+            fig.colorbar(cs, ax=ax, label="P(pass)", ticks=np.linspace(0, 1, 6))
+            if clear_boundary(prob):
                 ax.contour(gx, gy, prob, levels=[0.5], colors="k", linewidths=1.6)
-            fig.colorbar(cs, ax=ax, label="P(pass)")
-            ax.set_title(f"{criterion}: boundary P(pass) = 0.5 (kernel h = {h:.3f})", fontsize=9)
+                ax.set_title(f"{criterion}: boundary P(pass) = 0.5 (kernel h = {h:.3f})", fontsize=9)
+            else:
+                ax.set_title(f"{criterion}: no boundary over this pair (P(pass) {prob.min():.2f}-{prob.max():.2f})",
+                             fontsize=9)
         ax.scatter(x[passed], y[passed], s=9, c=PASS_COLOUR, edgecolors="none", label="pass")
         ax.scatter(x[~passed & ok], y[~passed & ok], s=9, c=FAIL_COLOUR, edgecolors="none", label="fail")
         if (~ok).any():
