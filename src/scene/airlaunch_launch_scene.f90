@@ -24,6 +24,9 @@ module airlaunch_launch_scene
   implicit none
   private
   public :: launch_result, run_launch, setup_launch
+  ! helpers also used by the submodule airlaunch_launch_rigidized (gfortran 12
+  ! does not emit private module procedures for a submodule)
+  public :: write_milestones, event_or_minus, segment_distance
 
   !> Milestones of one run (also the summary row of a sweep case).
   type :: launch_result
@@ -42,6 +45,18 @@ module airlaunch_launch_scene
     real(dp) :: end_time = 0.0_dp
     type(cvode_stats) :: stats
   end type launch_result
+
+  interface
+    !> The scene with coupling (a), `&line coupling = 'rigidized'`: the line as
+    !> the virtual rigid body of the Kane chain (submodule airlaunch_launch_rigidized).
+    module subroutine run_rigidized(run, cfg, echo, res, error)
+      type(run_config), intent(in) :: run
+      type(scenario_config), intent(in) :: cfg
+      character(len=*), intent(in) :: echo
+      type(launch_result), intent(inout) :: res
+      type(error_type), allocatable, intent(inout) :: error
+    end subroutine run_rigidized
+  end interface
 
 contains
 
@@ -243,6 +258,10 @@ contains
     real(dp) :: tout
     integer :: k
 
+    if (cfg%line%coupling == "rigidized") then
+      call run_rigidized(run, cfg, echo, res, error)
+      return
+    end if
     call setup_launch(cfg, sys, y0, res, error)
     if (allocated(error)) return
     n = sys%line%n

@@ -77,7 +77,10 @@ module airlaunch_scenario_config
     real(dp) :: diameter = 0.025_dp         !< [m]
     real(dp) :: cd_normal = 1.2_dp
     real(dp) :: cd_tangential = 0.01_dp
-    character(len=16) :: coupling = "direct"  !< "direct" (nodes with the bodies)
+    character(len=16) :: coupling = "direct"  !< "direct" (nodes with the bodies) or "rigidized" (§2.4)
+    real(dp) :: outer_dt = 0.02_dp          !< rigidized: outer step of §2.4 Steps 3-6 [s]
+    real(dp) :: inner_rtol = 0.0_dp         !< rigidized: line sub-step tolerance (0: &run rtol)
+    character(len=16) :: far_end = "parachute"  !< rigidized: node N "parachute" (far-end force) or "chain"
   end type line_config
 
   !> Everything the air-launch scene reads.
@@ -441,18 +444,22 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
+    real(dp) :: outer_dt, inner_rtol
     integer :: n_seg, u, ios
-    character(len=16) :: coupling
+    character(len=16) :: coupling, far_end
     logical :: present
     character(len=256) :: msg
-    namelist /line/ length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling
-    type(nml_var), parameter :: vars(9) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
+    namelist /line/ length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling, &
+      outer_dt, inner_rtol, far_end
+    type(nml_var), parameter :: vars(12) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
       nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
       nml_var("diameter", "real"), nml_var("cd_normal", "real"), nml_var("cd_tangential", "real"), &
-      nml_var("coupling", "string")]
+      nml_var("coupling", "string"), nml_var("outer_dt", "real"), nml_var("inner_rtol", "real"), &
+      nml_var("far_end", "string")]
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
     cd_tangential = c%cd_tangential; coupling = c%coupling
+    outer_dt = c%outer_dt; inner_rtol = c%inner_rtol; far_end = c%far_end
     call open_group(f, "line", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -471,9 +478,16 @@ contains
     call require_positive(f, "line", "diameter", diameter, "m", error)
     call require_nonnegative(f, "line", "cd_normal", cd_normal, "", error)
     call require_nonnegative(f, "line", "cd_tangential", cd_tangential, "", error)
-    call require_choice(f, "line", "coupling", coupling, [character(len=16) :: "direct"], error)
+    call require_choice(f, "line", "coupling", coupling, [character(len=16) :: "direct", "rigidized"], error)
+    call require_range(f, "line", "outer_dt", outer_dt, 1.0e-5_dp, 0.1_dp, "s", error)
+    call require_range(f, "line", "inner_rtol", inner_rtol, 0.0_dp, 1.0e-2_dp, "(0: &run rtol)", error)
+    call require_choice(f, "line", "far_end", far_end, [character(len=16) :: "parachute", "chain"], error)
+    if (.not. allocated(error) .and. coupling == "rigidized" .and. far_end == "chain" .and. n_seg < 2) &
+      call fatal_error(error, f%path // ": &line: n_seg = " // str(n_seg) // " is not allowed with " // &
+        "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
     if (allocated(error)) return
-    c = line_config(length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling)
+    c = line_config(length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling, &
+      outer_dt, inner_rtol, far_end)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=line)
     call echo_namelist_unit(u, echo)
