@@ -10,7 +10,8 @@
 !> writes the summary (sorted by case id) atomically and prints the tally.
 !> Exit status: 0 done (failed cases are results, counted in the tally),
 !> 2 bad input (one line on stderr, before any case runs), 4 a file or MPI
-!> error while running.
+!> error while running.  --restart discards the journal and the kept
+!> trajectories of an earlier run.
 program airlaunch_sweep
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use, intrinsic :: iso_c_binding, only: c_int
@@ -20,7 +21,7 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: make_dir, file_exists
+  use airlaunch_sweep_files, only: make_dir, file_exists, delete_file
   use airlaunch_sweep_case, only: run_case, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -177,7 +178,13 @@ contains
       status = exit_runtime
       return
     end if
-    if (restart) call remove_journal(s%def%journal_dir())
+    if (restart) then
+      ! the rows and the kept trajectories of the earlier sweep go together
+      call remove_journal(s%def%journal_dir())
+      do k = 0, s%table%n_cases - 1
+        call delete_file(s%def%trajectory_path(k))
+      end do
+    end if
     call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error)
     if (allocated(error)) then
       status = exit_input
