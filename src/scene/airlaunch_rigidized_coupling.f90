@@ -194,6 +194,7 @@ module airlaunch_rigidized_coupling
     !> refreshes (the chain conserves them in between when the loads are internal).
     real(dp) :: momentum_jump(3) = 0.0_dp
     real(dp) :: angular_momentum_jump(3) = 0.0_dp
+    real(dp) :: kinetic_energy_jump = 0.0_dp        !< the same for the chain's kinetic energy [J]
     type(cvode_stats) :: chain_totals               !< chain counters before the last restart
     ! samples of the current outer step (relative frame)
     real(dp), private :: tie_x(3) = 0.0_dp, tie_v(3) = 0.0_dp, b3_x(3) = 0.0_dp, b3_v(3) = 0.0_dp
@@ -730,7 +731,7 @@ contains
   subroutine coupling_refresh(self, error)
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    real(dp) :: p0(3), h0(3)
+    real(dp) :: p0(3), h0(3), e0
     call self%line%unpack(self%t, self%line_solver%y)
     self%vl = virtual_line_body(self%line%model, self%line%x, self%line%v, self%opts%guard_band)
     if (self%vl%eq%degenerate) then
@@ -743,8 +744,10 @@ contains
     call self%chain%prepare(self%t, self%chain_solver%y)
     p0 = self%chain%sep%linear_momentum()
     h0 = self%chain%sep%angular_momentum()
+    e0 = self%chain%sep%kinetic_energy()
     call set_links(self, self%t, self%chain_solver%y, error)
     if (allocated(error)) return
+    self%kinetic_energy_jump = self%kinetic_energy_jump + self%chain%sep%kinetic_energy() - e0
     self%momentum_jump = self%momentum_jump + self%chain%sep%linear_momentum() - p0
     self%angular_momentum_jump = self%angular_momentum_jump + self%chain%sep%angular_momentum() - h0
     if (self%opts%restart_on_refresh) call self%restart_chain(error)
