@@ -138,6 +138,10 @@ contains
       do while (run%t_end - cpl%t > eps)
         t_target = min(cpl%t + ropt%outer_dt, run%t_end)
         if (run%t_end - t_target < 1.0e-6_dp*ropt%outer_dt) t_target = run%t_end
+        ! end on an output time when the step reaches it (no round-off slivers)
+        if (iout <= nout) then
+          if (abs(t_out(iout) - t_target) < 1.0e-6_dp*ropt%outer_dt) t_target = t_out(iout)
+        end if
         call cpl%begin_step(t_target, event, which, err, t_out(iout:nout))
         do j = 1, cpl%n_saved
           if (allocated(err)) exit

@@ -1,0 +1,172 @@
+"""Coupling (a), `&line coupling = 'rigidized'` (the paper's equivalent
+rigidization, §2.4 Steps 1-6, inside the Kane chain of §4.2), end to end on the
+paper scenario against coupling (b), 'direct', its accuracy reference
+(DESIGN §4).  The difference between the two is the cost of (a) in error.
+
+Measured at the paper file's settings (docs/model.md, "Coupling (a)"):
+phase times +0.024 ms, first pitch maximum +1.7 ms, nose elevation within
+0.034 deg and rocket CG within 4 cm over the 15 s, rocket-end tension within
+7 N.  Tolerances (each about 3-10x the measured value):
+  * Case 1->2 and separation times 0.2 ms: 10x the measured 0.024 ms and 10x
+    the direct model's own integration error at these tolerances (rtol 1e-6
+    vs 1e-9 moves them by 0.02 ms);
+  * first pitch maximum 5 ms: the flat maximum of the Euler pitch amplifies
+    attitude differences; 0.05 % of 10.5 s, half the 0.1 % bar of issue 7;
+  * nose elevation 0.1 deg, rocket CG 0.2 m (after 2.9 km of flight), tension
+    at the rocket end 50 N (0.06 % of the 78.8 kN pull), peak tension 10 N.
+The virtual body must follow the flexible line (d_rigid = its chord, m_rigid =
+its mass), B3 and the line's node N must agree (the parachute is modelled on
+both sides of the coupling), and `far_end = 'chain'` (both end motions from
+the chain) must show why it is not the default: d_rigid frozen and the line's
+tension stuck near its initial stretch.
+"""
+import re
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from conftest import ROOT, run_airlaunch
+
+PAPER = ROOT / "input" / "airlaunch_paper.nml"
+
+CONTRACT_VARS = ["phase", "aircraft_position", "aircraft_euler_deg", "aircraft_alpha_deg",
+                 "rocket_position", "rocket_velocity", "rocket_euler_deg", "rocket_pitch_rate_deg_s",
+                 "parachute_position", "line_tension_rocket_end_N", "line_tension_parachute_end_N",
+                 "line_nodes", "constraint_force", "clearance_m"]
+RIGIDIZED_VARS = ["m_rigid_kg", "j_rigid_kg_m2", "d_rigid_m", "rigid_line_force_N", "line_end_mismatch_m"]
+
+
+def variant(tmp_path, name, line=(), edits=()):
+    """The paper file with extra &line assignments and regex edits."""
+    text = PAPER.read_text()
+    for old, new in edits:
+        text, n = re.subn(old, new, text, flags=re.M)
+        assert n == 1, old
+    if line:
+        text, n = re.subn(r"^(  cd_tangential = 0.01 .*)$", lambda m: m.group(1) + "\n" + "\n".join(line), text,
+                          flags=re.M)
+        assert n == 1
+    p = tmp_path / f"{name}.nml"
+    p.write_text(text)
+    return p
+
+
+@pytest.fixture(scope="module")
+def paper_pair(airlaunch_exe, tmp_path_factory):
+    d = tmp_path_factory.mktemp("rigidized")
+    out = {}
+    for name, line in [("direct", ()), ("rigidized", ("  coupling = 'rigidized'",))]:
+        nc = d / f"{name}.nc"
+        res = run_airlaunch(airlaunch_exe, variant(d, name, line), "--output", nc)
+        assert res.returncode == 0, res.stderr
+        out[name] = xr.open_dataset(nc)
+    yield out["direct"], out["rigidized"]
+    for ds in out.values():
+        ds.close()
+
+
+def test_output_contract_and_rigidized_variables(paper_pair):
+    direct, rig = paper_pair
+    for name in CONTRACT_VARS + RIGIDIZED_VARS:
+        assert name in rig, name
+        assert rig[name].attrs.get("units"), f"{name} has no units"
+        assert rig[name].dims[0] == "time"
+    assert rig["line_nodes"].dims == ("time", "node", "xyz")
+    assert rig.sizes["node"] == 61 and rig.sizes["time"] == direct.sizes["time"]
+    np.testing.assert_array_equal(rig["time"].values, direct["time"].values)
+    assert rig.attrs["status"] == "completed"
+    assert rig.attrs["line_coupling"] == "rigidized"
+    assert rig.attrs["outer_dt_s"] == pytest.approx(0.02)
+    assert 'COUPLING="RIGIDIZED"' in rig.attrs["input_namelist"].upper().replace(" ", "")
+
+
+def test_virtual_body_follows_the_line(paper_pair):
+    _, rig = paper_pair
+    nodes = rig["line_nodes"].values
+    chord = np.linalg.norm(nodes[:, -1] - nodes[:, 0], axis=1)
+    # d_rigid (20) is the flexible line's chord; m_rigid (31) its mass, 0.4 kg/m x 60 m
+    # (kinetic-energy equivalent in the earth frame: the taut line moves almost rigidly)
+    np.testing.assert_allclose(rig["d_rigid_m"].values, chord, rtol=1e-12)
+    np.testing.assert_allclose(rig["m_rigid_kg"].values, 24.0, rtol=1e-3)
+    assert np.all(rig["j_rigid_kg_m2"].values > 0)
+    # the line stretches and relaxes with the pull: the chain's body follows (2 m)
+    assert chord.max() - chord.min() > 1.5
+    # the parachute is on both sides of the coupling: B3 and the line's node N agree
+    gap = np.linalg.norm(rig["parachute_position"].values - nodes[:, -1], axis=1)
+    np.testing.assert_allclose(gap, rig["line_end_mismatch_m"].values, rtol=1e-9, atol=1e-12)
+    assert gap.max() < 0.01
+    # the rigid line pulls the rocket like the flexible line's tension (0.2 %)
+    force = np.linalg.norm(rig["rigid_line_force_N"].values, axis=1)
+    tension = rig["line_tension_rocket_end_N"].values
+    assert np.max(np.abs(force - tension) / tension) < 2e-3
+    assert rig.attrs["min_rigid_line_tension_N"] > 4e4        # never pushes (the real line cannot)
+
+
+def test_milestones_match_direct(paper_pair):
+    direct, rig = paper_pair
+    a, b = direct.attrs, rig.attrs
+    assert b["release_time_s"] == pytest.approx(a["release_time_s"], abs=1e-12)
+    assert b["edge_time_s"] == pytest.approx(a["edge_time_s"], abs=2e-4)
+    assert b["separation_time_s"] == pytest.approx(a["separation_time_s"], abs=2e-4)
+    assert b["early_separation"] == a["early_separation"]
+    assert b["pitch_at_separation_deg"] == pytest.approx(a["pitch_at_separation_deg"], abs=0.01)
+    assert b["pitch_max_time_s"] == pytest.approx(a["pitch_max_time_s"], abs=5e-3)
+    assert b["pitch_max_deg"] == pytest.approx(a["pitch_max_deg"], abs=0.01)
+    assert b["peak_line_tension_N"] == pytest.approx(a["peak_line_tension_N"], abs=10.0)
+    assert b["min_clearance_m"] == pytest.approx(a["min_clearance_m"], abs=0.01)
+
+
+def test_trajectories_match_direct(paper_pair):
+    direct, rig = paper_pair
+    d_elev = np.abs(rig["rocket_nose_elevation_deg"].values - direct["rocket_nose_elevation_deg"].values)
+    d_pos = np.linalg.norm(rig["rocket_position"].values - direct["rocket_position"].values, axis=1)
+    d_ten = np.abs(rig["line_tension_rocket_end_N"].values - direct["line_tension_rocket_end_N"].values)
+    assert d_elev.max() < 0.1, d_elev.max()
+    assert d_pos.max() < 0.2, d_pos.max()
+    assert d_ten.max() < 50.0, d_ten.max()
+    np.testing.assert_array_equal(rig["phase"].values, direct["phase"].values)
+
+
+def test_far_end_chain_freezes_the_line(airlaunch_exe, tmp_path, paper_pair):
+    """Both end motions from the chain: |x_N - x_0| is the chain's own length
+    at every sample, so d_rigid never changes and the line's tension stays
+    near its initial stretch, while the direct model's pull falls by 17 %
+    in 6 s (the rocket slows down)."""
+    direct, _ = paper_pair
+    nml = variant(tmp_path, "chain", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
+                  edits=[(r"^  t_end = 15.0 .*$", "  t_end = 6.0")])
+    out = tmp_path / "chain.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        d = ds["d_rigid_m"].values
+        assert d.max() - d.min() < 1e-6
+        t_end_direct = direct["line_tension_rocket_end_N"].sel(time=6.0, method="nearest").item()
+        t_end_chain = ds["line_tension_rocket_end_N"].values[-1]
+        t0 = ds["line_tension_rocket_end_N"].values[0]
+        assert t_end_direct < 0.85 * t0
+        assert abs(t_end_chain - t0) < 0.05 * t0
+
+
+@pytest.mark.parametrize("line,fragment", [
+    (("  coupling = 'paper'",), "&line: coupling = 'paper' is not allowed (one of: direct, rigidized)"),
+    (("  coupling = 'rigidized'", "  outer_dt = 0.0"), "&line: outer_dt = 0.0 is not allowed"),
+    (("  coupling = 'rigidized'", "  inner_rtol = 0.5"), "&line: inner_rtol = 0.5 is not allowed"),
+    (("  coupling = 'rigidized'", "  far_end = 'aircraft'"), "&line: far_end = 'aircraft' is not allowed"),
+])
+def test_bad_rigidized_input_gives_one_clear_line(airlaunch_exe, tmp_path, line, fragment):
+    out = tmp_path / "x.nc"
+    res = run_airlaunch(airlaunch_exe, variant(tmp_path, "bad", line), "--output", out)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], res.stderr
+    assert not out.exists()
+
+
+def test_far_end_chain_needs_two_segments(airlaunch_exe, tmp_path):
+    nml = variant(tmp_path, "one", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
+                  edits=[(r"^  n_seg = 60 .*$", "  n_seg = 1")])
+    res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc")
+    assert res.returncode == 2
+    assert "n_seg = 1 is not allowed with far_end = 'chain'" in res.stderr
