@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Work-precision of the paper scenario: wall time against the error of the
+milestones, for a ladder of tolerances and line resolutions (and, when
+available, both line couplings), each against a converged reference.
+
+    bench_workprecision.py [--quick] [--figure docs/figures/workprecision_paper.png]
+
+Error of a run = the largest relative error of its milestones (Case 1->2 time,
+separation time, time of the first pitch maximum, time-averaged line tension
+at the rocket end over the run) against the reference (rtol 1e-9, atol 1e-10,
+N = 240).  Wall time: one core, no output file.  Prints a table, marks the
+Pareto front, says whether the default settings are on it, and ends with
+`RESULT {json}`."""
+import argparse
+import json
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+EXE = pathlib.Path(os.environ.get("AIRLAUNCH_EXE", ROOT / "build" / "release" / "bin" / "airlaunch"))
+BASE = (ROOT / "input" / "airlaunch_paper.nml").read_text()
+DEFAULT = ("direct", 1e-6, 60)
+
+
+def scenario(coupling, rtol, n, out):
+    text = re.sub(r"^\s*rtol\s*=.*$", f"  rtol = {rtol:.1e}", BASE, flags=re.M)
+    text = re.sub(r"^\s*atol\s*=.*$", f"  atol = {rtol / 10:.1e}", text, flags=re.M)
+    text = re.sub(r"^\s*n_seg\s*=.*$", f"  n_seg = {n}", text, flags=re.M)
+    text = re.sub(r"^\s*output\s*=.*$", f"  output = '{out}'", text, flags=re.M)
+    if coupling != "direct":
+        text = re.sub(r"^(&line\b.*)$", rf"\1\n  coupling = '{coupling}'", text, count=1, flags=re.M)
+    return text
+
+
+def run(coupling, rtol, n, repeats=1):
+    """Milestones and the best-of-`repeats` wall time of one setting."""
+    import xarray as xr
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = pathlib.Path(tmp)
+        # timing run: no output file
+        nml = tmp / "t.nml"
+        nml.write_text(re.sub(r"^\s*output\s*=.*$", "  trajectory = .false.",
+                              scenario(coupling, rtol, n, tmp / "x.nc"), flags=re.M))
+        cmd = [str(EXE), str(nml)]
+        if shutil.which("taskset"):
+            cmd = ["taskset", "-c", "0"] + cmd
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+        walls = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            res = subprocess.run(cmd, capture_output=True, text=True, env=env)
+            walls.append(time.perf_counter() - t0)
+            if res.returncode != 0:
+                return None
+        # milestone run: with output (the tension history)
+        out = tmp / "m.nc"
+        nml2 = tmp / "m.nml"
+        nml2.write_text(scenario(coupling, rtol, n, out))
+        res = subprocess.run([str(EXE), str(nml2)], capture_output=True, text=True, env=env)
+        if res.returncode != 0:
+            return None
+        with xr.open_dataset(out) as ds:
+            m = {"edge": ds.attrs["edge_time_s"], "separation": ds.attrs["separation_time_s"],
+                 "pitch_max": ds.attrs["pitch_max_time_s"],
+                 "mean_tension": float(ds["line_tension_rocket_end_N"].mean())}
+        steps = re.search(r"(\d+) steps", res.stdout)
+        return {"wall": min(walls), "steps": int(steps.group(1)) if steps else None, **m}
+
+
+def error(r, ref):
+    return max(abs(r[k] - ref[k]) / abs(ref[k]) for k in ("edge", "separation", "pitch_max", "mean_tension"))
+
+
+def pareto(points):
+    """Indices of the points no other point beats in both time and error."""
+    front = []
+    for i, (t, e) in enumerate(points):
+        if not any((t2 <= t and e2 <= e) and (t2 < t or e2 < e) for j, (t2, e2) in enumerate(points) if j != i):
+            front.append(i)
+    return front
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="fewer settings (a smoke run)")
+    ap.add_argument("--figure", default=str(ROOT / "output" / "workprecision_paper.png"))
+    ap.add_argument("--couplings", default="direct", help="comma list: direct,rigidized")
+    args = ap.parse_args()
+    rtols = [1e-3, 1e-5, 1e-6, 1e-7] if args.quick else [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
+    ns = [15, 60] if args.quick else [15, 30, 60, 120, 240]
+    couplings = args.couplings.split(",")
+    print("reference: rtol 1e-9, atol 1e-10, N = 240, direct coupling ...", flush=True)
+    ref = run("direct", 1e-9, 240)
+    if ref is None:
+        sys.exit("bench workprecision: the reference run failed")
+    print(f"  {ref}")
+    rows = []
+    for c in couplings:
+        for n in ns:
+            for rtol in rtols:
+                r = run(c, rtol, n, repeats=3)
+                if r is None:
+                    print(f"{c:10s} N={n:4d} rtol={rtol:.0e}: failed")
+                    continue
+                rows.append({"coupling": c, "n": n, "rtol": rtol, **r, "error": error(r, ref)})
+    front = set(pareto([(r["wall"], r["error"]) for r in rows]))
+    print(f"\n{'coupling':10s} {'N':>4s} {'rtol':>7s} {'steps':>7s} {'wall [s]':>9s} {'error':>9s}  front")
+    for i, r in enumerate(rows):
+        print(f"{r['coupling']:10s} {r['n']:4d} {r['rtol']:7.0e} {r['steps'] or 0:7d} {r['wall']:9.3f} "
+              f"{r['error']:9.2e}  {'*' if i in front else ''}")
+    default = next((i for i, r in enumerate(rows) if (r["coupling"], r["rtol"], r["n"]) == DEFAULT), None)
+    on_front = default in front if default is not None else None
+    print(f"\ndefault (direct, rtol 1e-6, N = 60) on the Pareto front: {on_front}")
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for c in couplings:
+            for n in ns:
+                pts = [(r["wall"], max(r["error"], 1e-8)) for r in rows if r["coupling"] == c and r["n"] == n]
+                if pts:
+                    ax.loglog(*zip(*pts), "o-", label=f"{c}, N = {n}")
+        if default is not None:
+            ax.loglog(rows[default]["wall"], max(rows[default]["error"], 1e-8), "k*", ms=14, label="default")
+        ax.set_xlabel("wall time per run [s] (one core)")
+        ax.set_ylabel("largest relative milestone error")
+        ax.set_title("paper scenario: work-precision (tolerance ladder along each curve)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+        pathlib.Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(args.figure, dpi=110, bbox_inches="tight")
+        print(f"figure: {args.figure}")
+    except Exception as exc:  # the table and RESULT are the product; the figure is a convenience
+        print(f"figure not drawn: {exc}")
+    print("RESULT " + json.dumps({"bench": "workprecision_paper", "reference": ref, "default_on_pareto_front": on_front,
+                                  "runs": [{k: (float(f"{v:.6g}") if isinstance(v, float) else v) for k, v in r.items()}
+                                           for r in rows]}))
+
+
+if __name__ == "__main__":
+    main()
