@@ -26,94 +26,149 @@ program bench_line
   implicit none
   integer, parameter :: ns(3) = [20, 60, 200], n_ref = 400
   real(dp), parameter :: t_end = 2.0_dp, rho_air = 0.41351_dp, v_air = 194.7_dp
-  real(dp), parameter :: rtols(9) = [1.0e-2_dp, 3.0e-3_dp, 1.0e-3_dp, 3.0e-4_dp, 1.0e-4_dp, 3.0e-5_dp, &
+  integer, parameter :: n_rec = 41    ! tip recorded every t_end/40 = 0.05 s
+  integer, parameter :: nr = 9
+  real(dp), parameter :: rtols(nr) = [1.0e-2_dp, 3.0e-3_dp, 1.0e-3_dp, 3.0e-4_dp, 1.0e-4_dp, 3.0e-5_dp, &
     1.0e-5_dp, 3.0e-6_dp, 1.0e-6_dp]
   real(dp), parameter :: rtol_default = 1.0e-5_dp
-  integer, parameter :: n_rec = 41    ! tip recorded every t_end/40 = 0.05 s
-  real(dp) :: tip_inf(3, n_rec), tip_n(3, n_rec), tip(3, n_rec)
-  real(dp) :: wall, err_t, err_s, wall_m, err_m, err_ms, best_wall, best_err, best_rtol
-  real(dp) :: wall_d, err_d, err_ds, speedup(3), dt_m, mm_wall, mm_rtol, speedup_mm(3)
+  real(dp) :: tip_inf(3, n_rec), tip_n(3, n_rec), tip(3, n_rec), wall
+  real(dp) :: err_s(3), dt_m(3), wall_m(3), err_m(3), err_ms(3)
+  real(dp) :: wall_c(nr, 3), err_c(nr, 3), errt_c(nr, 3)
+  real(dp) :: sp_same(3), sp_acc(3), sp_mm(3), best
+  integer :: bj_same(3), bj_acc(3), bi_acc(3), bj_mm(3)
+  integer(8) :: steps, steps_m(3), steps_c(nr, 3)
   character(len=:), allocatable :: json, rows
-  integer :: i, j
-  integer(8) :: steps, steps_m, steps_d
   character(len=32) :: arg
-  real(dp) :: c_d
+  real(dp) :: c_d, ea, rho
+  integer :: i, j, k
 
   c_d = 1000.0_dp
+  ea = 1.0e6_dp
+  rho = 0.3_dp
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg)
     if (arg == "single") then
       call single()
       stop
     end if
-    ! bench-line [C_D]: the same benchmark with another axial damping [N s]
+    ! bench-line [C_D [EA [RHO]]]: the same benchmark with another axial damping
+    ! [N s], stiffness [N], mass per length [kg/m] (sensitivity runs)
     read(arg, *) c_d
+    if (command_argument_count() >= 2) then
+      call get_command_argument(2, arg)
+      read(arg, *) ea
+    end if
+    if (command_argument_count() >= 3) then
+      call get_command_argument(3, arg)
+      read(arg, *) rho
+    end if
   end if
-  print '(a)', "bench line: 60 m line, EA 1 MN, c_d " // str(c_d) // " N s, parachute end, nose oscillating, " // &
-    "2 s simulated"
+  print '(a)', "bench line: 60 m line, EA " // str(ea) // " N, " // str(rho) // " kg/m, c_d " // str(c_d) // &
+    " N s, parachute end, nose oscillating, 2 s simulated"
   call run("cvode", n_ref, 1.0e-10_dp, 0.0_dp, tip_inf, wall, steps, 1, 5)
   print '(a, i0, a, 3f14.8, a, f8.2, a)', "converged reference: N = ", n_ref, ", cvode BDF5 rtol 1e-10: tip ", &
     tip_inf(:, n_rec), " m at t_end (", wall, " s)"
-  print '(a)', "tip error = largest distance of the tip (node N) from the reference's over the 41 outputs (every 0.05 s)"
+  print '(a)', "tip error = largest distance of the tip (node N) from the reference's over the 41 outputs " // &
+    "(every 0.05 s); wall = best of 3"
   print '(a)', ""
   print '(a)', "   N  scheme    setting           wall/sim-s [s]   steps    tip error [m]     tip error [m]"
   print '(a)', "                                                            vs same-N ref     vs converged"
-  rows = ""
   do i = 1, size(ns)
+    ! same-N reference: the semi-discretization integrated to 1e-11
     call run("cvode", ns(i), 1.0e-11_dp, 0.0_dp, tip_n, wall, steps, 1, 5)
-    err_s = max_dist(tip_n, tip_inf)
-    ! paper scheme at 0.9 of its stability limit
-    dt_m = 0.9_dp*stable_dt(ns(i))
-    call run("marching", ns(i), 0.0_dp, dt_m, tip, wall_m, steps_m, 3)
-    err_m = max_dist(tip, tip_n)
-    err_ms = max_dist(tip, tip_inf)
-    ! default scheme at its default tolerance
-    call run("cvode", ns(i), rtol_default, 0.0_dp, tip, wall_d, steps_d, 3)
-    err_d = max_dist(tip, tip_n)
-    err_ds = max_dist(tip, tip_inf)
-    print '(i4, 2x, a, es9.2, 9x, es12.4, i10, 2es17.4)', ns(i), "marching  dt = ", dt_m, wall_m/t_end, steps_m, &
-      err_m, err_ms
-    print '(i4, 2x, a, es9.2, 9x, es12.4, i10, 2es17.4)', ns(i), "cvode     rtol = ", rtol_default, wall_d/t_end, &
-      steps_d, err_d, err_ds
-    ! the cheapest CVODE tolerance that reaches the paper scheme's error, and 1 mm
-    best_wall = huge(1.0_dp); best_err = -1; best_rtol = -1
-    mm_wall = huge(1.0_dp); mm_rtol = -1
-    do j = 1, size(rtols)
-      call run("cvode", ns(i), rtols(j), 0.0_dp, tip, wall, steps, 3)
-      err_t = max_dist(tip, tip_n)
-      print '(i4, 2x, a, es9.2, 9x, es12.4, i10, es17.4)', ns(i), "cvode     rtol = ", rtols(j), wall/t_end, steps, err_t
-      if (err_t <= err_m .and. wall < best_wall) then
-        best_wall = wall; best_err = err_t; best_rtol = rtols(j)
-      end if
-      if (err_t <= 1.0e-3_dp .and. wall < mm_wall) then
-        mm_wall = wall; mm_rtol = rtols(j)
+    err_s(i) = max_dist(tip_n, tip_inf)
+    ! paper scheme at 0.9 of its stability limit (its cheapest setting)
+    dt_m(i) = 0.9_dp*stable_dt(ns(i))
+    call run("marching", ns(i), 0.0_dp, dt_m(i), tip, wall_m(i), steps_m(i), 3)
+    err_m(i) = max_dist(tip, tip_n)
+    err_ms(i) = max_dist(tip, tip_inf)
+    print '(i4, 2x, a, es9.2, 9x, es12.4, i10, 2es17.4)', ns(i), "marching  dt = ", dt_m(i), wall_m(i)/t_end, &
+      steps_m(i), err_m(i), err_ms(i)
+    do j = 1, nr
+      call run("cvode", ns(i), rtols(j), 0.0_dp, tip, wall_c(j, i), steps_c(j, i), 3)
+      err_c(j, i) = max_dist(tip, tip_n)
+      errt_c(j, i) = max_dist(tip, tip_inf)
+      print '(i4, 2x, a, es9.2, a, es12.4, i10, 2es17.4)', ns(i), "cvode     rtol = ", rtols(j), &
+        merge(" (default)", "          ", rtols(j) == rtol_default), wall_c(j, i)/t_end, steps_c(j, i), &
+        err_c(j, i), errt_c(j, i)
+    end do
+    print '(a, i0, a, es10.3, a)', "  discretization error of N = ", ns(i), ": ", err_s(i), " m"
+    print '(a)', ""
+  end do
+
+  ! A. same N (same semi-discretization): the cheapest tolerance reaching the paper scheme's error
+  ! B. equal accuracy of the physical answer: the paper run's error against the converged
+  !    solution, reached by the cheapest default run of any N and tolerance
+  ! C. 1 mm against the same-N reference
+  print '(a)', "comparison                     paper run (N, wall/sim-s, error)      cvode run (N, rtol, " // &
+    "wall/sim-s, error)      speedup"
+  do i = 1, size(ns)
+    best = huge(1.0_dp); bj_same(i) = 0
+    do j = 1, nr
+      if (err_c(j, i) <= err_m(i) .and. wall_c(j, i) < best) then
+        best = wall_c(j, i); bj_same(i) = j
       end if
     end do
-    speedup(i) = wall_m/best_wall
-    speedup_mm(i) = wall_m/mm_wall
-    print '(a, i0, a, es9.2, a, es9.2, a, es9.2, a, f8.1, a)', "  N = ", ns(i), ": paper scheme error ", err_m, &
-      " m; cvode reaches it at rtol ", best_rtol, " (error ", best_err, " m): ", speedup(i), "x faster"
-    print '(a, i0, a, es9.2, a, f8.1, a)', "  N = ", ns(i), ": at 1 mm (the paper scheme cannot go cheaper than " // &
-      "its stability limit), cvode rtol ", mm_rtol, ": ", speedup_mm(i), "x faster"
-    print '(a)', ""
+    sp_same(i) = wall_m(i)/best
+    best = huge(1.0_dp); bj_acc(i) = 0; bi_acc(i) = 0
+    do k = 1, size(ns)
+      do j = 1, nr
+        if (errt_c(j, k) <= err_ms(i) .and. wall_c(j, k) < best) then
+          best = wall_c(j, k); bj_acc(i) = j; bi_acc(i) = k
+        end if
+      end do
+    end do
+    sp_acc(i) = wall_m(i)/best
+    best = huge(1.0_dp); bj_mm(i) = 0
+    do j = 1, nr
+      if (err_c(j, i) <= 1.0e-3_dp .and. wall_c(j, i) < best) then
+        best = wall_c(j, i); bj_mm(i) = j
+      end if
+    end do
+    sp_mm(i) = wall_m(i)/best
+    call compare("A same N, paper's error      ", i, i, bj_same(i), err_m(i), err_c(bj_same(i), i), sp_same(i))
+    call compare("B equal accuracy, any N      ", i, bi_acc(i), bj_acc(i), err_ms(i), &
+      errt_c(bj_acc(i), bi_acc(i)), sp_acc(i))
+    call compare("C same N, 1 mm               ", i, i, bj_mm(i), err_m(i), err_c(bj_mm(i), i), sp_mm(i))
+  end do
+
+  rows = ""
+  do i = 1, size(ns)
     if (i > 1) rows = rows // ", "
+    j = minloc(abs(rtols - rtol_default), 1)
     rows = rows // '{"N": ' // str(ns(i)) // &
-      ', "marching": {"dt": ' // jnum(dt_m) // ', "wall_per_sim_s": ' // jnum(wall_m/t_end) // &
-      ', "tip_error_time_m": ' // jnum(err_m) // ', "tip_error_total_m": ' // jnum(err_ms) // '}' // &
-      ', "cvode": {"rtol": ' // jnum(rtol_default) // ', "wall_per_sim_s": ' // jnum(wall_d/t_end) // &
-      ', "tip_error_time_m": ' // jnum(err_d) // ', "tip_error_total_m": ' // jnum(err_ds) // '}' // &
-      ', "cvode_at_paper_error": {"rtol": ' // jnum(best_rtol) // ', "wall_per_sim_s": ' // &
-      jnum(best_wall/t_end) // ', "tip_error_time_m": ' // jnum(best_err) // '}' // &
-      ', "speedup_at_paper_error": ' // jnum(speedup(i)) // ', "speedup_at_1mm": ' // jnum(speedup_mm(i)) // &
-      ', "discretization_error_m": ' // jnum(err_s) // '}'
+      ', "marching": {"dt": ' // jnum(dt_m(i)) // ', "wall_per_sim_s": ' // jnum(wall_m(i)/t_end) // &
+      ', "tip_error_time_m": ' // jnum(err_m(i)) // ', "tip_error_total_m": ' // jnum(err_ms(i)) // '}' // &
+      ', "cvode": {"rtol": ' // jnum(rtol_default) // ', "wall_per_sim_s": ' // jnum(wall_c(j, i)/t_end) // &
+      ', "tip_error_time_m": ' // jnum(err_c(j, i)) // ', "tip_error_total_m": ' // jnum(errt_c(j, i)) // '}' // &
+      ', "speedup_same_N_at_paper_error": ' // jnum(sp_same(i)) // &
+      ', "cvode_rtol_same_N": ' // jnum(rtols(bj_same(i))) // &
+      ', "speedup_equal_accuracy": ' // jnum(sp_acc(i)) // &
+      ', "cvode_N_equal_accuracy": ' // str(ns(bi_acc(i))) // &
+      ', "cvode_rtol_equal_accuracy": ' // jnum(rtols(bj_acc(i))) // &
+      ', "speedup_same_N_at_1mm": ' // jnum(sp_mm(i)) // &
+      ', "discretization_error_m": ' // jnum(err_s(i)) // '}'
   end do
   json = '{"bench": "line", "t_sim_s": ' // jnum(t_end) // ', "damping_Ns": ' // jnum(c_d) // &
-    ', "reference_N": ' // str(n_ref) // &
-    ', "rows": [' // rows // '], "min_speedup_at_paper_error": ' // jnum(minval(speedup)) // &
-    ', "meets_10x": ' // merge("true ", "false", minval(speedup) >= 10.0_dp) // '}'
+    ', "ea_N": ' // jnum(ea) // ', "mass_per_length_kg_m": ' // jnum(rho) // &
+    ', "reference_N": ' // str(n_ref) // ', "rows": [' // rows // ']' // &
+    ', "min_speedup_same_N_at_paper_error": ' // jnum(minval(sp_same)) // &
+    ', "min_speedup_equal_accuracy": ' // jnum(minval(sp_acc)) // &
+    ', "meets_10x_same_N": ' // merge("true ", "false", minval(sp_same) >= 10.0_dp) // &
+    ', "meets_10x_equal_accuracy": ' // merge("true ", "false", minval(sp_acc) >= 10.0_dp) // '}'
+  print '(a)', ""
   print '(a)', "RESULT " // trim(json)
 
 contains
+
+  !> One line of the comparison table.
+  subroutine compare(what, i, k, j, e_paper, e_cvode, speedup)
+    character(len=*), intent(in) :: what
+    integer, intent(in) :: i, k, j
+    real(dp), intent(in) :: e_paper, e_cvode, speedup
+    print '(a, i5, es12.4, es11.3, 6x, i5, es10.2, es12.4, es11.3, f10.1, a)', what, ns(i), wall_m(i)/t_end, &
+      e_paper, ns(k), rtols(j), wall_c(j, k)/t_end, e_cvode, speedup, "x"
+  end subroutine compare
 
   !> One run from the command line: bench-line single <scheme> <N> <rtol|dt> [max_order]
   !> (a diagnostic to study one setting; prints the work counters).
@@ -173,7 +228,7 @@ contains
     integer, intent(in) :: n
     type(line_scene_config) :: cfg
     real(dp) :: eps0
-    cfg%line = line_params(length=60.0_dp, n_seg=n, ea=1.0e6_dp, mass_per_length=0.3_dp, damping=c_d, &
+    cfg%line = line_params(length=60.0_dp, n_seg=n, ea=ea, mass_per_length=rho, damping=c_d, &
       diameter=0.025_dp, cd_normal=1.2_dp, cd_tangential=0.01_dp, gravity=.true., air=.true., &
       wind=[-v_air, 0.0_dp, 0.0_dp], air_density=rho_air)
     eps0 = 0.5_dp*rho_air*10.0_dp*v_air**2/cfg%line%ea
