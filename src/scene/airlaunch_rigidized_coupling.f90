@@ -399,6 +399,7 @@ contains
     end if
   end subroutine chain_prepare
 
+  !> Chain right-hand side: the separation system's (Kane + CFA) in the relative frame.
   subroutine chain_rhs(self, t, y, ydot, status)
     class(rigidized_chain), intent(inout) :: self
     real(dp), intent(in) :: t
@@ -415,12 +416,15 @@ contains
     ydot(14) = ydot(14) - self%v_ref
   end subroutine chain_rhs
 
+  !> Number of event functions.
   integer function chain_nroots_fn(self)
     class(rigidized_chain), intent(in) :: self
     chain_nroots_fn = rigidized_nroots
     if (.false.) chain_nroots_fn = self%iloads
   end function chain_nroots_fn
 
+  !> Event functions: the separation scene's and, in Case 3 until found, the
+  !> rocket's Euler pitch rate (its first maximum).
   subroutine chain_roots(self, t, y, g, status)
     class(rigidized_chain), intent(inout) :: self
     real(dp), intent(in) :: t
@@ -593,6 +597,10 @@ contains
     self%opts = opts
     if (.not. (opts%outer_dt > 0.0_dp)) then
       call fatal_error(error, "rigidized coupling: outer_dt = " // str(opts%outer_dt) // " s must be > 0")
+      return
+    end if
+    if (.not. (opts%guard_band >= 1.0_dp)) then
+      call fatal_error(error, "rigidized coupling: guard_band = " // str(opts%guard_band) // " must be >= 1")
       return
     end if
     if (sep%chain%n /= 3) then
