@@ -1,10 +1,19 @@
 !> Benchmark of the two line integrators (issue 3, "Performance"): for N = 20,
 !> 60, 200 and each scheme, wall time per simulated second and the error of
-!> the tip (node N) position against converged references (the largest
+!> the tip (node N) position against converged references - the largest
 !> distance over 41 outputs, so that a lucky cancellation at one instant
-!> cannot pass for accuracy), then the
-!> cost of the default scheme at the paper scheme's error.  Ends with one line
-!> `RESULT {json}`.  Run through `scripts/bench line`.
+!> cannot pass for accuracy - against the same-N semi-discretization
+!> integrated to 1e-11 (time error) and against N = 400 (total error).  The
+!> paper's marching scheme runs at 0.9 of its stability limit (its cheapest
+!> setting), CVODE over a tolerance sweep.  Then the default scheme's cost
+!>  A. at the same N, reaching the paper scheme's error;
+!>  B. reaching the paper run's error against the converged answer with any
+!>     of the three N (equal accuracy of the physical answer);
+!>  C. at the same N, reaching 1 mm.
+!> Ends with one line `RESULT {json}`.  Run through `scripts/bench line`
+!> (optional arguments: axial damping c_d [N s] (1000), EA [N] (1e6), mass per
+!> length [kg/m] (0.3)); `bench-line single SCHEME N RTOL|DT [MAX_ORDER]` runs
+!> one setting and prints its work counters.
 !>
 !> Scenario ("paper line", documented in docs/line.md): the 60 m line of the
 !> paper's scene trailing a parachute in the air stream of a carrier at
