@@ -58,7 +58,7 @@ program bench_line
     call get_command_argument(1, arg)
     if (arg == "single") then
       call single()
-      stop
+      stop 0, quiet=.true.
     end if
     ! bench-line [C_D [EA [RHO]]]: the same benchmark with another axial damping
     ! [N s], stiffness [N], mass per length [kg/m] (sensitivity runs)
