@@ -105,6 +105,8 @@ module airlaunch_separation
     procedure :: roots => sep_roots
     procedure :: handle_event => sep_handle_event
     procedure :: normalize_quaternions => sep_normalize_quaternions
+    procedure :: has_projection => sep_has_projection
+    procedure :: project => sep_project
     procedure :: advance => sep_advance
     procedure :: linear_momentum => sep_linear_momentum
     procedure :: angular_momentum => sep_angular_momentum
@@ -546,6 +548,25 @@ contains
       y(o+1:o+4) = y(o+1:o+4)/norm2(y(o+1:o+4))
     end do
   end subroutine sep_normalize_quaternions
+
+  !> The scene projects its quaternions onto unit norm after every CVODE step
+  !> (CVodeSetProjFn), so the norm error stays at round-off whatever the tolerance.
+  logical function sep_has_projection(self)
+    class(separation_system), intent(in) :: self   !< the scene
+    sep_has_projection = .true.
+    if (.false.) sep_has_projection = self%phase > 0
+  end function sep_has_projection
+
+  !> Projection callback: unit quaternions.
+  subroutine sep_project(self, t, y, status)
+    class(separation_system), intent(inout) :: self  !< the scene
+    real(dp), intent(in) :: t                        !< time [s]
+    real(dp), intent(inout) :: y(:)                  !< state, projected in place
+    integer, intent(out) :: status                   !< rhs_ok
+    call self%normalize_quaternions(y)
+    status = rhs_ok
+    if (.false.) y(1) = t
+  end subroutine sep_project
 
   !> Total linear momentum of the loaded bodies, earth [kg m/s].
   function sep_linear_momentum(self) result(p)

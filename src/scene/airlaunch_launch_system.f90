@@ -60,6 +60,8 @@ module airlaunch_launch_system
     procedure :: prepare => launch_prepare
     procedure :: to_absolute => launch_to_absolute
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
+    procedure :: has_projection => launch_has_projection
+    procedure :: project => launch_project
   end type launch_system
 
 contains
@@ -169,6 +171,21 @@ contains
     end if
     if (self%find_pitch_max .and. self%sep%phase == phase_free) g(launch_nroots) = self%euler_pitch_rate()
   end subroutine launch_roots
+
+  !> Unit quaternions after every step (the rigid part's projection).
+  logical function launch_has_projection(self)
+    class(launch_system), intent(in) :: self
+    launch_has_projection = .true.
+    if (.false.) launch_has_projection = self%iloads > 0
+  end function launch_has_projection
+
+  subroutine launch_project(self, t, y, status)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t
+    real(dp), intent(inout) :: y(:)
+    integer, intent(out) :: status
+    call self%sep%project(t, y(1:rigid_size), status)
+  end subroutine launch_project
 
   !> Euler pitch rate of the rocket [rad/s] from its body rates (no
   !> singularity): theta' = sin(gamma) w_y + cos(gamma) w_z (Eqs. (49)-(50)).

@@ -185,6 +185,13 @@ contains
     if (opts%initial_step > 0.0_dp) ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
     if (opts%max_order > 0) ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
     ierr = FCVodeSetMaxHnilWarns(self%mem, -1_c_int)
+    if (sys%has_projection() .and. lmm == CV_BDF) then
+      ierr = FCVodeSetProjFn(self%mem, c_funloc(proj_callback))
+      if (ierr /= 0) then
+        call fatal_error(error, "CVODE: cannot install the projection (flag " // str(int(ierr)) // ")")
+        return
+      end if
+    end if
     if (opts%stability_limit_detection) ierr = FCVodeSetStabLimDet(self%mem, 1_c_int)
     call self%set_roots(sys%nroots(), error)
   end subroutine solver_init
@@ -346,6 +353,25 @@ contains
     call cb%sys%rhs(t, y, ydot, status)
     ierr = int(status, c_int)
   end function rhs_callback
+
+  !> CVODE projection callback: corr = P(y) - y.
+  integer(c_int) function proj_callback(t, nv_y, nv_corr, eps, err, user_data) result(ierr) bind(C)
+    real(c_double), value :: t, eps
+    type(N_Vector) :: nv_y, nv_corr
+    type(c_ptr), value :: err, user_data
+    type(callback_data), pointer :: cb
+    real(c_double), pointer :: y(:), corr(:)
+    integer :: status
+    call c_f_pointer(user_data, cb)
+    y => FN_VGetArrayPointer(nv_y)
+    corr => FN_VGetArrayPointer(nv_corr)
+    corr = y
+    call cb%sys%project(t, corr, status)
+    corr = corr - y
+    ierr = 0
+    if (status /= rhs_ok) ierr = -1
+    if (.false.) ierr = int(merge(1, 0, c_associated(err) .and. eps > 0), c_int)
+  end function proj_callback
 
   !> CVODE event-function callback.
   integer(c_int) function root_callback(t, nv_y, gout, user_data) result(ierr) bind(C)

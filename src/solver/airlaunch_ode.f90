@@ -19,6 +19,8 @@ module airlaunch_ode
     procedure(rhs_interface), deferred :: rhs
     procedure :: nroots => ode_nroots
     procedure :: roots => ode_roots
+    procedure :: has_projection => ode_has_projection
+    procedure :: project => ode_project
   end type ode_system
 
   abstract interface
@@ -53,4 +55,23 @@ contains
     status = rhs_ok
     if (.false.) g = t + y(1) + len(self%failure)
   end subroutine ode_roots
+
+  !> True if the system projects its state onto an invariant manifold after
+  !> each step (e.g. unit quaternions); the solver then installs `project`.
+  logical function ode_has_projection(self)
+    class(ode_system), intent(in) :: self   !< the system
+    ode_has_projection = .false.
+    if (.false.) ode_has_projection = allocated(self%failure)
+  end function ode_has_projection
+
+  !> Projection: y is replaced by the nearest state on the manifold (default:
+  !> unchanged).  Called by CVODE after each step when has_projection is true.
+  subroutine ode_project(self, t, y, status)
+    class(ode_system), intent(inout) :: self  !< the system
+    real(dp), intent(in) :: t                 !< time [s]
+    real(dp), intent(inout) :: y(:)           !< state, projected in place
+    integer, intent(out) :: status            !< rhs_ok or rhs_fatal
+    status = rhs_ok
+    if (.false.) y(1) = t + len(self%failure)
+  end subroutine ode_project
 end module airlaunch_ode
