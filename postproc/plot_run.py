@@ -7,6 +7,7 @@ Scenes register a drawing function in PLOTTERS.
 import sys
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -75,7 +76,30 @@ def plot_airlaunch(ds, fig):
     ax3.legend(fontsize=7)
 
 
-PLOTTERS = {"drop": plot_drop, "airlaunch": plot_airlaunch}
+def plot_line(ds, fig):
+    """Standalone line: the line's shape at a few times and its end tensions."""
+    pos = ds["line_node_position"]
+    ax1 = fig.add_subplot(1, 2, 1)
+    for k in np.linspace(0, ds.sizes["time"] - 1, 6).astype(int):
+        p = pos.isel(time=k)
+        ax1.plot(p.sel(xyz=0), p.sel(xyz=1), ".-", ms=2, label=f"t = {float(ds['time'][k]):.2f} s")
+    ax1.set_xlabel("x [m]")
+    ax1.set_ylabel("y [m]")
+    ax1.set_title("line shape")
+    ax1.axis("equal")
+    ax1.grid(True)
+    ax1.legend(fontsize=7)
+    ax2 = fig.add_subplot(1, 2, 2)
+    ten = ds["line_end_tension"]
+    for k in range(ten.shape[-1]):
+        ax2.plot(ds["time"], ten.isel({ten.dims[-1]: k}), label=f"end {'ab'[k] if k < 2 else k}")
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylabel("end tension [N]")
+    ax2.grid(True)
+    ax2.legend(fontsize=7)
+
+
+PLOTTERS = {"drop": plot_drop, "airlaunch": plot_airlaunch, "line": plot_line}
 
 
 def main(argv):

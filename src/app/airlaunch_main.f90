@@ -14,6 +14,7 @@ program airlaunch
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
+  use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
   use airlaunch_strings, only: str
   implicit none
   type(nml_file) :: f
@@ -66,6 +67,14 @@ program airlaunch
       if (.not. allocated(error)) call read_drop_config(f, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
       call run_drop(run, cfg, echo, summary, error)
+    end block
+  case ("line")
+    block
+      type(line_scene_config) :: cfg
+      call f%check_groups([character(len=16) :: "run", "line", "line_scene"], error)
+      if (.not. allocated(error)) call read_line_scene_config(f, run, cfg, echo, error)
+      if (allocated(error)) call fail_input(error%message)
+      call run_line_scene(run, cfg, echo, summary, error)
     end block
   case ("airlaunch")
     block

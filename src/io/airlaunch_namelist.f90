@@ -70,6 +70,9 @@ contains
     logical :: exists
 
     self%path = path
+    if (allocated(self%items)) deallocate(self%items)
+    if (allocated(self%groups)) deallocate(self%groups)
+    if (allocated(self%group_lines)) deallocate(self%group_lines)
     allocate(self%items(0), self%groups(0), self%group_lines(0))
     inquire(file=path, exist=exists)
     if (.not. exists) then

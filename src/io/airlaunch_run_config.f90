@@ -20,7 +20,10 @@ module airlaunch_run_config
     real(dp) :: rtol = 1.0e-6_dp               !< CVODE relative tolerance
     real(dp) :: atol = 1.0e-8_dp               !< CVODE absolute tolerance (scaled per state)
     logical :: trajectory = .true.             !< write the time history (false: summary only)
-    integer :: max_order = 0                   !< largest BDF order (0: CVODE's 5)
+    integer :: max_order = 0                   !< largest BDF order (0: the scene's default)
+    !> End the run as soon as its milestones are final (sweeps in summary mode):
+    !> the scene decides when (airlaunch: see docs/input.md).
+    logical :: stop_when_final = .false.
   end type run_config
 
 contains
@@ -34,16 +37,18 @@ contains
     character(len=16) :: scene
     real(dp) :: t_end, output_dt, rtol, atol
     character(len=256) :: output
-    logical :: trajectory, present
+    logical :: trajectory, present, stop_when_final
     integer :: unit, ios, max_order
     character(len=256) :: msg
-    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order
-    type(nml_var), parameter :: vars(8) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final
+    type(nml_var), parameter :: vars(9) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
       nml_var("output_dt", "real"), nml_var("output", "string"), nml_var("rtol", "real"), &
-      nml_var("atol", "real"), nml_var("trajectory", "logical"), nml_var("max_order", "integer")]
+      nml_var("atol", "real"), nml_var("trajectory", "logical"), nml_var("max_order", "integer"), &
+      nml_var("stop_when_final", "logical")]
 
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
     rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
+    stop_when_final = cfg%stop_when_final
     call f%check_group("run", vars, error)
     if (allocated(error)) return
     call f%position("run", unit, present)
@@ -66,7 +71,7 @@ contains
       call fatal_error(error, f%path // ": &run: output = '' is not allowed (a file name, e.g. 'output/run.nc')")
       return
     end if
-    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order)
+    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final)
     block
       integer :: u
       open(newunit=u, status="scratch", action="readwrite")

@@ -33,6 +33,7 @@ module airlaunch_launch_scene
     character(len=16) :: status = "completed"
     character(len=:), allocatable :: failure
     real(dp) :: trim_alpha_deg = 0.0_dp, trim_elevator_deg = 0.0_dp, trim_thrust_n = 0.0_dp
+    real(dp) :: trim_cl0 = 0.0_dp, trim_cm0 = 0.0_dp   !< the aircraft's C_L0, C_m0 after the trim
     real(dp) :: release_time = -1.0_dp, edge_time = -1.0_dp, separation_time = -1.0_dp
     logical :: early_separation = .false.
     real(dp) :: edge_pull_time = -1.0_dp   !< bilateral edge: first time the edge had to pull [s]
@@ -108,6 +109,8 @@ contains
     res%trim_alpha_deg = tr%alpha*rad2deg
     res%trim_elevator_deg = tr%delta_e*rad2deg
     res%trim_thrust_n = tr%thrust
+    res%trim_cl0 = tr%cl0
+    res%trim_cm0 = tr%cm0
 
     ! --- bodies: aircraft in trimmed level flight, rocket locked on the rail
     b0 = new_rigid_body("aircraft", cfg%aircraft%mass, diag(cfg%aircraft%inertia), error)
@@ -255,13 +258,14 @@ contains
       load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
       t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
       edge_clearance(:)
-    real(dp) :: tout
+    real(dp) :: tout, last_record_of_extremum
     integer :: k
 
     if (cfg%line%coupling == "rigidized") then
       call run_rigidized(run, cfg, echo, res, error)
       return
     end if
+    last_record_of_extremum = 0.0_dp
     call setup_launch(cfg, sys, y0, res, error)
     if (allocated(error)) return
     n = sys%line%n
@@ -300,6 +304,7 @@ contains
       if (allocated(run_error)) exit
       call record()
       if (tout >= run%t_end) exit
+      if (run%stop_when_final .and. milestones_final()) exit
     end do
     call add_stats(res%stats, solver%stats())
     res%end_time = solver%t
@@ -363,6 +368,18 @@ contains
         " s: too many events before the output time")
     end subroutine advance_to
 
+    !> The milestones cannot change any more (for &run stop_when_final): the
+    !> rocket is free, its first pitch maximum is found, and 1 s has passed
+    !> since both, during which the rocket-empennage clearance only grew (so its
+    !> minimum is behind) and the aircraft's pitch excursion and load factor did
+    !> not set a new maximum.  A later snatch of the line is not waited for.
+    logical function milestones_final()
+      milestones_final = .false.
+      if (sys%sep%phase /= phase_free .or. res%pitch_max_time < 0.0_dp) return
+      if (solver%t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
+      milestones_final = solver%t >= last_record_of_extremum + 1.0_dp
+    end function milestones_final
+
     !> Sample the state at the solver's time (outputs and milestones).
     subroutine record()
       integer :: status
@@ -385,11 +402,17 @@ contains
         cl = segment_distance(tail, nose, aft) - cfg%rocket%aero%diameter/2
         ecl = segment_distance(edge, nose, aft) - cfg%rocket%aero%diameter/2
         if (sys%sep%phase /= phase_free) ecl = 0.0_dp
-        if (sys%sep%phase == phase_free) res%min_clearance = min(res%min_clearance, cl)
+        if (sys%sep%phase == phase_free .and. cl < res%min_clearance) then
+          res%min_clearance = cl
+          last_record_of_extremum = solver%t
+        end if
         if (maxval(sys%tension) > res%peak_tension) then
           res%peak_tension = maxval(sys%tension)
           res%peak_tension_time = solver%t
         end if
+        if (abs(ea(2)*rad2deg - res%trim_alpha_deg) > res%max_aircraft_pitch_excursion_deg .or. &
+            abs(nz - 1.0_dp) > res%max_load_factor_excursion .or. maxval(sys%tension) >= res%peak_tension) &
+          last_record_of_extremum = solver%t
         res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, &
           abs(ea(2)*rad2deg - res%trim_alpha_deg))
         res%max_load_factor_excursion = max(res%max_load_factor_excursion, abs(nz - 1.0_dp))
@@ -503,6 +526,8 @@ contains
     call w%add_real_att("/", "trim_alpha_deg", res%trim_alpha_deg, error)
     call w%add_real_att("/", "trim_elevator_deg", res%trim_elevator_deg, error)
     call w%add_real_att("/", "trim_thrust_N", res%trim_thrust_n, error)
+    call w%add_real_att("/", "trim_cl0", res%trim_cl0, error)
+    call w%add_real_att("/", "trim_cm0", res%trim_cm0, error)
     call w%add_real_att("/", "release_time_s", res%release_time, error)
     call w%add_real_att("/", "edge_time_s", res%edge_time, error)
     call w%add_real_att("/", "separation_time_s", res%separation_time, error)

@@ -158,3 +158,20 @@ def test_numerical_failure_keeps_readable_output(airlaunch_exe, tmp_path):
         t_fail = float(re.search(r"t = ([0-9.]+) s", first).group(1))
         assert ds["time"].values[-1] <= t_fail + 1e-9
         assert ds["time"].values[-1] > 10.0
+
+
+def test_stop_when_final_keeps_the_milestones(airlaunch_exe, tmp_path, paper_run):
+    """&run stop_when_final (sweeps' summary mode) ends the run once the
+    milestones are final; they equal those of the full 15 s run."""
+    paper, _ = paper_run
+    nml = _variant(tmp_path, [(r"^  rtol = 1.0e-6$", "  rtol = 1.0e-6\n  stop_when_final = .true.")])
+    out = tmp_path / "swf.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert ds["time"].values[-1] < 14.0
+        for key in ("edge_time_s", "separation_time_s", "pitch_max_time_s", "pitch_max_deg", "min_clearance_m",
+                    "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion"):
+            assert ds.attrs[key] == pytest.approx(paper.attrs[key], rel=1e-9, abs=1e-12), key
+        # the calibrated aircraft constants are recorded (sweeps freeze them)
+        assert ds.attrs["trim_cl0"] == pytest.approx(paper.attrs["trim_cl0"])
