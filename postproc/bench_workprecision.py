@@ -92,10 +92,16 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer settings (a smoke run)")
     ap.add_argument("--figure", default=str(ROOT / "output" / "workprecision_paper.png"))
-    ap.add_argument("--couplings", default="direct", help="comma list: direct,rigidized")
+    ap.add_argument("--couplings", default="direct,rigidized", help="comma list: direct,rigidized")
+    ap.add_argument("--rtols", default=None, help="comma list of rtol (default: 1e-3 ... 1e-8)")
+    ap.add_argument("--ns", default=None, help="comma list of segment counts (default: 15 ... 240)")
     args = ap.parse_args()
     rtols = [1e-3, 1e-5, 1e-6, 1e-7] if args.quick else [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
     ns = [15, 60] if args.quick else [15, 30, 60, 120, 240]
+    if args.rtols:
+        rtols = [float(x) for x in args.rtols.split(",")]
+    if args.ns:
+        ns = [int(x) for x in args.ns.split(",")]
     couplings = args.couplings.split(",")
     print("reference: rtol 1e-9, atol 1e-10, N = 240, direct coupling ...", flush=True)
     ref = run("direct", 1e-9, 240)
