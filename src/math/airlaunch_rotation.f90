@@ -58,8 +58,10 @@ contains
   !> Body-to-earth matrix from Euler angles [yaw, pitch, roll] (rad).
   pure function euler_to_dcm(e) result(c)
     real(dp), intent(in) :: e(3)   !< [psi, theta, gamma] [rad]
-    real(dp) :: c(3, 3)
-    c = matmul(rot_y(e(1)), matmul(rot_z(e(2)), rot_x(e(3))))
+    real(dp) :: c(3, 3), ry(3, 3), rz(3, 3), rx(3, 3)
+    ! named factors: gfortran 12 mis-warns on matmul of function results
+    ry = rot_y(e(1)); rz = rot_z(e(2)); rx = rot_x(e(3))
+    c = matmul(ry, matmul(rz, rx))
   end function euler_to_dcm
 
   !> Euler angles [yaw, pitch, roll] (rad) from a body-to-earth matrix.
@@ -165,15 +167,17 @@ contains
   !> Rotate a body vector into the earth frame: C v.
   pure function quat_rotate(q, v) result(r)
     real(dp), intent(in) :: q(4), v(3)   !< quaternion, body vector
-    real(dp) :: r(3)
-    r = matmul(quat_to_dcm(q), v)
+    real(dp) :: r(3), c(3, 3)
+    c = quat_to_dcm(q)
+    r = matmul(c, v)
   end function quat_rotate
 
   !> Rotate an earth vector into the body frame: C^T v.
   pure function quat_rotate_inv(q, v) result(r)
     real(dp), intent(in) :: q(4), v(3)   !< quaternion, earth vector
-    real(dp) :: r(3)
-    r = matmul(transpose(quat_to_dcm(q)), v)
+    real(dp) :: r(3), c(3, 3)
+    c = quat_to_dcm(q)
+    r = matmul(v, c)
   end function quat_rotate_inv
 
   !> Matrix W of Eqs. (49)-(50): w_body = W [gamma_dot, psi_dot, theta_dot].

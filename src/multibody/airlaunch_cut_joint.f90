@@ -481,11 +481,12 @@ contains
     real(dp), intent(in) :: slide_rate        !< rocket sliding speed along -x_r [m/s]
     real(dp), intent(in) :: pitch_rate        !< relative pitch rate [rad/s]
     type(rigid_body), intent(inout) :: b1     !< rocket: state set
-    real(dp) :: rel(3, 3), eps(3)
+    real(dp) :: rel(3, 3), eps(3), rz(3, 3)
     rel(:, 1) = -self%e(:, 1)
     rel(:, 2) = self%e(:, 2)
     rel(:, 3) = -self%e(:, 3)
-    rel = matmul(rel, rot_z(pitch))
+    rz = rot_z(pitch)
+    rel = matmul(rel, rz)
     call b1%set_attitude(rot_to_quat(matmul(b0%c, rel)))
     eps = self%geo%contact_point + [slide, 0.0_dp, 0.0_dp]
     b1%r = b0%r + matmul(b0%c, self%geo%edge_point) - matmul(b1%c, eps)

@@ -140,8 +140,9 @@ contains
   pure function body_point_velocity(self, p) result(u)
     class(rigid_body), intent(in) :: self  !< body
     real(dp), intent(in) :: p(3)           !< point, body axes [m]
-    real(dp) :: u(3)
-    u = self%v + matmul(self%c, cross(self%w, p))
+    real(dp) :: u(3), wp(3)
+    wp = cross(self%w, p)
+    u = self%v + matmul(self%c, wp)
   end function body_point_velocity
 
   !> Kinetic energy 1/2 m v.v + 1/2 w.J w [J].
