@@ -29,11 +29,9 @@ contains
     type(rigidized_loads) :: rl
     type(error_type), allocatable :: run_error
     real(dp), allocatable :: y0(:), xl(:, :), vl_(:, :), ten(:)
-    integer :: nmax, nrec, n, k, status, nout, iout
-    real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
-      load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
-      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
-      edge_clearance(:), m_rig(:), j_rig(:), d_rig(:), f_rig(:, :), mismatch(:)
+    integer :: nmax, n, k, status, nout, iout
+    type(launch_history) :: hist
+    real(dp), allocatable :: m_rig(:), j_rig(:), d_rig(:), f_rig(:, :), mismatch(:)
     real(dp) :: min_rigid_tension, max_mismatch
     real(dp), allocatable :: t_out(:)
 
@@ -89,13 +87,9 @@ contains
 
     nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
     if (run%trajectory) then
-      allocate(time(nmax), phase(nmax), ac_pos(3, nmax), ac_eul(3, nmax), ac_alpha(nmax), ac_q(nmax), &
-        elev(nmax), load_factor(nmax), rk_pos(3, nmax), rk_vel(3, nmax), rk_eul(3, nmax), rk_rate(nmax), &
-        rk_elev(nmax), pc_pos(3, nmax), t_rocket(nmax), t_chute(nmax), nodes(3, 0:n, nmax), &
-        cforce(6, nmax), normal(nmax), friction(nmax), clearance(nmax), residual(nmax), edge_clearance(nmax), &
-        m_rig(nmax), j_rig(nmax), d_rig(nmax), f_rig(3, nmax), mismatch(nmax))
+      call hist%init(nmax, n)
+      allocate(m_rig(nmax), j_rig(nmax), d_rig(nmax), f_rig(3, nmax), mismatch(nmax))
     end if
-    nrec = 0
     min_rigid_tension = huge(1.0_dp)
     max_mismatch = 0.0_dp
     ! the output times (as the direct scene's)
@@ -212,37 +206,19 @@ contains
     subroutine record_at(t, y, err)
       real(dp), intent(in) :: t, y(:)
       type(error_type), allocatable, intent(inout) :: err
-      real(dp) :: ea(3), er(3), rate, nz, cl, ecl, edge(3), tail(3), nose(3), aft(3), frig(3), axis(3), mm
+      real(dp) :: frig(3), axis(3), mm
       integer :: j, o
       type(error_type), allocatable :: eval_error
       type(virtual_line) :: vb
+      type(launch_sample) :: smp
       if (allocated(err)) return
       call cpl%line_state(xl, vl_, ten)
       call cpl%chain%prepare(t, y)
       call cpl%chain%sep%evaluate(t, cpl%chain%yabs, eval_error)
-      associate(sp => cpl%chain%sep, b0 => cpl%chain%sep%bodies(0), b1 => cpl%chain%sep%bodies(1), &
-          b3 => cpl%chain%sep%bodies(3))
-        ea = dcm_to_euler(b0%c)
-        er = dcm_to_euler(b1%c)
-        rate = cpl%chain%euler_pitch_rate()
-        nz = dot_product(b0%c(:, 2), sp%a0 + [0.0_dp, g0, 0.0_dp])/g0
-        nose = b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp])
-        aft = b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])
-        edge = b0%r + matmul(b0%c, [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp])
-        tail = b0%r + matmul(b0%c, [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp])
-        cl = segment_distance(tail, nose, aft) - cfg%rocket%aero%diameter/2
-        ecl = segment_distance(edge, nose, aft) - cfg%rocket%aero%diameter/2
-        if (sp%phase /= phase_free) ecl = 0.0_dp
-        if (sp%phase == phase_free) res%min_clearance = min(res%min_clearance, cl)
-        if (maxval(ten) > res%peak_tension) then
-          res%peak_tension = maxval(ten)
-          res%peak_tension_time = t
-        end if
-        res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, &
-          abs(ea(2)*rad2deg - res%trim_alpha_deg))
-        res%max_load_factor_excursion = max(res%max_load_factor_excursion, abs(nz - 1.0_dp))
-        if (sp%phase /= phase_free) res%max_constraint_residual = max(res%max_constraint_residual, &
-          sp%js%res_position)
+      associate(sp => cpl%chain%sep, b1 => cpl%chain%sep%bodies(1), b3 => cpl%chain%sep%bodies(3))
+        smp = sample_launch(cfg, sp, 2)
+        ! the milestones (stop_when_final is not offered by this coupling)
+        if (record_milestones(res, t, smp, sp, ten)) continue
         do j = 0, 3   ! aircraft, rocket, line body, parachute
           o = merge(7 + 13*j, 27 + 7*(j - 2), j < 2)
           res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, &
@@ -256,98 +232,22 @@ contains
         max_mismatch = max(max_mismatch, mm)
         if (.not. run%trajectory) return
         vb = virtual_line_body(cpl%line%model, xl, vl_, ropt%guard_band)
-        nrec = nrec + 1
-        time(nrec) = t
-        phase(nrec) = sp%phase
-        ac_pos(:, nrec) = b0%r
-        ac_eul(:, nrec) = ea*rad2deg
-        select type (s => sp%sources(2)%source)
-        type is (launch_loads)
-          ac_alpha(nrec) = s%aircraft_out%alpha*rad2deg
-          elev(nrec) = s%aircraft_out%delta_e*rad2deg
-        end select
-        ac_q(nrec) = b0%w(3)*rad2deg
-        load_factor(nrec) = nz
-        rk_pos(:, nrec) = b1%r
-        rk_vel(:, nrec) = b1%v
-        rk_eul(:, nrec) = er*rad2deg
-        rk_rate(nrec) = rate*rad2deg
-        rk_elev(nrec) = nose_elevation(b1%q)*rad2deg
-        pc_pos(:, nrec) = b3%r
-        t_rocket(nrec) = ten(1)
-        t_chute(nrec) = ten(n)
-        nodes(:, :, nrec) = xl
-        cforce(1:3, nrec) = sp%rh_force
-        cforce(4:6, nrec) = sp%rh_moment
-        normal(nrec) = sp%normal_force
-        friction(nrec) = sp%friction_force
-        clearance(nrec) = cl
-        edge_clearance(nrec) = ecl
-        residual(nrec) = sp%js%res_position
-        m_rig(nrec) = vb%mass
-        j_rig(nrec) = vb%inertia
-        d_rig(nrec) = vb%length
-        f_rig(:, nrec) = frig
-        mismatch(nrec) = mm
+        call hist%append(t, smp, sp, xl, ten, b3%r)
+        m_rig(hist%nrec) = vb%mass
+        j_rig(hist%nrec) = vb%inertia
+        d_rig(hist%nrec) = vb%length
+        f_rig(:, hist%nrec) = frig
+        mismatch(hist%nrec) = mm
       end associate
     end subroutine record_at
 
     subroutine write_output()
       type(nc_writer) :: w
       type(error_type), allocatable :: werr
-      real(dp) :: node_index(0:n)
-      integer :: j
-      do j = 0, n
-        node_index(j) = j
-      end do
+      integer :: nrec
+      nrec = hist%nrec
       call w%create(run%output, werr)
-      call w%add_dim("time", time(1:nrec), "s", "time since the start (trimmed flight)", werr)
-      call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
-        "earth-frame component: 0 = x forward, 1 = y up, 2 = z right", werr)
-      call w%add_dim("angle", [0.0_dp, 1.0_dp, 2.0_dp], "1", "Euler angle: 0 = yaw, 1 = pitch, 2 = roll", werr)
-      call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
-      call w%add_dim("wrench", [0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp], "1", &
-        "0-2 force on the rocket (earth x, y, z), 3-5 moment on the rocket about its CG (rocket axes)", werr)
-      call w%add_var_1d("phase", ["time"], phase(1:nrec), "1", "phase: 0 locked, 1 rail extraction, " // &
-        "2 rotation on the ramp edge, 3 free flight", werr)
-      call w%add_var_2d("aircraft_position", ["xyz ", "time"], ac_pos(:, 1:nrec), "m", "aircraft CG, earth frame", werr)
-      call w%add_var_2d("aircraft_euler_deg", ["angle", "time "], ac_eul(:, 1:nrec), "degree", &
-        "aircraft yaw, pitch, roll", werr)
-      call w%add_var_1d("aircraft_alpha_deg", ["time"], ac_alpha(1:nrec), "degree", "aircraft angle of attack", werr)
-      call w%add_var_1d("aircraft_pitch_rate_deg_s", ["time"], ac_q(1:nrec), "degree s-1", &
-        "aircraft body pitch rate", werr)
-      call w%add_var_1d("elevator_deg", ["time"], elev(1:nrec), "degree", "elevator deflection", werr)
-      call w%add_var_1d("aircraft_load_factor", ["time"], load_factor(1:nrec), "1", &
-        "aircraft normal load factor (specific force along body y / g)", werr)
-      call w%add_var_2d("rocket_position", ["xyz ", "time"], rk_pos(:, 1:nrec), "m", "rocket CG, earth frame", werr)
-      call w%add_var_2d("rocket_velocity", ["xyz ", "time"], rk_vel(:, 1:nrec), "m s-1", &
-        "rocket CG velocity, earth frame", werr)
-      call w%add_var_2d("rocket_euler_deg", ["angle", "time "], rk_eul(:, 1:nrec), "degree", &
-        "rocket yaw, pitch, roll (the paper's Euler convention; pitch in [-90, 90])", werr)
-      call w%add_var_1d("rocket_pitch_rate_deg_s", ["time"], rk_rate(1:nrec), "degree s-1", &
-        "rocket Euler pitch rate", werr)
-      call w%add_var_1d("rocket_nose_elevation_deg", ["time"], rk_elev(1:nrec), "degree", &
-        "rocket nose elevation, continuous through the vertical (0 level forward, 90 up, 180 level aft)", werr)
-      call w%add_var_2d("parachute_position", ["xyz ", "time"], pc_pos(:, 1:nrec), "m", &
-        "parachute (chain body B3), earth frame", werr)
-      call w%add_var_1d("line_tension_rocket_end_N", ["time"], t_rocket(1:nrec), "N", &
-        "line tension at the rocket end (sub-stepped flexible line)", werr)
-      call w%add_var_1d("line_tension_parachute_end_N", ["time"], t_chute(1:nrec), "N", &
-        "line tension at the parachute end (sub-stepped flexible line)", werr)
-      call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], nodes(:, :, 1:nrec), "m", &
-        "line node positions (sub-stepped flexible line), earth frame", werr)
-      call w%add_var_2d("constraint_force", ["wrench", "time  "], cforce(:, 1:nrec), "N or N m", &
-        "cut-joint constraint wrench R_H on the rocket (CFA)", werr)
-      call w%add_var_1d("edge_normal_force_N", ["time"], normal(1:nrec), "N", &
-        "contact normal force of the rail / ramp edge on the rocket", werr)
-      call w%add_var_1d("friction_force_N", ["time"], friction(1:nrec), "N", &
-        "friction on the rocket along the exit direction", werr)
-      call w%add_var_1d("clearance_m", ["time"], clearance(1:nrec), "m", &
-        "distance from the rocket's surface to the aircraft's empennage (&bay tail_x, tail_y)", werr)
-      call w%add_var_1d("edge_clearance_m", ["time"], edge_clearance(1:nrec), "m", &
-        "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
-      call w%add_var_1d("constraint_residual_m", ["time"], residual(1:nrec), "m", &
-        "position residual of the cut-joint constraints", werr)
+      call hist%write_contract(w, "parachute (chain body B3), earth frame", " (sub-stepped flexible line)", werr)
       call w%add_var_1d("m_rigid_kg", ["time"], m_rig(1:nrec), "kg", &
         "virtual line body: mass m_rigid (Eq. (31), kinetic-energy equivalent, guarded)", werr)
       call w%add_var_1d("j_rigid_kg_m2", ["time"], j_rig(1:nrec), "kg m2", &

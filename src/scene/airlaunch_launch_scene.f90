@@ -21,31 +21,12 @@ module airlaunch_launch_scene
   use airlaunch_line_model, only: line_params
   use airlaunch_launch_loads, only: launch_loads
   use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size
+  use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
+    record_milestones, write_milestones, event_or_minus, segment_distance
   implicit none
   private
   public :: launch_result, run_launch, setup_launch
-  ! helpers also used by the submodule airlaunch_launch_rigidized (gfortran 12
-  ! does not emit private module procedures for a submodule)
-  public :: write_milestones, event_or_minus, segment_distance
 
-  !> Milestones of one run (also the summary row of a sweep case).
-  type :: launch_result
-    character(len=16) :: status = "completed"
-    character(len=:), allocatable :: failure
-    real(dp) :: trim_alpha_deg = 0.0_dp, trim_elevator_deg = 0.0_dp, trim_thrust_n = 0.0_dp
-    real(dp) :: trim_cl0 = 0.0_dp, trim_cm0 = 0.0_dp   !< the aircraft's C_L0, C_m0 after the trim
-    real(dp) :: release_time = -1.0_dp, edge_time = -1.0_dp, separation_time = -1.0_dp
-    logical :: early_separation = .false.
-    real(dp) :: edge_pull_time = -1.0_dp   !< bilateral edge: first time the edge had to pull [s]
-    real(dp) :: pitch_at_separation_deg = 0.0_dp, pitch_rate_at_separation_deg_s = 0.0_dp
-    real(dp) :: pitch_max_time = -1.0_dp, pitch_max_deg = 0.0_dp, nose_elevation_at_max_deg = 0.0_dp
-    real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
-    real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
-    real(dp) :: max_constraint_residual = 0.0_dp
-    real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
-    real(dp) :: end_time = 0.0_dp
-    type(cvode_stats) :: stats
-  end type launch_result
 
   interface
     !> The scene with coupling (a), `&line coupling = 'rigidized'`: the line as
@@ -252,12 +233,8 @@ contains
     type(cvode_options) :: opts
     type(error_type), allocatable :: run_error
     real(dp), allocatable :: y0(:)
-    ! recorded history
-    integer :: nmax, nrec, n
-    real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
-      load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
-      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
-      edge_clearance(:)
+    type(launch_history) :: hist
+    integer :: nmax, n
     real(dp) :: tout, last_record_of_extremum
     integer :: k
 
@@ -290,13 +267,7 @@ contains
     if (allocated(error)) return
 
     nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
-    if (run%trajectory) then
-      allocate(time(nmax), phase(nmax), ac_pos(3, nmax), ac_eul(3, nmax), ac_alpha(nmax), ac_q(nmax), &
-        elev(nmax), load_factor(nmax), rk_pos(3, nmax), rk_vel(3, nmax), rk_eul(3, nmax), rk_rate(nmax), &
-        rk_elev(nmax), pc_pos(3, nmax), t_rocket(nmax), t_chute(nmax), nodes(3, 0:n, nmax), &
-        cforce(6, nmax), normal(nmax), friction(nmax), clearance(nmax), residual(nmax), edge_clearance(nmax))
-    end if
-    nrec = 0
+    if (run%trajectory) call hist%init(nmax, n)
     call record()
     do k = 1, nmax - 1
       tout = min(k*run%output_dt, run%t_end)
@@ -383,131 +354,22 @@ contains
     !> Sample the state at the solver's time (outputs and milestones).
     subroutine record()
       integer :: status
-      real(dp) :: ea(3), er(3), rate, nz, cl, ecl, edge(3), tail(3), nose(3), aft(3), amag
       type(error_type), allocatable :: eval_error
+      type(launch_sample) :: smp
       call sys%prepare(solver%t, solver%y, status)
       call sys%sep%evaluate(solver%t, sys%yabs(1:rigid_size), eval_error)
-      associate(b0 => sys%sep%bodies(0), b1 => sys%sep%bodies(1))
-        ea = dcm_to_euler(b0%c)
-        er = dcm_to_euler(b1%c)
-        rate = sys%euler_pitch_rate()
-        ! load factor along the aircraft's y axis: specific force / g
-        nz = dot_product(b0%c(:, 2), sys%sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
-        ! clearances of the rocket's surface (its axis segment less the radius)
-        ! from the aircraft's empennage point and from the ramp edge
-        nose = b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp])
-        aft = b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])
-        edge = b0%r + matmul(b0%c, [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp])
-        tail = b0%r + matmul(b0%c, [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp])
-        cl = segment_distance(tail, nose, aft) - cfg%rocket%aero%diameter/2
-        ecl = segment_distance(edge, nose, aft) - cfg%rocket%aero%diameter/2
-        if (sys%sep%phase /= phase_free) ecl = 0.0_dp
-        if (sys%sep%phase == phase_free .and. cl < res%min_clearance) then
-          res%min_clearance = cl
-          last_record_of_extremum = solver%t
-        end if
-        if (maxval(sys%tension) > res%peak_tension) then
-          res%peak_tension = maxval(sys%tension)
-          res%peak_tension_time = solver%t
-        end if
-        if (abs(ea(2)*rad2deg - res%trim_alpha_deg) > res%max_aircraft_pitch_excursion_deg .or. &
-            abs(nz - 1.0_dp) > res%max_load_factor_excursion .or. maxval(sys%tension) >= res%peak_tension) &
-          last_record_of_extremum = solver%t
-        res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, &
-          abs(ea(2)*rad2deg - res%trim_alpha_deg))
-        res%max_load_factor_excursion = max(res%max_load_factor_excursion, abs(nz - 1.0_dp))
-        if (sys%sep%phase /= phase_free) res%max_constraint_residual = max(res%max_constraint_residual, &
-          sys%sep%js%res_position)
-        res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(solver%y(7:10)) - 1.0_dp), &
-          abs(norm2(solver%y(20:23)) - 1.0_dp))
-        if (.not. run%trajectory) return
-        nrec = nrec + 1
-        time(nrec) = solver%t
-        phase(nrec) = sys%sep%phase
-        ac_pos(:, nrec) = b0%r
-        ac_eul(:, nrec) = ea*rad2deg
-        select type (s => sys%sep%sources(sys%iloads)%source)
-        type is (launch_loads)
-          ac_alpha(nrec) = s%aircraft_out%alpha*rad2deg
-          elev(nrec) = s%aircraft_out%delta_e*rad2deg
-        end select
-        ac_q(nrec) = b0%w(3)*rad2deg
-        load_factor(nrec) = nz
-        rk_pos(:, nrec) = b1%r
-        rk_vel(:, nrec) = b1%v
-        rk_eul(:, nrec) = er*rad2deg
-        rk_rate(nrec) = rate*rad2deg
-        rk_elev(nrec) = nose_elevation(b1%q)*rad2deg
-        pc_pos(:, nrec) = sys%x(:, n)
-        t_rocket(nrec) = sys%tension(1)
-        t_chute(nrec) = sys%tension(n)
-        nodes(:, :, nrec) = sys%x
-        cforce(1:3, nrec) = sys%sep%rh_force
-        cforce(4:6, nrec) = sys%sep%rh_moment
-        normal(nrec) = sys%sep%normal_force
-        friction(nrec) = sys%sep%friction_force
-        clearance(nrec) = cl
-        edge_clearance(nrec) = ecl
-        residual(nrec) = sys%sep%js%res_position
-        amag = 0.0_dp
-      end associate
+      smp = sample_launch(cfg, sys%sep, sys%iloads)
+      if (record_milestones(res, solver%t, smp, sys%sep, sys%tension)) last_record_of_extremum = solver%t
+      res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(solver%y(7:10)) - 1.0_dp), &
+        abs(norm2(solver%y(20:23)) - 1.0_dp))
+      if (run%trajectory) call hist%append(solver%t, smp, sys%sep, sys%x, sys%tension, sys%x(:, n))
     end subroutine record
 
     subroutine write_output()
       type(nc_writer) :: w
       type(error_type), allocatable :: werr
-      real(dp) :: node_index(0:n)
-      integer :: j
-      do j = 0, n
-        node_index(j) = j
-      end do
       call w%create(run%output, werr)
-      call w%add_dim("time", time(1:nrec), "s", "time since the start (trimmed flight)", werr)
-      call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
-        "earth-frame component: 0 = x forward, 1 = y up, 2 = z right", werr)
-      call w%add_dim("angle", [0.0_dp, 1.0_dp, 2.0_dp], "1", "Euler angle: 0 = yaw, 1 = pitch, 2 = roll", werr)
-      call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
-      call w%add_dim("wrench", [0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp], "1", &
-        "0-2 force on the rocket (earth x, y, z), 3-5 moment on the rocket about its CG (rocket axes)", werr)
-      call w%add_var_1d("phase", ["time"], phase(1:nrec), "1", "phase: 0 locked, 1 rail extraction, " // &
-        "2 rotation on the ramp edge, 3 free flight", werr)
-      call w%add_var_2d("aircraft_position", ["xyz ", "time"], ac_pos(:, 1:nrec), "m", "aircraft CG, earth frame", werr)
-      call w%add_var_2d("aircraft_euler_deg", ["angle", "time "], ac_eul(:, 1:nrec), "degree", &
-        "aircraft yaw, pitch, roll", werr)
-      call w%add_var_1d("aircraft_alpha_deg", ["time"], ac_alpha(1:nrec), "degree", "aircraft angle of attack", werr)
-      call w%add_var_1d("aircraft_pitch_rate_deg_s", ["time"], ac_q(1:nrec), "degree s-1", &
-        "aircraft body pitch rate", werr)
-      call w%add_var_1d("elevator_deg", ["time"], elev(1:nrec), "degree", "elevator deflection", werr)
-      call w%add_var_1d("aircraft_load_factor", ["time"], load_factor(1:nrec), "1", &
-        "aircraft normal load factor (specific force along body y / g)", werr)
-      call w%add_var_2d("rocket_position", ["xyz ", "time"], rk_pos(:, 1:nrec), "m", "rocket CG, earth frame", werr)
-      call w%add_var_2d("rocket_velocity", ["xyz ", "time"], rk_vel(:, 1:nrec), "m s-1", &
-        "rocket CG velocity, earth frame", werr)
-      call w%add_var_2d("rocket_euler_deg", ["angle", "time "], rk_eul(:, 1:nrec), "degree", &
-        "rocket yaw, pitch, roll (the paper's Euler convention; pitch in [-90, 90])", werr)
-      call w%add_var_1d("rocket_pitch_rate_deg_s", ["time"], rk_rate(1:nrec), "degree s-1", &
-        "rocket Euler pitch rate", werr)
-      call w%add_var_1d("rocket_nose_elevation_deg", ["time"], rk_elev(1:nrec), "degree", &
-        "rocket nose elevation, continuous through the vertical (0 level forward, 90 up, 180 level aft)", werr)
-      call w%add_var_2d("parachute_position", ["xyz ", "time"], pc_pos(:, 1:nrec), "m", "parachute, earth frame", werr)
-      call w%add_var_1d("line_tension_rocket_end_N", ["time"], t_rocket(1:nrec), "N", &
-        "line tension at the rocket end", werr)
-      call w%add_var_1d("line_tension_parachute_end_N", ["time"], t_chute(1:nrec), "N", &
-        "line tension at the parachute end", werr)
-      call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], nodes(:, :, 1:nrec), "m", &
-        "line node positions, earth frame", werr)
-      call w%add_var_2d("constraint_force", ["wrench", "time  "], cforce(:, 1:nrec), "N or N m", &
-        "cut-joint constraint wrench R_H on the rocket (CFA)", werr)
-      call w%add_var_1d("edge_normal_force_N", ["time"], normal(1:nrec), "N", &
-        "contact normal force of the rail / ramp edge on the rocket", werr)
-      call w%add_var_1d("friction_force_N", ["time"], friction(1:nrec), "N", &
-        "friction on the rocket along the exit direction", werr)
-      call w%add_var_1d("clearance_m", ["time"], clearance(1:nrec), "m", &
-        "distance from the rocket's surface to the aircraft's empennage (&bay tail_x, tail_y)", werr)
-      call w%add_var_1d("edge_clearance_m", ["time"], edge_clearance(1:nrec), "m", &
-        "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
-      call w%add_var_1d("constraint_residual_m", ["time"], residual(1:nrec), "m", &
-        "position residual of the cut-joint constraints", werr)
+      call hist%write_contract(w, "parachute (the line's last node), earth frame", "", werr)
       call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
         "(Zheng & Zhang 2018, §5.2)", echo, werr)
       call write_milestones(w, res, werr)
@@ -516,36 +378,6 @@ contains
     end subroutine write_output
   end subroutine run_launch
 
-  !> The milestones as global attributes.
-  subroutine write_milestones(w, res, error)
-    type(nc_writer), intent(inout) :: w
-    type(launch_result), intent(in) :: res
-    type(error_type), allocatable, intent(inout) :: error
-    call w%add_text_att("/", "status", trim(res%status), error)
-    if (allocated(res%failure)) call w%add_text_att("/", "failure", res%failure, error)
-    call w%add_real_att("/", "trim_alpha_deg", res%trim_alpha_deg, error)
-    call w%add_real_att("/", "trim_elevator_deg", res%trim_elevator_deg, error)
-    call w%add_real_att("/", "trim_thrust_N", res%trim_thrust_n, error)
-    call w%add_real_att("/", "trim_cl0", res%trim_cl0, error)
-    call w%add_real_att("/", "trim_cm0", res%trim_cm0, error)
-    call w%add_real_att("/", "release_time_s", res%release_time, error)
-    call w%add_real_att("/", "edge_time_s", res%edge_time, error)
-    call w%add_real_att("/", "separation_time_s", res%separation_time, error)
-    call w%add_text_att("/", "early_separation", merge("true ", "false", res%early_separation), error)
-    call w%add_real_att("/", "edge_pull_time_s", res%edge_pull_time, error)
-    call w%add_real_att("/", "pitch_at_separation_deg", res%pitch_at_separation_deg, error)
-    call w%add_real_att("/", "pitch_rate_at_separation_deg_s", res%pitch_rate_at_separation_deg_s, error)
-    call w%add_real_att("/", "pitch_max_time_s", res%pitch_max_time, error)
-    call w%add_real_att("/", "pitch_max_deg", res%pitch_max_deg, error)
-    call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", res%nose_elevation_at_max_deg, error)
-    call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
-    call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
-    call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
-    call w%add_real_att("/", "max_aircraft_pitch_excursion_deg", res%max_aircraft_pitch_excursion_deg, error)
-    call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
-    call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)
-    call w%add_real_att("/", "max_quaternion_norm_error", res%max_quaternion_norm_error, error)
-  end subroutine write_milestones
 
   !> Accumulate CVODE counters.
   pure subroutine add_stats(total, part)
@@ -561,11 +393,6 @@ contains
     total%root_evals = total%root_evals + part%root_evals
   end subroutine add_stats
 
-  pure real(dp) function event_or_minus(t) result(r)
-    real(dp), intent(in) :: t
-    r = t
-    if (t < -1.0e300_dp) r = -1.0_dp
-  end function event_or_minus
 
   !> Per-component absolute tolerances: positions and velocities in m and
   !> m/s (relative variables, small numbers), quaternions and rates tighter.
@@ -581,12 +408,4 @@ contains
     end do
   end function atol_scaling
 
-  !> Distance from point p to the segment [a, b].
-  pure real(dp) function segment_distance(p, a, b) result(d)
-    real(dp), intent(in) :: p(3), a(3), b(3)
-    real(dp) :: ab(3), s
-    ab = b - a
-    s = max(0.0_dp, min(1.0_dp, dot_product(p - a, ab)/dot_product(ab, ab)))
-    d = norm2(p - (a + s*ab))
-  end function segment_distance
 end module airlaunch_launch_scene

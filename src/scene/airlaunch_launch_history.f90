@@ -1,0 +1,284 @@
+!> What the air-launch scene records, shared by its two line couplings
+!> (direct, and rigidized in the submodule airlaunch_launch_rigidized): the
+!> milestones of a run, the sampled history of the output contract
+!> (docs/output.md) and its netCDF writer.
+module airlaunch_launch_history
+  use airlaunch_kinds, only: dp, g0, rad2deg
+  use airlaunch_error, only: error_type
+  use airlaunch_rotation, only: dcm_to_euler, nose_elevation
+  use airlaunch_cvode, only: cvode_stats
+  use airlaunch_ncwrite, only: nc_writer
+  use airlaunch_scenario_config, only: scenario_config
+  use airlaunch_separation, only: separation_system
+  use airlaunch_cut_joint, only: phase_free
+  use airlaunch_launch_loads, only: launch_loads
+  implicit none
+  private
+  public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones
+  public :: write_milestones, event_or_minus, segment_distance
+
+  !> Milestones of one run (also the summary row of a sweep case).
+  type :: launch_result
+    character(len=16) :: status = "completed"
+    character(len=:), allocatable :: failure
+    real(dp) :: trim_alpha_deg = 0.0_dp, trim_elevator_deg = 0.0_dp, trim_thrust_n = 0.0_dp
+    real(dp) :: trim_cl0 = 0.0_dp, trim_cm0 = 0.0_dp   !< the aircraft's C_L0, C_m0 after the trim
+    real(dp) :: release_time = -1.0_dp, edge_time = -1.0_dp, separation_time = -1.0_dp
+    logical :: early_separation = .false.
+    real(dp) :: edge_pull_time = -1.0_dp   !< bilateral edge: first time the edge had to pull [s]
+    real(dp) :: pitch_at_separation_deg = 0.0_dp, pitch_rate_at_separation_deg_s = 0.0_dp
+    real(dp) :: pitch_max_time = -1.0_dp, pitch_max_deg = 0.0_dp, nose_elevation_at_max_deg = 0.0_dp
+    real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
+    real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
+    real(dp) :: max_constraint_residual = 0.0_dp
+    real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
+    real(dp) :: end_time = 0.0_dp
+    type(cvode_stats) :: stats
+  end type launch_result
+
+  !> The state of the rigid part at one instant, as the outputs see it.
+  type :: launch_sample
+    real(dp) :: aircraft_euler(3) = 0.0_dp   !< [rad]
+    real(dp) :: rocket_euler(3) = 0.0_dp     !< [rad]
+    real(dp) :: pitch_rate = 0.0_dp          !< rocket Euler pitch rate [rad/s]
+    real(dp) :: load_factor = 1.0_dp         !< aircraft n along body y
+    real(dp) :: clearance = 0.0_dp           !< rocket surface to the empennage point [m]
+    real(dp) :: edge_clearance = 0.0_dp      !< rocket surface to the ramp edge after separation [m]
+    real(dp) :: alpha = 0.0_dp               !< aircraft angle of attack [rad]
+    real(dp) :: elevator = 0.0_dp            !< [rad]
+  end type launch_sample
+
+  !> The sampled history of the output contract.
+  type :: launch_history
+    integer :: nrec = 0
+    real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
+      load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
+      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
+      edge_clearance(:)
+  contains
+    procedure :: init => history_init
+    procedure :: append => history_append
+    procedure :: write_contract => history_write_contract
+  end type launch_history
+
+contains
+
+  !> Room for nmax samples of a line with n segments.
+  subroutine history_init(self, nmax, n)
+    class(launch_history), intent(inout) :: self
+    integer, intent(in) :: nmax, n
+    self%nrec = 0
+    allocate(self%time(nmax), self%phase(nmax), self%ac_pos(3, nmax), self%ac_eul(3, nmax), self%ac_alpha(nmax), &
+      self%ac_q(nmax), self%elev(nmax), self%load_factor(nmax), self%rk_pos(3, nmax), self%rk_vel(3, nmax), &
+      self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%pc_pos(3, nmax), self%t_rocket(nmax), &
+      self%t_chute(nmax), self%nodes(3, 0:n, nmax), self%cforce(6, nmax), self%normal(nmax), &
+      self%friction(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax))
+  end subroutine history_init
+
+  !> The outputs of the rigid part of `sep` (evaluated at time t) and of the
+  !> loads source `iloads`.
+  function sample_launch(cfg, sep, iloads) result(s)
+    type(scenario_config), intent(in) :: cfg
+    type(separation_system), intent(in) :: sep
+    integer, intent(in) :: iloads
+    type(launch_sample) :: s
+    real(dp) :: nose(3), aft(3), edge(3), tail(3)
+    associate(b0 => sep%bodies(0), b1 => sep%bodies(1))
+      s%aircraft_euler = dcm_to_euler(b0%c)
+      s%rocket_euler = dcm_to_euler(b1%c)
+      ! Euler pitch rate without the singularity: theta' = sin(gamma) w_y + cos(gamma) w_z (Eqs. (49)-(50))
+      s%pitch_rate = sin(s%rocket_euler(3))*b1%w(2) + cos(s%rocket_euler(3))*b1%w(3)
+      ! load factor along the aircraft's y axis: specific force / g
+      s%load_factor = dot_product(b0%c(:, 2), sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
+      ! clearances of the rocket's surface (its axis segment less the radius)
+      ! from the aircraft's empennage point and from the ramp edge
+      nose = b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp])
+      aft = b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])
+      edge = b0%r + matmul(b0%c, [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp])
+      tail = b0%r + matmul(b0%c, [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp])
+      s%clearance = segment_distance(tail, nose, aft) - cfg%rocket%aero%diameter/2
+      s%edge_clearance = segment_distance(edge, nose, aft) - cfg%rocket%aero%diameter/2
+      if (sep%phase /= phase_free) s%edge_clearance = 0.0_dp
+    end associate
+    select type (src => sep%sources(iloads)%source)
+    type is (launch_loads)
+      s%alpha = src%aircraft_out%alpha
+      s%elevator = src%aircraft_out%delta_e
+    end select
+  end function sample_launch
+
+  !> Update the running milestones with a sample; true if any extremum moved
+  !> (for &run stop_when_final).
+  logical function record_milestones(res, t, s, sep, tension) result(changed)
+    type(launch_result), intent(inout) :: res
+    real(dp), intent(in) :: t
+    type(launch_sample), intent(in) :: s
+    type(separation_system), intent(in) :: sep
+    real(dp), intent(in) :: tension(:)
+    real(dp) :: dtheta, dn
+    changed = .false.
+    if (sep%phase == phase_free .and. s%clearance < res%min_clearance) then
+      res%min_clearance = s%clearance
+      changed = .true.
+    end if
+    if (maxval(tension) > res%peak_tension) then
+      res%peak_tension = maxval(tension)
+      res%peak_tension_time = t
+      changed = .true.
+    end if
+    dtheta = abs(s%aircraft_euler(2)*rad2deg - res%trim_alpha_deg)
+    dn = abs(s%load_factor - 1.0_dp)
+    if (dtheta > res%max_aircraft_pitch_excursion_deg .or. dn > res%max_load_factor_excursion) changed = .true.
+    res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, dtheta)
+    res%max_load_factor_excursion = max(res%max_load_factor_excursion, dn)
+    if (sep%phase /= phase_free) res%max_constraint_residual = max(res%max_constraint_residual, &
+      sep%js%res_position)
+  end function record_milestones
+
+  !> Append one sample: the rigid part from `sep` and `s`, the line's nodes,
+  !> end tensions and the parachute's position from the caller.
+  subroutine history_append(self, t, s, sep, nodes, tension, chute)
+    class(launch_history), intent(inout) :: self
+    real(dp), intent(in) :: t
+    type(launch_sample), intent(in) :: s
+    type(separation_system), intent(in) :: sep
+    real(dp), intent(in) :: nodes(:, 0:), tension(:), chute(3)
+    integer :: k
+    self%nrec = self%nrec + 1
+    k = self%nrec
+    associate(b0 => sep%bodies(0), b1 => sep%bodies(1))
+      self%time(k) = t
+      self%phase(k) = sep%phase
+      self%ac_pos(:, k) = b0%r
+      self%ac_eul(:, k) = s%aircraft_euler*rad2deg
+      self%ac_alpha(k) = s%alpha*rad2deg
+      self%elev(k) = s%elevator*rad2deg
+      self%ac_q(k) = b0%w(3)*rad2deg
+      self%load_factor(k) = s%load_factor
+      self%rk_pos(:, k) = b1%r
+      self%rk_vel(:, k) = b1%v
+      self%rk_eul(:, k) = s%rocket_euler*rad2deg
+      self%rk_rate(k) = s%pitch_rate*rad2deg
+      self%rk_elev(k) = nose_elevation(b1%q)*rad2deg
+    end associate
+    self%pc_pos(:, k) = chute
+    self%t_rocket(k) = tension(1)
+    self%t_chute(k) = tension(size(tension))
+    self%nodes(:, :, k) = nodes
+    self%cforce(1:3, k) = sep%rh_force
+    self%cforce(4:6, k) = sep%rh_moment
+    self%normal(k) = sep%normal_force
+    self%friction(k) = sep%friction_force
+    self%clearance(k) = s%clearance
+    self%edge_clearance(k) = s%edge_clearance
+    self%residual(k) = sep%js%res_position
+  end subroutine history_append
+
+  !> Dimensions and variables of the output contract (docs/output.md).
+  subroutine history_write_contract(self, w, chute_text, line_text, werr)
+    class(launch_history), intent(in) :: self
+    type(nc_writer), intent(inout) :: w
+    character(len=*), intent(in) :: chute_text   !< long name of parachute_position
+    character(len=*), intent(in) :: line_text    !< qualifier of the line variables ("" or a note)
+    type(error_type), allocatable, intent(inout) :: werr
+    real(dp) :: node_index(0:ubound(self%nodes, 2))
+    integer :: j, nrec, n
+    nrec = self%nrec
+    n = ubound(self%nodes, 2)
+    do j = 0, n
+      node_index(j) = j
+    end do
+      call w%add_dim("time", self%time(1:nrec), "s", "time since the start (trimmed flight)", werr)
+      call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
+        "earth-frame component: 0 = x forward, 1 = y up, 2 = z right", werr)
+      call w%add_dim("angle", [0.0_dp, 1.0_dp, 2.0_dp], "1", "Euler angle: 0 = yaw, 1 = pitch, 2 = roll", werr)
+      call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
+      call w%add_dim("wrench", [0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp], "1", &
+        "0-2 force on the rocket (earth x, y, z), 3-5 moment on the rocket about its CG (rocket axes)", werr)
+      call w%add_var_1d("phase", ["time"], self%phase(1:nrec), "1", "phase: 0 locked, 1 rail extraction, " // &
+        "2 rotation on the ramp edge, 3 free flight", werr)
+      call w%add_var_2d("aircraft_position", ["xyz ", "time"], self%ac_pos(:, 1:nrec), "m", "aircraft CG, earth frame", werr)
+      call w%add_var_2d("aircraft_euler_deg", ["angle", "time "], self%ac_eul(:, 1:nrec), "degree", &
+        "aircraft yaw, pitch, roll", werr)
+      call w%add_var_1d("aircraft_alpha_deg", ["time"], self%ac_alpha(1:nrec), "degree", "aircraft angle of attack", werr)
+      call w%add_var_1d("aircraft_pitch_rate_deg_s", ["time"], self%ac_q(1:nrec), "degree s-1", &
+        "aircraft body pitch rate", werr)
+      call w%add_var_1d("elevator_deg", ["time"], self%elev(1:nrec), "degree", "elevator deflection", werr)
+      call w%add_var_1d("aircraft_load_factor", ["time"], self%load_factor(1:nrec), "1", &
+        "aircraft normal load factor (specific force along body y / g)", werr)
+      call w%add_var_2d("rocket_position", ["xyz ", "time"], self%rk_pos(:, 1:nrec), "m", "rocket CG, earth frame", werr)
+      call w%add_var_2d("rocket_velocity", ["xyz ", "time"], self%rk_vel(:, 1:nrec), "m s-1", &
+        "rocket CG velocity, earth frame", werr)
+      call w%add_var_2d("rocket_euler_deg", ["angle", "time "], self%rk_eul(:, 1:nrec), "degree", &
+        "rocket yaw, pitch, roll (the paper's Euler convention; pitch in [-90, 90])", werr)
+      call w%add_var_1d("rocket_pitch_rate_deg_s", ["time"], self%rk_rate(1:nrec), "degree s-1", &
+        "rocket Euler pitch rate", werr)
+      call w%add_var_1d("rocket_nose_elevation_deg", ["time"], self%rk_elev(1:nrec), "degree", &
+        "rocket nose elevation, continuous through the vertical (0 level forward, 90 up, 180 level aft)", werr)
+      call w%add_var_2d("parachute_position", ["xyz ", "time"], self%pc_pos(:, 1:nrec), "m", chute_text, werr)
+      call w%add_var_1d("line_tension_rocket_end_N", ["time"], self%t_rocket(1:nrec), "N", &
+        "line tension at the rocket end" // line_text, werr)
+      call w%add_var_1d("line_tension_parachute_end_N", ["time"], self%t_chute(1:nrec), "N", &
+        "line tension at the parachute end" // line_text, werr)
+      call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], self%nodes(:, :, 1:nrec), "m", &
+        "line node positions" // line_text // ", earth frame", werr)
+      call w%add_var_2d("constraint_force", ["wrench", "time  "], self%cforce(:, 1:nrec), "N or N m", &
+        "cut-joint constraint wrench R_H on the rocket (CFA)", werr)
+      call w%add_var_1d("edge_normal_force_N", ["time"], self%normal(1:nrec), "N", &
+        "contact normal force of the rail / ramp edge on the rocket", werr)
+      call w%add_var_1d("friction_force_N", ["time"], self%friction(1:nrec), "N", &
+        "friction on the rocket along the exit direction", werr)
+      call w%add_var_1d("clearance_m", ["time"], self%clearance(1:nrec), "m", &
+        "distance from the rocket's surface to the aircraft's empennage (&bay tail_x, tail_y)", werr)
+      call w%add_var_1d("edge_clearance_m", ["time"], self%edge_clearance(1:nrec), "m", &
+        "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
+      call w%add_var_1d("constraint_residual_m", ["time"], self%residual(1:nrec), "m", &
+        "position residual of the cut-joint constraints", werr)
+  end subroutine history_write_contract
+
+  !> The milestones as global attributes.
+  subroutine write_milestones(w, res, error)
+    type(nc_writer), intent(inout) :: w
+    type(launch_result), intent(in) :: res
+    type(error_type), allocatable, intent(inout) :: error
+    call w%add_text_att("/", "status", trim(res%status), error)
+    if (allocated(res%failure)) call w%add_text_att("/", "failure", res%failure, error)
+    call w%add_real_att("/", "trim_alpha_deg", res%trim_alpha_deg, error)
+    call w%add_real_att("/", "trim_elevator_deg", res%trim_elevator_deg, error)
+    call w%add_real_att("/", "trim_thrust_N", res%trim_thrust_n, error)
+    call w%add_real_att("/", "trim_cl0", res%trim_cl0, error)
+    call w%add_real_att("/", "trim_cm0", res%trim_cm0, error)
+    call w%add_real_att("/", "release_time_s", res%release_time, error)
+    call w%add_real_att("/", "edge_time_s", res%edge_time, error)
+    call w%add_real_att("/", "separation_time_s", res%separation_time, error)
+    call w%add_text_att("/", "early_separation", merge("true ", "false", res%early_separation), error)
+    call w%add_real_att("/", "edge_pull_time_s", res%edge_pull_time, error)
+    call w%add_real_att("/", "pitch_at_separation_deg", res%pitch_at_separation_deg, error)
+    call w%add_real_att("/", "pitch_rate_at_separation_deg_s", res%pitch_rate_at_separation_deg_s, error)
+    call w%add_real_att("/", "pitch_max_time_s", res%pitch_max_time, error)
+    call w%add_real_att("/", "pitch_max_deg", res%pitch_max_deg, error)
+    call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", res%nose_elevation_at_max_deg, error)
+    call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
+    call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
+    call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
+    call w%add_real_att("/", "max_aircraft_pitch_excursion_deg", res%max_aircraft_pitch_excursion_deg, error)
+    call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
+    call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)
+    call w%add_real_att("/", "max_quaternion_norm_error", res%max_quaternion_norm_error, error)
+  end subroutine write_milestones
+
+  pure real(dp) function event_or_minus(t) result(r)
+    real(dp), intent(in) :: t
+    r = t
+    if (t < -1.0e300_dp) r = -1.0_dp
+  end function event_or_minus
+
+  !> Distance from point p to the segment [a, b].
+  pure real(dp) function segment_distance(p, a, b) result(d)
+    real(dp), intent(in) :: p(3), a(3), b(3)
+    real(dp) :: ab(3), s
+    ab = b - a
+    s = max(0.0_dp, min(1.0_dp, dot_product(p - a, ab)/dot_product(ab, ab)))
+    d = norm2(p - (a + s*ab))
+  end function segment_distance
+end module airlaunch_launch_history
