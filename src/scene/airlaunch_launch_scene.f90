@@ -7,7 +7,7 @@ module airlaunch_launch_scene
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: quat_from_euler, dcm_to_euler, nose_elevation
-  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_linalg, only: solve_banded
   use airlaunch_run_config, only: run_config
   use airlaunch_ncwrite, only: nc_writer
@@ -379,19 +379,6 @@ contains
   end subroutine run_launch
 
 
-  !> Accumulate CVODE counters.
-  pure subroutine add_stats(total, part)
-    type(cvode_stats), intent(inout) :: total
-    type(cvode_stats), intent(in) :: part
-    total%steps = total%steps + part%steps
-    total%rhs_evals = total%rhs_evals + part%rhs_evals
-    total%jac_evals = total%jac_evals + part%jac_evals
-    total%lin_setups = total%lin_setups + part%lin_setups
-    total%err_test_fails = total%err_test_fails + part%err_test_fails
-    total%nonlin_iters = total%nonlin_iters + part%nonlin_iters
-    total%nonlin_fails = total%nonlin_fails + part%nonlin_fails
-    total%root_evals = total%root_evals + part%root_evals
-  end subroutine add_stats
 
 
   !> Per-component absolute tolerances: positions and velocities in m and

@@ -60,7 +60,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: dcm_to_euler, dcm_to_quat, cross
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
-  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, &
@@ -767,7 +767,7 @@ contains
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     real(dp), allocatable :: y(:)
-    call add_counters(self%chain_totals, self%chain_solver%stats())
+    call add_stats(self%chain_totals, self%chain_solver%stats())
     y = self%chain_solver%y
     call self%chain_solver%reinit(self%t, y, error)
   end subroutine coupling_restart_chain
@@ -896,8 +896,8 @@ contains
     class(rigidized_coupling), intent(in) :: self   !< the coupling
     type(cvode_stats) :: s
     s = self%chain_totals
-    call add_counters(s, self%chain_solver%stats())
-    call add_counters(s, self%line_solver%stats())
+    call add_stats(s, self%chain_solver%stats())
+    call add_stats(s, self%line_solver%stats())
   end function coupling_stats
 
   !> Release both integrators and subsystems.
@@ -910,17 +910,4 @@ contains
     nullify(self%chain, self%line)
   end subroutine coupling_free
 
-  !> total += part.
-  pure subroutine add_counters(total, part)
-    type(cvode_stats), intent(inout) :: total
-    type(cvode_stats), intent(in) :: part
-    total%steps = total%steps + part%steps
-    total%rhs_evals = total%rhs_evals + part%rhs_evals
-    total%jac_evals = total%jac_evals + part%jac_evals
-    total%lin_setups = total%lin_setups + part%lin_setups
-    total%err_test_fails = total%err_test_fails + part%err_test_fails
-    total%nonlin_iters = total%nonlin_iters + part%nonlin_iters
-    total%nonlin_fails = total%nonlin_fails + part%nonlin_fails
-    total%root_evals = total%root_evals + part%root_evals
-  end subroutine add_counters
 end module airlaunch_rigidized_coupling

@@ -26,7 +26,7 @@ module airlaunch_cvode
   use airlaunch_lapack_band, only: new_lapack_band_solver
   implicit none
   private
-  public :: cvode_options, cvode_solver, cvode_stats
+  public :: cvode_options, cvode_solver, cvode_stats, add_stats
 
   !> How to integrate.
   type :: cvode_options
@@ -288,6 +288,20 @@ contains
       ierr = FCVodeGetNumJacEvals(self%mem, n); s%jac_evals = n(1)
     end if
   end function solver_stats
+
+  !> Accumulate counters (a solver's restart at an event resets its own): total += part.
+  pure subroutine add_stats(total, part)
+    type(cvode_stats), intent(inout) :: total  !< running totals
+    type(cvode_stats), intent(in) :: part      !< counters to add
+    total%steps = total%steps + part%steps
+    total%rhs_evals = total%rhs_evals + part%rhs_evals
+    total%jac_evals = total%jac_evals + part%jac_evals
+    total%lin_setups = total%lin_setups + part%lin_setups
+    total%err_test_fails = total%err_test_fails + part%err_test_fails
+    total%nonlin_iters = total%nonlin_iters + part%nonlin_iters
+    total%nonlin_fails = total%nonlin_fails + part%nonlin_fails
+    total%root_evals = total%root_evals + part%root_evals
+  end subroutine add_stats
 
   !> Release every SUNDIALS object (safe to call twice).
   subroutine solver_free(self)
