@@ -110,8 +110,8 @@ contains
       "release (Case 0->1):        t = " // fx(r%release_time, 3) // " s" // nl // &
       "edge (Case 1->2):           t = " // fx(r%edge_time, 3) // " s" // nl // &
       "separation (Case 2->3):     t = " // fx(r%separation_time, 3) // " s" // &
-      merge(" (early: edge normal force reached zero)", "                                        ", &
-        r%early_separation) // nl // &
+      trim(merge(" (early: edge normal force reached zero)", "                                        ", &
+        r%early_separation)) // nl // &
       edge_note(r%edge_pull_time) // &
       "  rocket pitch " // fx(r%pitch_at_separation_deg, 2) // " deg, pitch rate " // &
       fx(r%pitch_rate_at_separation_deg_s, 2) // " deg/s" // nl // &
