@@ -17,7 +17,7 @@ module airlaunch_namelist
   private
   public :: nml_file, nml_var, unset_real, unset_int
   public :: require_positive, require_nonnegative, require_range, require_choice, require_set
-  public :: require_int_range
+  public :: require_int_range, edit_distance
 
   !> Sentinel of a required real/integer value that the file did not set.
   real(dp), parameter :: unset_real = -huge(1.0_dp)
@@ -544,7 +544,7 @@ contains
     if (jbest > 0) s = " (did you mean '" // lower(trim(vars(jbest)%name)) // "'?)"
   end function closest
 
-  !> Levenshtein distance.
+  !> Levenshtein distance between two names (for "did you mean" suggestions).
   pure integer function edit_distance(a, b) result(d)
     character(len=*), intent(in) :: a, b
     integer :: m(0:len(a), 0:len(b)), i, j

@@ -13,7 +13,7 @@ module airlaunch_sweep_case
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
-  use airlaunch_namelist, only: nml_file
+  use airlaunch_namelist, only: nml_file, edit_distance
   use airlaunch_run_config, only: run_config, read_run_config
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
@@ -466,20 +466,4 @@ contains
     end do
   end function closest
 
-  pure integer function edit_distance(a, b) result(d)
-    character(len=*), intent(in) :: a, b
-    integer :: m(0:len(a), 0:len(b)), i, j
-    do i = 0, len(a)
-      m(i, 0) = i
-    end do
-    do j = 0, len(b)
-      m(0, j) = j
-    end do
-    do j = 1, len(b)
-      do i = 1, len(a)
-        m(i, j) = min(m(i-1, j) + 1, m(i, j-1) + 1, m(i-1, j-1) + merge(0, 1, a(i:i) == b(j:j)))
-      end do
-    end do
-    d = m(len(a), len(b))
-  end function edit_distance
 end module airlaunch_sweep_case
