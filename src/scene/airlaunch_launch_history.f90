@@ -10,11 +10,13 @@ module airlaunch_launch_history
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_scenario_config, only: scenario_config
   use airlaunch_separation, only: separation_system
-  use airlaunch_cut_joint, only: phase_free
+  use airlaunch_cut_joint, only: phase_free, phase_name
+  use airlaunch_strings, only: str
   use airlaunch_launch_loads, only: launch_loads
   implicit none
   private
   public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones
+  public :: handle_launch_event, rocket_pitch_rate
   public :: write_milestones, event_or_minus, segment_distance
 
   !> Milestones of one run (also the summary row of a sweep case).
@@ -86,8 +88,7 @@ contains
     associate(b0 => sep%bodies(0), b1 => sep%bodies(1))
       s%aircraft_euler = dcm_to_euler(b0%c)
       s%rocket_euler = dcm_to_euler(b1%c)
-      ! Euler pitch rate without the singularity: theta' = sin(gamma) w_y + cos(gamma) w_z (Eqs. (49)-(50))
-      s%pitch_rate = sin(s%rocket_euler(3))*b1%w(2) + cos(s%rocket_euler(3))*b1%w(3)
+      s%pitch_rate = rocket_pitch_rate(sep)
       ! load factor along the aircraft's y axis: specific force / g
       s%load_factor = dot_product(b0%c(:, 2), sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
       ! clearances of the rocket's surface (its axis segment less the radius)
@@ -106,6 +107,48 @@ contains
       s%elevator = src%aircraft_out%delta_e
     end select
   end function sample_launch
+
+  !> Euler pitch rate of the rocket (body 1 of `sep`) [rad/s], free of the
+  !> singularity: theta' = sin(gamma) w_y + cos(gamma) w_z (Eqs. (49)-(50)).
+  real(dp) function rocket_pitch_rate(sep) result(r)
+    type(separation_system), intent(in) :: sep
+    real(dp) :: e(3)
+    e = dcm_to_euler(sep%bodies(1)%c)
+    r = sin(e(3))*sep%bodies(1)%w(2) + cos(e(3))*sep%bodies(1)%w(3)
+  end function rocket_pitch_rate
+
+  !> An event at time t (state y of the separation system, bodies loaded):
+  !> the first pitch maximum (root `pitch_root` < 0 in Case 3, while
+  !> `find_pitch_max`), the phase change of the separation scene (`which_sep`),
+  !> and the rocket's attitude at separation.  `changed`: the phase changed.
+  subroutine handle_launch_event(res, t, sep, y, which_sep, pitch_root, find_pitch_max, changed, error)
+    type(launch_result), intent(inout) :: res
+    real(dp), intent(in) :: t, y(:)
+    type(separation_system), intent(inout) :: sep
+    integer, intent(in) :: which_sep(:), pitch_root
+    logical, intent(inout) :: find_pitch_max
+    logical, intent(out) :: changed
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: e(3)
+    if (pitch_root < 0 .and. sep%phase == phase_free .and. find_pitch_max) then
+      e = dcm_to_euler(sep%bodies(1)%c)
+      res%pitch_max_time = t
+      res%pitch_max_deg = e(2)*rad2deg
+      res%nose_elevation_at_max_deg = nose_elevation(sep%bodies(1)%q)*rad2deg
+      find_pitch_max = .false.
+    end if
+    call sep%handle_event(t, y, which_sep, changed, error)
+    if (allocated(error)) then
+      error%message = phase_name(sep%phase) // ", t = " // str(t) // " s: " // error%message
+      return
+    end if
+    if (changed .and. sep%phase == phase_free .and. res%separation_time < 0.0_dp) then
+      e = dcm_to_euler(sep%bodies(1)%c)
+      res%pitch_at_separation_deg = e(2)*rad2deg
+      res%pitch_rate_at_separation_deg_s = rocket_pitch_rate(sep)*rad2deg
+      res%separation_time = t
+    end if
+  end subroutine handle_launch_event
 
   !> Update the running milestones with a sample; true if any extremum moved
   !> (for &run stop_when_final).

@@ -125,7 +125,7 @@ contains
       type(error_type), allocatable, intent(inout) :: err
       logical :: event, changed
       integer :: which(rigidized_nroots), n_events, j
-      real(dp) :: t_target, e(3), eps, t_last
+      real(dp) :: t_target, eps, t_last
       eps = 1.0e-12_dp*max(1.0_dp, run%t_end)
       n_events = 0
       t_last = cpl%t
@@ -162,24 +162,9 @@ contains
         end if
         associate(c => cpl%chain)
           call c%prepare(cpl%t, cpl%chain_solver%y)
-          if (which(rigidized_nroots) < 0 .and. c%sep%phase == phase_free .and. c%find_pitch_max) then
-            e = dcm_to_euler(c%sep%bodies(1)%c)
-            res%pitch_max_time = cpl%t
-            res%pitch_max_deg = e(2)*rad2deg
-            res%nose_elevation_at_max_deg = nose_elevation(c%sep%bodies(1)%q)*rad2deg
-            c%find_pitch_max = .false.
-          end if
-          call c%sep%handle_event(cpl%t, c%yabs, which(1:separation_nroots), changed, err)
-          if (allocated(err)) then
-            err%message = phase_name(c%sep%phase) // ", t = " // str(cpl%t) // " s: " // err%message
-            return
-          end if
-          if (changed .and. c%sep%phase == phase_free .and. res%separation_time < 0.0_dp) then
-            e = dcm_to_euler(c%sep%bodies(1)%c)
-            res%pitch_at_separation_deg = e(2)*rad2deg
-            res%pitch_rate_at_separation_deg_s = c%euler_pitch_rate()*rad2deg
-            res%separation_time = cpl%t
-          end if
+          call handle_launch_event(res, cpl%t, c%sep, c%yabs, which(1:separation_nroots), &
+            which(rigidized_nroots), c%find_pitch_max, changed, err)
+          if (allocated(err)) return
         end associate
         ! every event restarts the chain at its time (the outer step ended there)
         call cpl%restart_chain(err)

@@ -6,7 +6,7 @@ module airlaunch_launch_scene
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
-  use airlaunch_rotation, only: quat_from_euler, dcm_to_euler, nose_elevation
+  use airlaunch_rotation, only: quat_from_euler
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_linalg, only: solve_banded
   use airlaunch_run_config, only: run_config
@@ -22,7 +22,7 @@ module airlaunch_launch_scene
   use airlaunch_launch_loads, only: launch_loads
   use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size
   use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
-    record_milestones, write_milestones, event_or_minus, segment_distance
+    record_milestones, write_milestones, event_or_minus, segment_distance, handle_launch_event
   implicit none
   private
   public :: launch_result, run_launch, setup_launch
@@ -299,7 +299,7 @@ contains
       type(error_type), allocatable, intent(inout) :: err
       logical :: event, changed
       integer :: which(launch_nroots), guard, status
-      real(dp) :: e(3)
+
       do guard = 1, 100
         call solver%advance(t_target, err, event, which)
         if (allocated(err)) then
@@ -308,24 +308,9 @@ contains
         end if
         if (.not. event) return
         call sys%prepare(solver%t, solver%y, status)
-        if (which(launch_nroots) < 0 .and. sys%sep%phase == phase_free .and. sys%find_pitch_max) then
-          e = dcm_to_euler(sys%sep%bodies(1)%c)
-          res%pitch_max_time = solver%t
-          res%pitch_max_deg = e(2)*rad2deg
-          res%nose_elevation_at_max_deg = nose_elevation(sys%sep%bodies(1)%q)*rad2deg
-          sys%find_pitch_max = .false.
-        end if
-        call sys%sep%handle_event(solver%t, sys%yabs(1:rigid_size), which(1:launch_nroots-1), changed, err)
-        if (allocated(err)) then
-          err%message = phase_name(sys%sep%phase) // ", t = " // str(solver%t) // " s: " // err%message
-          return
-        end if
-        if (changed .and. sys%sep%phase == phase_free .and. res%separation_time < 0.0_dp) then
-          e = dcm_to_euler(sys%sep%bodies(1)%c)
-          res%pitch_at_separation_deg = e(2)*rad2deg
-          res%pitch_rate_at_separation_deg_s = sys%euler_pitch_rate()*rad2deg
-          res%separation_time = solver%t
-        end if
+        call handle_launch_event(res, solver%t, sys%sep, sys%yabs(1:rigid_size), which(1:launch_nroots-1), &
+          which(launch_nroots), sys%find_pitch_max, changed, err)
+        if (allocated(err)) return
         if (changed) then
           ! the constraint set changed: restart CVODE from the event (its
           ! counters restart too, so keep the totals)
