@@ -420,6 +420,7 @@ contains
       if (chars(n+1) == c_null_char) exit
       n = n + 1
     end do
+    if (allocated(cb%last_message)) deallocate(cb%last_message)
     allocate(character(len=n) :: cb%last_message)
     cb%last_message = transfer(chars(1:n), cb%last_message)
   end subroutine error_handler

@@ -98,7 +98,11 @@ program test_cvode
   if (allocated(error)) then
     call check(index(error%message, "test quantity became invalid") > 0 .and. &
       index(error%message, "t = ") > 0, "message: " // error%message)
+    deallocate(error)
   end if
+  ! a second failure of the same solver replaces the kept SUNDIALS message
+  call solver%advance(2.0_dp, error)
+  call check(allocated(error), "a second failure is reported too")
   call solver%free()
   call finish()
 end program test_cvode
