@@ -78,12 +78,17 @@ contains
   !> Solve A X = B for a general square A (LU with partial pivoting, dgetrf/dgetrs).
   !> A is overwritten by its factors, B by the solution.  A singular pivot or a
   !> reciprocal condition number below `rcond_limit` is an error naming `what`.
-  subroutine solve_general(a, b, error, what, rcond)
+  !> With `estimate_condition = .false.` (right-hand sides: small systems solved
+  !> thousands of times) LAPACK's estimate (dgecon, several times the cost of
+  !> the solve) is replaced by the pivot ratio min|u_ii|/max|u_ii| against the
+  !> same limit.
+  subroutine solve_general(a, b, error, what, rcond, estimate_condition)
     real(dp), intent(inout) :: a(:, :)       !< n x n matrix; on exit its LU factors
     real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     character(len=*), intent(in) :: what     !< name of the system, for the message
     real(dp), intent(out), optional :: rcond !< reciprocal condition number (1-norm)
+    logical, intent(in), optional :: estimate_condition !< dgecon (default) or the pivot ratio
     integer :: n, info, ipiv(size(a, 1)), iwork(size(a, 1))
     real(dp) :: anorm, rc, work(4*size(a, 1))
     n = size(a, 1)
@@ -101,7 +106,11 @@ contains
       call fatal_error(error, what // ": dgetrf illegal argument " // str(-info))
       return
     end if
-    call dgecon('1', n, a, n, anorm, rc, work, iwork, info)
+    if (wants_estimate(estimate_condition)) then
+      call dgecon('1', n, a, n, anorm, rc, work, iwork, info)
+    else
+      rc = pivot_ratio(a)
+    end if
     if (present(rcond)) rcond = rc
     if (rc < rcond_limit) then
       call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
@@ -114,13 +123,15 @@ contains
   !> Solve A X = B for a symmetric positive-definite A (Cholesky, dpotrf/dpotrs).
   !> Only the upper triangle of A is read.  A matrix that is not positive
   !> definite, or whose reciprocal condition number is below `rcond_limit`, is
-  !> an error naming `what`.
-  subroutine solve_spd(a, b, error, what, rcond)
+  !> an error naming `what`.  `estimate_condition` as for solve_general (the
+  !> pivot ratio is then that of the Cholesky factor, squared).
+  subroutine solve_spd(a, b, error, what, rcond, estimate_condition)
     real(dp), intent(inout) :: a(:, :)       !< n x n SPD matrix; on exit its Cholesky factor
     real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     character(len=*), intent(in) :: what     !< name of the system, for the message
     real(dp), intent(out), optional :: rcond !< reciprocal condition number (1-norm)
+    logical, intent(in), optional :: estimate_condition !< dpocon (default) or the pivot ratio
     integer :: n, info, i, iwork(size(a, 1))
     real(dp) :: anorm, rc, work(3*size(a, 1))
     n = size(a, 1)
@@ -131,9 +142,11 @@ contains
     end if
     ! 1-norm of the symmetric matrix from its upper triangle
     anorm = 0.0_dp
-    do i = 1, n
-      anorm = max(anorm, sum(abs(a(1:i, i))) + sum(abs(a(i, i+1:n))))
-    end do
+    if (wants_estimate(estimate_condition)) then
+      do i = 1, n
+        anorm = max(anorm, sum(abs(a(1:i, i))) + sum(abs(a(i, i+1:n))))
+      end do
+    end if
     call dpotrf('U', n, a, n, info)
     if (info > 0) then
       call fatal_error(error, what // ": matrix is not positive definite (leading minor " &
@@ -143,7 +156,11 @@ contains
       call fatal_error(error, what // ": dpotrf illegal argument " // str(-info))
       return
     end if
-    call dpocon('U', n, a, n, anorm, rc, work, iwork, info)
+    if (wants_estimate(estimate_condition)) then
+      call dpocon('U', n, a, n, anorm, rc, work, iwork, info)
+    else
+      rc = pivot_ratio(a)**2
+    end if
     if (present(rcond)) rcond = rc
     if (rc < rcond_limit) then
       call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
@@ -152,6 +169,29 @@ contains
     call dpotrs('U', n, size(b, 2), a, n, b, n, info)
     if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
   end subroutine solve_spd
+
+  !> True unless the caller asked for the cheap conditioning check.
+  pure logical function wants_estimate(estimate_condition)
+    logical, intent(in), optional :: estimate_condition  !< the caller's choice
+    wants_estimate = .true.
+    if (present(estimate_condition)) wants_estimate = estimate_condition
+  end function wants_estimate
+
+  !> min |d_ii| / max |d_ii| of a triangular factor: a cheap indicator of
+  !> near-singularity (an upper bound of the factor's reciprocal condition number).
+  pure real(dp) function pivot_ratio(f) result(r)
+    real(dp), intent(in) :: f(:, :)  !< square factor (its diagonal is read)
+    integer :: i
+    real(dp) :: dmin, dmax
+    dmin = huge(1.0_dp)
+    dmax = 0.0_dp
+    do i = 1, size(f, 1)
+      dmin = min(dmin, abs(f(i, i)))
+      dmax = max(dmax, abs(f(i, i)))
+    end do
+    r = 0.0_dp
+    if (dmax > 0.0_dp) r = dmin/dmax
+  end function pivot_ratio
 
   !> Solve A X = B for a band matrix A with kl sub- and ku super-diagonals
   !> (LU with partial pivoting, dgbsv).  `ab` is in LAPACK band storage with

@@ -135,7 +135,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     ws%sys(n)%a = alpha(1:n, 1:n)
     ws%sys(n)%b(:, 1) = -beta(1:n)
-    call solve_general(ws%sys(n)%a, ws%sys(n)%b, error, "CFA matrix alpha (Eqs. (43), (68))")
+    call solve_general(ws%sys(n)%a, ws%sys(n)%b, error, "CFA matrix alpha (Eqs. (43), (68))", &
+      estimate_condition=.false.)
     if (allocated(error)) return
     lambda(1:n) = ws%sys(n)%b(:, 1)
   end subroutine solve_all
@@ -154,7 +155,8 @@ contains
     ws%sys(m)%a(:, 1) = ws%sys(m)%a(:, 1) + k*nhat(1)*alpha(2:n, 1)
     ws%sys(m)%a(:, 2) = ws%sys(m)%a(:, 2) + k*nhat(2)*alpha(2:n, 1)
     ws%sys(m)%b(:, 1) = -beta(2:n)
-    call solve_general(ws%sys(m)%a, ws%sys(m)%b, error, "CFA matrix alpha (Eqs. (43), (68))")
+    call solve_general(ws%sys(m)%a, ws%sys(m)%b, error, "CFA matrix alpha (Eqs. (43), (68))", &
+      estimate_condition=.false.)
     if (allocated(error)) return
     lambda(2:n) = ws%sys(m)%b(:, 1)
     lambda(1) = k*dot_product(nhat, lambda(2:3))

@@ -271,8 +271,10 @@ contains
       self%rhs(1:3, k+1) = probe_force(:, k)
       self%rhs(4:6, k+1) = probe_moment(:, k)
     end do
-    call solve_spd(self%mass_matrix, self%rhs, error, "Kane mass matrix Vhat^T A (Eq. (65)) of a " // &
-      str(self%n) // "-body chain")
+    ! every right-hand side: the cheap conditioning check (the message is built on failure only)
+    call solve_spd(self%mass_matrix, self%rhs, error, "Kane mass matrix Vhat^T A (Eq. (65))", &
+      estimate_condition=.false.)
+    if (allocated(error)) error%message = error%message // " of a " // str(self%n) // "-body chain"
   end subroutine chain_accelerations
 
   !> Chain state derivative from udot: rdot_1 = v, vdot = udot(1:3), quaternion

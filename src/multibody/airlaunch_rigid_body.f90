@@ -185,7 +185,9 @@ contains
       wdot(:, k) = moment(:, k) - gyro(k)*h
     end do
     jmat = body%inertia
-    call solve_spd(jmat, wdot, error, body%name // " inertia tensor (Eq. (48))")
+    ! the inertia was validated when the body was made: the cheap check suffices here
+    call solve_spd(jmat, wdot, error, "inertia tensor (Eq. (48))", estimate_condition=.false.)
+    if (allocated(error)) error%message = body%name // " " // error%message
   end subroutine newton_euler
 
   !> Derivative of the 13-state of one body from its accelerations.

@@ -46,6 +46,25 @@ program test_linalg
   s = 0; s(1, 1) = 1; s(2, 2) = -1; s(3, 3) = 1; s(4, 4) = 1
   call solve_spd(s, sb, error, "indefinite")
   call check(allocated(error), "an indefinite matrix is an error")
+  if (allocated(error)) deallocate(error)
+
+  call section("cheap conditioning check (right-hand sides): pivot ratio")
+  ! the pivot ratio of a triangular factor is an upper bound of its rcond: a
+  ! well-conditioned system passes, a graded near-singular one (pivots 1 and
+  ! 1e-16) is rejected like dgecon would, and the solution is unchanged
+  a = reshape([4.0_dp, -2.0_dp, 1.0_dp, 3.0_dp, 6.0_dp, -4.0_dp, 2.0_dp, 1.0_dp, 8.0_dp], [3, 3])
+  x(:, 1) = [1.0_dp, -2.0_dp, 0.5_dp]
+  b = matmul(a, x)
+  call solve_general(a, b, error, "test 3x3", rcond=rc, estimate_condition=.false.)
+  call check(.not. allocated(error) .and. maxval(abs(b - x)) < 1e-14_dp, "well-conditioned: solved")
+  call check(rc > 0.1_dp .and. rc <= 1.0_dp, "pivot ratio of order one (" // trim(fmt(rc)) // ")")
+  a = 0; a(1, 1) = 1; a(2, 2) = 1e-16_dp; a(3, 3) = 1; b = 1
+  call solve_general(a, b, error, "graded", estimate_condition=.false.)
+  call check(allocated(error), "near-singular general matrix rejected")
+  if (allocated(error)) deallocate(error)
+  s = 0; s(1, 1) = 1; s(2, 2) = 1e-20_dp; s(3, 3) = 1; s(4, 4) = 1; sb = 1
+  call solve_spd(s, sb, error, "graded SPD", rcond=rc, estimate_condition=.false.)
+  call check(allocated(error), "near-singular SPD matrix rejected (rcond " // trim(fmt(rc)) // ")")
   call finish()
 contains
   function fmt(v) result(t)
