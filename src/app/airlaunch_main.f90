@@ -119,7 +119,7 @@ contains
       " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg)" // nl // &
       "minimum rocket-empennage clearance: " // fx(merge(r%min_clearance, -1.0d0, r%min_clearance < 1.0d300), 2) // &
       " m" // nl // &
-      "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at t = " // fx(r%peak_tension_time, 3) // " s" // nl // &
+      tension_note(r) // &
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
       "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
       "integration: " // str(int(r%stats%steps)) // " steps, " // str(int(r%stats%rhs_evals)) // &
@@ -127,6 +127,18 @@ contains
       str(int(r%stats%nonlin_iters)) // " Newton iterations, " // str(int(r%stats%nonlin_fails)) // &
       " convergence failures, " // str(int(r%stats%err_test_fails)) // " error-test failures"
   end function launch_summary
+
+  !> The peak line tension, or that the scene has no line.
+  function tension_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s
+    if (r%has_line) then
+      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at t = " // fx(r%peak_tension_time, 3) // &
+        " s" // new_line("a")
+    else
+      s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
+    end if
+  end function tension_note
 
   !> Note on a bilateral edge that had to pull (empty otherwise).
   function edge_note(t) result(s)

@@ -35,6 +35,7 @@ module airlaunch_launch_history
     real(dp) :: max_constraint_residual = 0.0_dp
     real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
     real(dp) :: end_time = 0.0_dp
+    logical :: has_line = .true.   !< false: no line (no peak tension; its attributes are left out)
     type(cvode_stats) :: stats
   end type launch_result
 
@@ -53,6 +54,7 @@ module airlaunch_launch_history
   !> The sampled history of the output contract.
   type :: launch_history
     integer :: nrec = 0
+    logical :: has_line = .true.   !< false: no line and no parachute (their variables are left out)
     real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
       load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
       t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
@@ -65,16 +67,21 @@ module airlaunch_launch_history
 
 contains
 
-  !> Room for nmax samples of a line with n segments.
-  subroutine history_init(self, nmax, n)
+  !> Room for nmax samples of a line with n segments (`has_line` false: no
+  !> line, nothing of it is allocated).
+  subroutine history_init(self, nmax, n, has_line)
     class(launch_history), intent(inout) :: self
     integer, intent(in) :: nmax, n
+    logical, intent(in), optional :: has_line
     self%nrec = 0
+    self%has_line = .true.
+    if (present(has_line)) self%has_line = has_line
     allocate(self%time(nmax), self%phase(nmax), self%ac_pos(3, nmax), self%ac_eul(3, nmax), self%ac_alpha(nmax), &
       self%ac_q(nmax), self%elev(nmax), self%load_factor(nmax), self%rk_pos(3, nmax), self%rk_vel(3, nmax), &
-      self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%pc_pos(3, nmax), self%t_rocket(nmax), &
-      self%t_chute(nmax), self%nodes(3, 0:n, nmax), self%cforce(6, nmax), self%normal(nmax), &
+      self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%cforce(6, nmax), self%normal(nmax), &
       self%friction(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax))
+    if (self%has_line) allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), &
+      self%nodes(3, 0:n, nmax))
   end subroutine history_init
 
   !> The outputs of the rigid part of `sep` (evaluated at time t) and of the
@@ -151,23 +158,25 @@ contains
   end subroutine handle_launch_event
 
   !> Update the running milestones with a sample; true if any extremum moved
-  !> (for &run stop_when_final).
+  !> (for &run stop_when_final).  `tension` absent: the scene has no line.
   logical function record_milestones(res, t, s, sep, tension) result(changed)
     type(launch_result), intent(inout) :: res
     real(dp), intent(in) :: t
     type(launch_sample), intent(in) :: s
     type(separation_system), intent(in) :: sep
-    real(dp), intent(in) :: tension(:)
+    real(dp), intent(in), optional :: tension(:)
     real(dp) :: dtheta, dn
     changed = .false.
     if (sep%phase == phase_free .and. s%clearance < res%min_clearance) then
       res%min_clearance = s%clearance
       changed = .true.
     end if
-    if (maxval(tension) > res%peak_tension) then
-      res%peak_tension = maxval(tension)
-      res%peak_tension_time = t
-      changed = .true.
+    if (present(tension)) then
+      if (maxval(tension) > res%peak_tension) then
+        res%peak_tension = maxval(tension)
+        res%peak_tension_time = t
+        changed = .true.
+      end if
     end if
     dtheta = abs(s%aircraft_euler(2)*rad2deg - res%trim_alpha_deg)
     dn = abs(s%load_factor - 1.0_dp)
@@ -179,13 +188,14 @@ contains
   end function record_milestones
 
   !> Append one sample: the rigid part from `sep` and `s`, the line's nodes,
-  !> end tensions and the parachute's position from the caller.
+  !> end tensions and the parachute's position from the caller (all three
+  !> absent without a line).
   subroutine history_append(self, t, s, sep, nodes, tension, chute)
     class(launch_history), intent(inout) :: self
     real(dp), intent(in) :: t
     type(launch_sample), intent(in) :: s
     type(separation_system), intent(in) :: sep
-    real(dp), intent(in) :: nodes(:, 0:), tension(:), chute(3)
+    real(dp), intent(in), optional :: nodes(:, 0:), tension(:), chute(3)
     integer :: k
     self%nrec = self%nrec + 1
     k = self%nrec
@@ -204,10 +214,12 @@ contains
       self%rk_rate(k) = s%pitch_rate*rad2deg
       self%rk_elev(k) = nose_elevation(b1%q)*rad2deg
     end associate
-    self%pc_pos(:, k) = chute
-    self%t_rocket(k) = tension(1)
-    self%t_chute(k) = tension(size(tension))
-    self%nodes(:, :, k) = nodes
+    if (self%has_line .and. present(nodes) .and. present(tension) .and. present(chute)) then
+      self%pc_pos(:, k) = chute
+      self%t_rocket(k) = tension(1)
+      self%t_chute(k) = tension(size(tension))
+      self%nodes(:, :, k) = nodes
+    end if
     self%cforce(1:3, k) = sep%rh_force
     self%cforce(4:6, k) = sep%rh_moment
     self%normal(k) = sep%normal_force
@@ -224,18 +236,18 @@ contains
     character(len=*), intent(in) :: chute_text   !< long name of parachute_position
     character(len=*), intent(in) :: line_text    !< qualifier of the line variables ("" or a note)
     type(error_type), allocatable, intent(inout) :: werr
-    real(dp) :: node_index(0:ubound(self%nodes, 2))
+    real(dp), allocatable :: node_index(:)
     integer :: j, nrec, n
     nrec = self%nrec
-    n = ubound(self%nodes, 2)
-    do j = 0, n
-      node_index(j) = j
-    end do
       call w%add_dim("time", self%time(1:nrec), "s", "time since the start (trimmed flight)", werr)
       call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
         "earth-frame component: 0 = x forward, 1 = y up, 2 = z right", werr)
       call w%add_dim("angle", [0.0_dp, 1.0_dp, 2.0_dp], "1", "Euler angle: 0 = yaw, 1 = pitch, 2 = roll", werr)
-      call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
+      if (self%has_line) then
+        n = ubound(self%nodes, 2)
+        node_index = [(real(j, dp), j = 0, n)]
+        call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
+      end if
       call w%add_dim("wrench", [0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp], "1", &
         "0-2 force on the rocket (earth x, y, z), 3-5 moment on the rocket about its CG (rocket axes)", werr)
       call w%add_var_1d("phase", ["time"], self%phase(1:nrec), "1", "phase: 0 locked, 1 rail extraction, " // &
@@ -258,13 +270,15 @@ contains
         "rocket Euler pitch rate", werr)
       call w%add_var_1d("rocket_nose_elevation_deg", ["time"], self%rk_elev(1:nrec), "degree", &
         "rocket nose elevation, continuous through the vertical (0 level forward, 90 up, 180 level aft)", werr)
-      call w%add_var_2d("parachute_position", ["xyz ", "time"], self%pc_pos(:, 1:nrec), "m", chute_text, werr)
-      call w%add_var_1d("line_tension_rocket_end_N", ["time"], self%t_rocket(1:nrec), "N", &
-        "line tension at the rocket end" // line_text, werr)
-      call w%add_var_1d("line_tension_parachute_end_N", ["time"], self%t_chute(1:nrec), "N", &
-        "line tension at the parachute end" // line_text, werr)
-      call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], self%nodes(:, :, 1:nrec), "m", &
-        "line node positions" // line_text // ", earth frame", werr)
+      if (self%has_line) then
+        call w%add_var_2d("parachute_position", ["xyz ", "time"], self%pc_pos(:, 1:nrec), "m", chute_text, werr)
+        call w%add_var_1d("line_tension_rocket_end_N", ["time"], self%t_rocket(1:nrec), "N", &
+          "line tension at the rocket end" // line_text, werr)
+        call w%add_var_1d("line_tension_parachute_end_N", ["time"], self%t_chute(1:nrec), "N", &
+          "line tension at the parachute end" // line_text, werr)
+        call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], self%nodes(:, :, 1:nrec), "m", &
+          "line node positions" // line_text // ", earth frame", werr)
+      end if
       call w%add_var_2d("constraint_force", ["wrench", "time  "], self%cforce(:, 1:nrec), "N or N m", &
         "cut-joint constraint wrench R_H on the rocket (CFA)", werr)
       call w%add_var_1d("edge_normal_force_N", ["time"], self%normal(1:nrec), "N", &
@@ -302,8 +316,11 @@ contains
     call w%add_real_att("/", "pitch_max_deg", res%pitch_max_deg, error)
     call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", res%nose_elevation_at_max_deg, error)
     call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
-    call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
-    call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
+    call w%add_text_att("/", "line_enabled", trim(merge("true ", "false", res%has_line)), error)
+    if (res%has_line) then
+      call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
+      call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
+    end if
     call w%add_real_att("/", "max_aircraft_pitch_excursion_deg", res%max_aircraft_pitch_excursion_deg, error)
     call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
     call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)

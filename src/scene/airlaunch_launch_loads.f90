@@ -25,6 +25,7 @@ module airlaunch_launch_loads
     real(dp) :: edge_point(3) = 0.0_dp              !< ramp edge, aircraft axes [m]
     real(dp) :: tie_down(3) = 0.0_dp                !< line attachment, rocket axes [m]
     logical :: aircraft_aero_on = .true.            !< false for a prescribed aircraft
+    logical :: line_on = .true.                     !< false: the scene has no line
     ! --- set by the scene before each evaluation
     integer :: phase = 0                            !< current Case
     real(dp) :: line_force(3) = 0.0_dp              !< line end force on the rocket, earth [N]
@@ -73,7 +74,7 @@ contains
       call rocket_aero_eval(self%rocket, air%density, matmul(transpose(b1%c), b1%v), b1%w, x_shield, f, m)
       force(:, 1) = force(:, 1) + matmul(b1%c, f)
       moment(:, 1) = moment(:, 1) + m
-      call add_point_force(b1, self%tie_down, self%line_force, force(:, 1), moment(:, 1))
+      if (self%line_on) call add_point_force(b1, self%tie_down, self%line_force, force(:, 1), moment(:, 1))
     end associate
     if (.false.) x_shield = t
   end subroutine launch_add_loads

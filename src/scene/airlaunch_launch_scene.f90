@@ -58,21 +58,24 @@ contains
     type(cut_joint_options) :: jopt
     type(launch_loads) :: loads
     type(line_params) :: lp
-    real(dp) :: v0, radius, r_rocket(3), r_tie(3), pull, seg, dir(3)
-    integer :: n, k, i, status
+    real(dp) :: v0, radius, r_rocket(3), r_tie(3), pull
+    integer :: n, i, status
 
     air = isa(cfg%flight%altitude)
     v0 = cfg%flight%mach*air%sound_speed
     radius = cfg%rocket%aero%diameter/2
-    ! the line: weight and drag on, ISA density along it
-    lp = line_params(length=cfg%line%length, n_seg=cfg%line%n_seg, ea=cfg%line%ea, &
-      mass_per_length=cfg%line%mass_per_length, damping=cfg%line%damping, diameter=cfg%line%diameter, &
-      cd_normal=cfg%line%cd_normal, cd_tangential=cfg%line%cd_tangential, gravity=.true., air=.true.)
-    call sys%line%init(lp, error)
-    if (allocated(error)) return
-    sys%chute = cfg%chute
-    if (sys%chute%deploy_time >= 0.0_dp) sys%chute%fill_time = &
-      sys%chute%fill_constant*sqrt(4*sys%chute%drag_area/(pi*sys%chute%cd0))/v0
+    sys%has_line = cfg%line%enabled
+    if (sys%has_line) then
+      ! the line: weight and drag on, ISA density along it
+      lp = line_params(length=cfg%line%length, n_seg=cfg%line%n_seg, ea=cfg%line%ea, &
+        mass_per_length=cfg%line%mass_per_length, damping=cfg%line%damping, diameter=cfg%line%diameter, &
+        cd_normal=cfg%line%cd_normal, cd_tangential=cfg%line%cd_tangential, gravity=.true., air=.true.)
+      call sys%line%init(lp, error)
+      if (allocated(error)) return
+      sys%chute = cfg%chute
+      if (sys%chute%deploy_time >= 0.0_dp) sys%chute%fill_time = &
+        sys%chute%fill_constant*sqrt(4*sys%chute%drag_area/(pi*sys%chute%cd0))/v0
+    end if
 
     ! --- trim of the Case 0 system (aircraft + locked rocket + parachute pull)
     r_rocket = [cfg%bay%ramp_edge_x + cfg%bay%l0, cfg%bay%floor_y + radius, 0.0_dp]
@@ -81,6 +84,7 @@ contains
     pull = 0.5_dp*air%density*v0**2*(sys%chute%drag_area + cfg%line%cd_tangential*pi*cfg%line%diameter &
       *cfg%line%length)
     if (sys%chute%deploy_time >= 0.0_dp) pull = 0.5_dp*air%density*v0**2*sys%chute%packed_drag_area
+    if (.not. sys%has_line) pull = 0.0_dp
     tp = trim_problem(aircraft_mass=cfg%aircraft%mass, rocket_mass=cfg%rocket%mass, r_rocket=r_rocket, &
       r_tie=r_tie, pull=pull, density=air%density, speed=v0, mode=cfg%flight%trim_mode, &
       alpha_target=cfg%flight%trim_alpha)
@@ -117,6 +121,7 @@ contains
     loads%edge_point = geo%edge_point
     loads%tie_down = sys%tie_down
     loads%aircraft_aero_on = cfg%aircraft%dynamics /= "prescribed"
+    loads%line_on = sys%has_line
     call sys%sep%add_source(loads)
     sys%iloads = size(sys%sep%sources)
 
@@ -124,23 +129,18 @@ contains
     !     the tie-down point, stretched by the steady pull
     sys%v_ref = v0
     sys%h_ref = cfg%flight%altitude
-    n = sys%line%n
+    n = merge(sys%line%n, 0, sys%has_line)
     allocate(y0(rigid_size + 6*n), sys%yabs(rigid_size + 6*n), sys%ydabs(rigid_size + 6*n))
-    allocate(sys%x(3, 0:n), sys%v(3, 0:n), sys%f(3, 0:n), sys%tension(n))
     call sys%sep%pack_state(y0(1:rigid_size))
     do i = 0, 1
       y0(13*i+1:13*i+3) = y0(13*i+1:13*i+3) - [0.0_dp, sys%h_ref, 0.0_dp]
       y0(13*i+4) = y0(13*i+4) - v0
     end do
-    seg = sys%line%l0*(1.0_dp + pull/cfg%line%ea)
-    dir = [-1.0_dp, 0.0_dp, 0.0_dp]
-    do k = 1, n
-      i = rigid_size + 6*(k - 1)
-      y0(i+1:i+3) = sys%sep%bodies(1)%point_position(sys%tie_down) + k*seg*dir - [0.0_dp, sys%h_ref, 0.0_dp]
-      y0(i+4:i+6) = 0.0_dp
-    end do
-    call settle_line(sys, y0, error)
-    if (allocated(error)) return
+    if (sys%has_line) then
+      allocate(sys%x(3, 0:n), sys%v(3, 0:n), sys%f(3, 0:n), sys%tension(n))
+      call place_line(sys, cfg, pull, y0, error)
+      if (allocated(error)) return
+    end if
     call sys%prepare(0.0_dp, y0, status)
     call sys%sep%start(0.0_dp, sys%yabs(1:rigid_size), phase_preparation, error)
   contains
@@ -151,6 +151,27 @@ contains
       m(1, 1) = d(1); m(2, 2) = d(2); m(3, 3) = d(3)
     end function diag
   end subroutine setup_launch
+
+  !> The line's nodes in y: trailing straight aft from the tie-down point,
+  !> stretched by the steady pull, then settled to their static equilibrium.
+  subroutine place_line(sys, cfg, pull, y0, error)
+    type(launch_system), intent(inout) :: sys
+    type(scenario_config), intent(in) :: cfg
+    real(dp), intent(in) :: pull   !< steady pull of the parachute and line drag [N]
+    real(dp), intent(inout) :: y0(:)
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: seg, dir(3)
+    integer :: n, k, i
+    n = sys%line%n
+    seg = sys%line%l0*(1.0_dp + pull/cfg%line%ea)
+    dir = [-1.0_dp, 0.0_dp, 0.0_dp]
+    do k = 1, n
+      i = rigid_size + 6*(k - 1)
+      y0(i+1:i+3) = sys%sep%bodies(1)%point_position(sys%tie_down) + k*seg*dir - [0.0_dp, sys%h_ref, 0.0_dp]
+      y0(i+4:i+6) = 0.0_dp
+    end do
+    call settle_line(sys, y0, error)
+  end subroutine place_line
 
   !> Static equilibrium of the trailing line in the trimmed flight: every node
   !> moves with the aircraft at V0, node 0 is the tie-down point, and the node
@@ -263,11 +284,13 @@ contains
     ! is order 2 (&run max_order = 0).
     opts%max_order = run%max_order
     if (opts%max_order == 0) opts%max_order = 2
+    if (.not. sys%has_line) call rigid_only_options(run, opts)
     call solver%init(sys, 0.0_dp, y0, opts, error)
     if (allocated(error)) return
 
+    res%has_line = sys%has_line
     nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
-    if (run%trajectory) call hist%init(nmax, n)
+    if (run%trajectory) call hist%init(nmax, n, sys%has_line)
     call record()
     do k = 1, nmax - 1
       tout = min(k*run%output_dt, run%t_end)
@@ -344,10 +367,19 @@ contains
       call sys%prepare(solver%t, solver%y, status)
       call sys%sep%evaluate(solver%t, sys%yabs(1:rigid_size), eval_error)
       smp = sample_launch(cfg, sys%sep, sys%iloads)
-      if (record_milestones(res, solver%t, smp, sys%sep, sys%tension)) last_record_of_extremum = solver%t
+      if (sys%has_line) then
+        if (record_milestones(res, solver%t, smp, sys%sep, sys%tension)) last_record_of_extremum = solver%t
+      else
+        if (record_milestones(res, solver%t, smp, sys%sep)) last_record_of_extremum = solver%t
+      end if
       res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(solver%y(7:10)) - 1.0_dp), &
         abs(norm2(solver%y(20:23)) - 1.0_dp))
-      if (run%trajectory) call hist%append(solver%t, smp, sys%sep, sys%x, sys%tension, sys%x(:, n))
+      if (.not. run%trajectory) return
+      if (sys%has_line) then
+        call hist%append(solver%t, smp, sys%sep, sys%x, sys%tension, sys%x(:, n))
+      else
+        call hist%append(solver%t, smp, sys%sep)
+      end if
     end subroutine record
 
     subroutine write_output()
@@ -365,6 +397,17 @@ contains
 
 
 
+
+  !> Solver settings of a scene without a line (26 rigid states): a dense
+  !> Newton matrix (the band of the line is gone; 26 x 26 costs nothing), and
+  !> BDF up to order 5 unless &run max_order says otherwise (the order-2
+  !> default exists for the line's lightly damped axial modes).
+  subroutine rigid_only_options(run, opts)
+    type(run_config), intent(in) :: run
+    type(cvode_options), intent(inout) :: opts
+    opts%linear_solver = "dense"
+    if (run%max_order == 0 .and. opts%method == "bdf") opts%max_order = 5
+  end subroutine rigid_only_options
 
   !> Per-component absolute tolerances: positions and velocities in m and
   !> m/s (relative variables, small numbers), quaternions and rates tighter.

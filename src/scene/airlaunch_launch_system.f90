@@ -14,6 +14,10 @@
 !> its inflating canopy.  The half-segment mass at node 0 (rho l0/2) is
 !> neglected against the rocket's (its weight and drag are in the end force).
 !>
+!> Without a line (`&line enabled = .false.`, has_line false) the state is the
+!> 26 rigid components alone: no line arrays are allocated, no line force is
+!> computed and the rocket's tie-down carries no force.
+!>
 !> Events: the four of the separation scene (release, CG past the edge, nose
 !> past the edge, edge normal force zero) and, in Case 3 until it is found, the
 !> first maximum of the rocket's Euler pitch (Euler pitch rate
@@ -49,6 +53,7 @@ module airlaunch_launch_system
     real(dp) :: h_ref = 0.0_dp              !< h0 of the reference frame [m]
     real(dp) :: tie_down(3) = 0.0_dp        !< rocket axes [m]
     logical :: find_pitch_max = .true.      !< event 5 active in Case 3
+    logical :: has_line = .true.            !< false: no line, no parachute (state = rigid part)
     ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
     real(dp), allocatable :: yabs(:), ydabs(:)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)
@@ -77,6 +82,7 @@ contains
       self%yabs(13*i+2) = y(13*i+2) + self%h_ref
       self%yabs(13*i+4) = y(13*i+4) + self%v_ref
     end do
+    if (.not. self%has_line) return
     n = self%line%n
     do k = 1, n
       i = rigid_size + 6*(k - 1)
@@ -93,17 +99,19 @@ contains
     integer, intent(out) :: status
     call self%to_absolute(t, y)
     call self%sep%load_state(self%yabs(1:rigid_size))
-    self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
-    self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
-    call self%line%forces(self%x, self%v, self%f, self%tension, status)
-    if (status /= 0) then
-      self%failure = "line tension is not finite at t = " // str(t) // " s"
-      status = rhs_fatal
-      return
+    if (self%has_line) then
+      self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
+      self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
+      call self%line%forces(self%x, self%v, self%f, self%tension, status)
+      if (status /= 0) then
+        self%failure = "line tension is not finite at t = " // str(t) // " s"
+        status = rhs_fatal
+        return
+      end if
     end if
     select type (s => self%sep%sources(self%iloads)%source)
     type is (launch_loads)
-      s%line_force = self%f(:, 0)
+      if (self%has_line) s%line_force = self%f(:, 0)   ! else it keeps its zero
       s%phase = self%sep%phase
     end select
     status = rhs_ok
@@ -127,6 +135,7 @@ contains
     end if
     ydot(1:3) = ydot(1:3) - [self%v_ref, 0.0_dp, 0.0_dp]
     ydot(14:16) = ydot(14:16) - [self%v_ref, 0.0_dp, 0.0_dp]
+    if (.not. self%has_line) return
     n = self%line%n
     do k = 1, n - 1
       i = rigid_size + 6*(k - 1)

@@ -21,6 +21,13 @@ module airlaunch_scenario_config
   character(len=16), parameter :: scenario_groups(7) = [character(len=16) :: "run", "flight", &
     "aircraft", "bay", "rocket", "parachute", "line"]
 
+  !> Variables of &line (air-launch scene).
+  type(nml_var), parameter :: line_vars(13) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
+    nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
+    nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
+    nml_var("cd_tangential", "real"), nml_var("coupling", "string"), nml_var("outer_dt", "real"), &
+    nml_var("inner_rtol", "real"), nml_var("far_end", "string")]
+
   !> Flight condition and trim.
   type :: flight_config
     real(dp) :: altitude = 10000.0_dp        !< [m] geometric
@@ -68,6 +75,8 @@ module airlaunch_scenario_config
   end type rocket_config
 
   !> Flexible line (riser) between the rocket's tie-down and the parachute.
+  !> `enabled` false: the scene has neither line nor parachute (a gravity drop,
+  !> a rail release): the other components are then unused.
   type :: line_config
     real(dp) :: length = 60.0_dp
     integer :: n_seg = 60
@@ -81,6 +90,7 @@ module airlaunch_scenario_config
     real(dp) :: outer_dt = 0.02_dp          !< rigidized: outer step of §2.4 Steps 3-6 [s]
     real(dp) :: inner_rtol = 0.0_dp         !< rigidized: line sub-step tolerance (0: &run rtol)
     character(len=16) :: far_end = "parachute"  !< rigidized: node N "parachute" (far-end force) or "chain"
+    logical :: enabled = .true.             !< false: no line and no parachute
   end type line_config
 
   !> Everything the air-launch scene reads.
@@ -107,11 +117,15 @@ contains
     if (.not. allocated(error)) call read_aircraft(f, cfg%aircraft, echo, error)
     if (.not. allocated(error)) call read_bay(f, cfg%bay, echo, error)
     if (.not. allocated(error)) call read_rocket(f, cfg%rocket, echo, error)
-    if (.not. allocated(error)) call read_parachute(f, cfg%chute, echo, error)
-    if (.not. allocated(error)) call read_line(f, cfg%line, echo, error)
+    if (line_enabled_in(f)) then
+      if (.not. allocated(error)) call read_parachute(f, cfg%chute, echo, error)
+      if (.not. allocated(error)) call read_line(f, cfg%line, echo, error)
+    else
+      if (.not. allocated(error)) call read_no_line(f, cfg%line, echo, error)
+    end if
     if (.not. allocated(error)) call check_geometry(f, cfg, error)
     if (allocated(error) .or. .not. present(t_end)) return
-    if (cfg%chute%deploy_time >= t_end) then
+    if (cfg%line%enabled .and. cfg%chute%deploy_time >= t_end) then
       call fatal_error(error, f%path // ": &parachute: deploy_time = " // str(cfg%chute%deploy_time) // &
         " is not allowed (the parachute would never inflate: the run ends at t_end = " // str(t_end) // " s)")
     else if (cfg%bay%release_time >= t_end) then
@@ -449,24 +463,21 @@ contains
     character(len=16) :: coupling, far_end
     logical :: present
     character(len=256) :: msg
-    namelist /line/ length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling, &
-      outer_dt, inner_rtol, far_end
-    type(nml_var), parameter :: vars(12) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
-      nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
-      nml_var("diameter", "real"), nml_var("cd_normal", "real"), nml_var("cd_tangential", "real"), &
-      nml_var("coupling", "string"), nml_var("outer_dt", "real"), nml_var("inner_rtol", "real"), &
-      nml_var("far_end", "string")]
+    logical :: enabled
+    namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
+      coupling, outer_dt, inner_rtol, far_end
+    enabled = .true.
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
     cd_tangential = c%cd_tangential; coupling = c%coupling
     outer_dt = c%outer_dt; inner_rtol = c%inner_rtol; far_end = c%far_end
-    call open_group(f, "line", vars, u, present, error)
+    call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
     if (present) then
       read(u, nml=line, iostat=ios, iomsg=msg)
       close(u)
       if (ios /= 0) then
-        call f%diagnose("line", vars, msg, error)
+        call f%diagnose("line", line_vars, msg, error)
         return
       end if
     end if
@@ -487,11 +498,69 @@ contains
         "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
     if (allocated(error)) return
     c = line_config(length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling, &
-      outer_dt, inner_rtol, far_end)
+      outer_dt, inner_rtol, far_end, enabled)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=line)
     call echo_namelist_unit(u, echo)
   end subroutine read_line
+
+  !> The value of `&line enabled` as the file sets it (true if the file does
+  !> not set it, or sets something that is not a logical: read_line reports that).
+  logical function line_enabled_in(f) result(enabled)
+    type(nml_file), intent(in) :: f
+    integer :: i, ios
+    logical :: value
+    enabled = .true.
+    if (.not. allocated(f%items)) return
+    do i = 1, size(f%items)
+      if (f%items(i)%group /= "line" .or. f%items(i)%name /= "enabled") cycle
+      read(f%items(i)%value, *, iostat=ios) value
+      if (ios == 0) enabled = value
+    end do
+  end function line_enabled_in
+
+  !> `&line enabled = .false.`: the scene has no line and no parachute.  Any
+  !> other &line variable and any &parachute group contradict that and are
+  !> rejected; the echo is `&line enabled = F /` alone (so a sweep cannot vary
+  !> what does not exist).
+  subroutine read_no_line(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(line_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    logical :: enabled
+    integer :: u, i
+    logical :: present
+    namelist /line/ enabled
+    call open_group(f, "line", line_vars, u, present, error)
+    if (allocated(error)) return
+    if (present) close(u)
+    if (allocated(f%items)) then
+      do i = 1, size(f%items)
+        associate(it => f%items(i))
+          if (it%group == "line" .and. it%name /= "enabled") then
+            call fatal_error(error, f%where(it) // it%name // " = " // it%value // " is not allowed with " // &
+              "enabled = .false. (no line: remove " // it%name // ", or set enabled = .true.)")
+            return
+          else if (it%group == "parachute") then
+            call fatal_error(error, f%where(it) // it%name // " = " // it%value // " is not allowed with " // &
+              "&line enabled = .false. (no line, no parachute: remove the &parachute group, or enable the line)")
+            return
+          end if
+        end associate
+      end do
+    end if
+    if (f%has_group("parachute")) then
+      call fatal_error(error, f%path // ": &parachute: the group is not allowed with &line enabled = .false. " // &
+        "(no line, no parachute: remove the group, or enable the line)")
+      return
+    end if
+    c = line_config(enabled=.false.)
+    enabled = .false.
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=line)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_no_line
 
   !> Geometry that cannot work: rocket not fitting the bay, line shorter than
   !> the way out, tie-down or CG outside the rocket.
@@ -518,7 +587,7 @@ contains
         call fatal_error(error, f%path // ": &rocket: fin_semi_span = " // str(cfg%rocket%fin_semi_span) // &
           " is not allowed (fins in X span " // str(2*(r%diameter/2 + cfg%rocket%fin_semi_span)/sqrt(2.0_dp)) // &
           " m across, the bay is " // str(min(b%width, b%height)) // " m)")
-      else if (cfg%line%length <= nose_ahead - cfg%rocket%tie_down_from_nose) then
+      else if (cfg%line%enabled .and. cfg%line%length <= nose_ahead - cfg%rocket%tie_down_from_nose) then
         call fatal_error(error, f%path // ": &line: length = " // str(cfg%line%length) // &
           " is not allowed (shorter than the " // str(nose_ahead - cfg%rocket%tie_down_from_nose) // &
           " m from the tie-down point to the ramp edge)")

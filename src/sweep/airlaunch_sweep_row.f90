@@ -45,7 +45,7 @@ module airlaunch_sweep_row
     "time of the first rocket pitch maximum after separation (the firing moment; NaN: not reached)", &
     "rocket Euler pitch at its first maximum", "rocket nose elevation at the first pitch maximum", &
     "minimum distance from the rocket's surface to the ramp edge after separation (NaN: not separated)", &
-    "peak line tension", "time of the peak line tension", &
+    "peak line tension (NaN: the scene has no line)", "time of the peak line tension (NaN: no line)", &
     "largest aircraft pitch excursion from trim", "largest aircraft load factor excursion from 1", &
     "largest cut-joint position residual", "simulated time reached", &
     "CVODE steps", "right-hand-side evaluations", "Jacobian evaluations", "Newton iterations", &
@@ -100,7 +100,7 @@ contains
       event(res%pitch_max_time), merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%min_clearance, nan, res%min_clearance < huge(1.0_dp)), &
-      res%peak_tension, event(res%peak_tension_time), &
+      merge(res%peak_tension, nan, res%has_line), merge(event(res%peak_tension_time), nan, res%has_line), &
       res%max_aircraft_pitch_excursion_deg, res%max_load_factor_excursion, res%max_constraint_residual, &
       res%end_time, real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       real(res%stats%nonlin_iters, dp), real(res%stats%nonlin_fails, dp), real(res%stats%err_test_fails, dp), &
