@@ -11,6 +11,14 @@ import xarray as xr
 from conftest import ROOT, run_airlaunch
 
 PAPER = ROOT / "input" / "airlaunch_paper.nml"
+N_SEG = int(re.search(r"^\s*n_seg\s*=\s*(\d+)", PAPER.read_text(), flags=re.M).group(1))
+RTOL = float(re.search(r"^\s*rtol\s*=\s*(\S+)", PAPER.read_text(), flags=re.M).group(1))
+# the paper's own discretization (60 elements, its Fig. 8) at tight tolerances
+FINE = [(r"^  rtol = \S+.*$", "  rtol = 1.0e-6"), (r"^  atol = \S+.*$", "  atol = 1.0e-7"),
+        (r"^  n_seg = \d+.*$", "  n_seg = 60")]
+MILESTONES = ["edge_time_s", "separation_time_s", "edge_pull_time_s", "pitch_at_separation_deg",
+              "pitch_rate_at_separation_deg_s", "pitch_max_time_s", "pitch_max_deg", "min_clearance_m",
+              "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion"]
 
 CONTRACT_VARS = ["phase", "aircraft_position", "aircraft_euler_deg", "aircraft_alpha_deg",
                  "rocket_position", "rocket_velocity", "rocket_euler_deg", "rocket_pitch_rate_deg_s",
@@ -30,6 +38,17 @@ def paper_run(airlaunch_exe, tmp_path_factory):
     ds.close()
 
 
+@pytest.fixture(scope="module")
+def paper_fine(airlaunch_exe, tmp_path_factory):
+    d = tmp_path_factory.mktemp("paper_fine")
+    out = d / "fine.nc"
+    res = run_airlaunch(airlaunch_exe, _variant(d, FINE), "--output", out)
+    assert res.returncode == 0, res.stderr
+    ds = xr.open_dataset(out)
+    yield ds
+    ds.close()
+
+
 def test_output_contract(paper_run):
     ds, _ = paper_run
     for name in CONTRACT_VARS:
@@ -39,7 +58,7 @@ def test_output_contract(paper_run):
     for name in CONTRACT_ATTRS:
         assert name in ds.attrs, name
     assert ds["line_nodes"].dims == ("time", "node", "xyz")
-    assert ds.sizes["node"] == 61          # 60 segments (the paper's Fig. 8)
+    assert ds.sizes["node"] == N_SEG + 1
     assert ds.attrs["status"] == "completed"
 
 
@@ -76,8 +95,9 @@ def test_attitude_after_separation(paper_run):
     assert np.nanmax(ds["rocket_euler_deg"].sel(angle=1).values) <= 90.0 + 1e-9
 
 
-def test_invariants(paper_run):
-    ds, _ = paper_run
+@pytest.mark.parametrize("which", ["default", "fine"])
+def test_invariants(paper_run, paper_fine, which):
+    ds = paper_run[0] if which == "default" else paper_fine
     # a tension-only line
     assert np.all(ds["line_tension_rocket_end_N"].values >= 0.0)
     assert np.all(ds["line_tension_parachute_end_N"].values >= 0.0)
@@ -85,12 +105,30 @@ def test_invariants(paper_run):
     # 1/2 rho V^2 CdS = 1/2 0.41351 (0.65 * 299.532)^2 * 10 = 78.4 kN (ISA 10 km)
     q = 0.5 * 0.41351 * (0.65 * 299.532) ** 2
     assert ds["line_tension_parachute_end_N"].values[0] == pytest.approx(10.0 * q, rel=2e-3)
-    # the constraint drift control keeps the joint residual small (Baumgarte)
-    assert ds.attrs["max_constraint_residual_m"] < 1e-4
+    # the constraint drift control keeps the joint residual small (Baumgarte):
+    # 0.1 mm at the paper's discretization (rtol 1e-6, positions held to
+    # 1e-5 m); at the defaults (positions held to 1e-4 m) it follows the
+    # integration error: below the 10 rtol x (size of the positions) of the
+    # stress suite, the positions being ~10 m (the rocket's travel)
+    limit = 1e-4 if which == "fine" else 10 * RTOL * 10.0
+    assert ds.attrs["max_constraint_residual_m"] < limit
     # the rocket rests on the floor in Case 0: normal force = weight component
     n0 = ds["edge_normal_force_N"].values[0]
     assert n0 == pytest.approx(28000 * 9.80665 * np.cos(np.radians(1.2174)), rel=2e-2)
     assert not np.any(np.isnan(ds["rocket_position"].values))
+
+
+def test_defaults_within_0p1_percent_of_the_paper_discretization(paper_run, paper_fine):
+    """Issue 7: the default settings (n_seg and tolerances of the input) give
+    every milestone within 0.1 % of a finer solution.  The paper's 60 elements
+    at rtol 1e-6 are 2e-5 from the converged answer (docs/performance.md), so
+    the 0.1 % is checked against it with that margin to spare.  Milestones that
+    are angles or excursions are compared relative to their size."""
+    ds, _ = paper_run
+    for key in MILESTONES:
+        assert ds.attrs[key] == pytest.approx(paper_fine.attrs[key], rel=1e-3), key
+    mean, mean_fine = (float(d["line_tension_rocket_end_N"].mean()) for d in (ds, paper_fine))
+    assert mean == pytest.approx(mean_fine, rel=1e-3)
 
 
 def _variant(tmp_path, edits):
@@ -164,7 +202,7 @@ def test_stop_when_final_keeps_the_milestones(airlaunch_exe, tmp_path, paper_run
     """&run stop_when_final (sweeps' summary mode) ends the run once the
     milestones are final; they equal those of the full 15 s run."""
     paper, _ = paper_run
-    nml = _variant(tmp_path, [(r"^  rtol = 1.0e-6$", "  rtol = 1.0e-6\n  stop_when_final = .true.")])
+    nml = _variant(tmp_path, [(r"^  rtol = (\S+)", "  stop_when_final = .true.\n  rtol = \\1")])
     out = tmp_path / "swf.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert res.returncode == 0, res.stderr

@@ -73,7 +73,7 @@ def test_output_contract_and_rigidized_variables(paper_pair):
         assert rig[name].attrs.get("units"), f"{name} has no units"
         assert rig[name].dims[0] == "time"
     assert rig["line_nodes"].dims == ("time", "node", "xyz")
-    assert rig.sizes["node"] == 61 and rig.sizes["time"] == direct.sizes["time"]
+    assert rig.sizes["node"] == direct.sizes["node"] and rig.sizes["time"] == direct.sizes["time"]
     np.testing.assert_array_equal(rig["time"].values, direct["time"].values)
     assert rig.attrs["status"] == "completed"
     assert rig.attrs["line_coupling"] == "rigidized"
@@ -166,7 +166,7 @@ def test_bad_rigidized_input_gives_one_clear_line(airlaunch_exe, tmp_path, line,
 
 def test_far_end_chain_needs_two_segments(airlaunch_exe, tmp_path):
     nml = variant(tmp_path, "one", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
-                  edits=[(r"^  n_seg = 60 .*$", "  n_seg = 1")])
+                  edits=[(r"^  n_seg = \d+ .*$", "  n_seg = 1")])
     res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc")
     assert res.returncode == 2
     assert "n_seg = 1 is not allowed with far_end = 'chain'" in res.stderr
