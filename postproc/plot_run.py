@@ -55,6 +55,8 @@ def plot_airlaunch(ds, fig):
     _phase_lines(ax1, ds)
     ax2 = fig.add_subplot(1, 3, 2, projection="3d")
     for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):
+        if f"{name}_position" not in ds:      # no parachute without a line (&line enabled = .false.)
+            continue
         p = ds[f"{name}_position"]
         ax2.plot(p.sel(xyz=0), p.sel(xyz=2), p.sel(xyz=1), style, label=name)
     ax2.set_xlabel("x [m]")
@@ -67,6 +69,8 @@ def plot_airlaunch(ds, fig):
     ax2.legend(fontsize=7)
     ax3 = fig.add_subplot(1, 3, 3)
     for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):
+        if f"{name}_position" not in ds:      # no parachute without a line (&line enabled = .false.)
+            continue
         p = ds[f"{name}_position"]
         ax3.plot(p.sel(xyz=0), p.sel(xyz=1), style, label=name)
     ax3.set_xlabel("x [m]")

@@ -387,8 +387,13 @@ contains
       type(error_type), allocatable :: werr
       call w%create(run%output, werr)
       call hist%write_contract(w, "parachute (the line's last node), earth frame", "", werr)
-      call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
-        "(Zheng & Zhang 2018, §5.2)", echo, werr)
+      if (sys%has_line) then
+        call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
+          "(Zheng & Zhang 2018, §5.2)", echo, werr)
+      else
+        call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket separation without line or " // &
+          "parachute (gravity drop, rail release)", echo, werr)
+      end if
       call write_milestones(w, res, werr)
       call w%finish(werr)
       if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)

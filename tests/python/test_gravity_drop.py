@@ -64,7 +64,7 @@ def test_output_without_line(example_run):
         assert name not in ds, name
     assert "node" not in ds.dims
     assert "peak_line_tension_N" not in ds.attrs and "peak_line_tension_time_s" not in ds.attrs
-    assert ds.attrs["line_enabled"] == "false"
+    assert ds.attrs["line_enabled"] == "false" and "without line" in ds.attrs["title"]
     assert ds.attrs["status"] == "completed"
     assert "peak line tension: none (no line" in stdout
     echo = ds.attrs["input_namelist"].lower()
