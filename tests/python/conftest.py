@@ -26,3 +26,13 @@ def run_airlaunch(exe, nml_path, *args, cwd=None):
     """Run the program; return the CompletedProcess (text mode)."""
     return subprocess.run([str(exe), str(nml_path), *map(str, args)], capture_output=True,
                           text=True, cwd=cwd, timeout=600, env=dict(os.environ))
+
+
+def assert_input_error(res, fragment, out):
+    """Bad input: exit status 2, one line on stderr containing `fragment`,
+    and no output file left behind (README: errors)."""
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], res.stderr
+    assert not pathlib.Path(out).exists()
+    return lines[0]

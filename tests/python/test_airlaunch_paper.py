@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, run_airlaunch
+from conftest import ROOT, assert_input_error, run_airlaunch
 
 PAPER = ROOT / "input" / "airlaunch_paper.nml"
 N_SEG = int(re.search(r"^\s*n_seg\s*=\s*(\d+)", PAPER.read_text(), flags=re.M).group(1))
@@ -153,10 +153,7 @@ def test_impossible_scenarios_give_one_clear_line(airlaunch_exe, tmp_path, edits
     nml = _variant(tmp_path, edits)
     out = tmp_path / "x.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
-    assert res.returncode == 2
-    lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and fragment in lines[0], res.stderr
-    assert not out.exists()
+    assert_input_error(res, fragment, out)
 
 
 def test_one_sided_edge_separates_early(airlaunch_exe, tmp_path, paper_run):
