@@ -25,7 +25,7 @@ def main():
         nml.write_text(text)
         cmd = [str(EXE), str(nml)]
         if shutil_which("taskset"):
-            cmd = ["taskset", "-c", "0"] + cmd
+            cmd = ["taskset", "-c", os.environ.get("AIRLAUNCH_BENCH_CORE", "0")] + cmd
         env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
         times, out = [], ""
         print(f"{'run':>4} {'wall [s]':>9}")

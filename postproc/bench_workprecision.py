@@ -55,7 +55,7 @@ def run(coupling, rtol, n, repeats=1):
                               scenario(coupling, rtol, n, tmp / "x.nc"), flags=re.M))
         cmd = [str(EXE), str(nml)]
         if shutil.which("taskset"):
-            cmd = ["taskset", "-c", "0"] + cmd
+            cmd = ["taskset", "-c", os.environ.get("AIRLAUNCH_BENCH_CORE", "0")] + cmd
         env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
         walls = []
         for _ in range(repeats):

@@ -10,7 +10,7 @@
 !> The file is written under `<path>.part` and renamed to `<path>` by
 !> `commit`, so a crash never leaves a truncated file under the final name.
 module airlaunch_ncwrite
-  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char, c_ptr, c_loc, c_null_ptr
   use hdf5
   use h5lt
   use h5ds
@@ -40,6 +40,9 @@ module airlaunch_ncwrite
     procedure :: add_var_2d => nc_add_var_2d
     procedure :: add_var_3d => nc_add_var_3d
     procedure :: add_int_var_1d => nc_add_int_var_1d
+    procedure :: add_int_dim => nc_add_int_dim
+    procedure :: add_string_var_1d => nc_add_string_var_1d
+    procedure :: add_int_att => nc_add_int_att
     procedure :: add_text_att => nc_add_text_att
     procedure :: add_real_att => nc_add_real_att
     procedure :: commit => nc_commit
@@ -211,6 +214,88 @@ contains
     open(newunit=unit, file=self%tmp_path, status="old", iostat=ios)
     if (ios == 0) close(unit, status="delete")
   end subroutine nc_abort
+
+  !> An integer dimension with its coordinate variable.
+  subroutine nc_add_int_dim(self, name, values, units, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, units, long_name
+    integer, intent(in) :: values(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    integer(hid_t) :: did
+    if (allocated(error)) return
+    call h5ltmake_dataset_int_f(self%fid, name, 1, [size(values, kind=hsize_t)], values, hdferr)
+    if (hdferr /= 0) then
+      call fatal_error(error, self%tmp_path // ": cannot write variable " // name)
+      return
+    end if
+    call h5dopen_f(self%fid, name, did, hdferr)
+    call h5dsset_scale_f(did, hdferr, name)
+    call h5dclose_f(did, hdferr)
+    self%dim_names = [character(len=32) :: self%dim_names, name]
+    self%dim_sizes = [self%dim_sizes, size(values, kind=hsize_t)]
+    call self%add_text_att(name, "units", units, error)
+    call self%add_text_att(name, "long_name", long_name, error)
+  end subroutine nc_add_int_dim
+
+  !> Integer attribute(s) of a variable, or of the file if `var` is "/".
+  subroutine nc_add_int_att(self, var, name, values, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: var, name
+    integer, intent(in) :: values(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: hdferr
+    if (allocated(error)) return
+    call h5ltset_attribute_int_f(self%fid, var, name, values, size(values, kind=size_t), hdferr)
+    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write attribute " // name // " of " // var)
+  end subroutine nc_add_int_att
+
+  !> A variable-length string variable over dimension `dim` (netCDF NC_STRING).
+  subroutine nc_add_string_var_1d(self, name, dim, values, long_name, error)
+    class(nc_writer), intent(inout) :: self
+    character(len=*), intent(in) :: name, dim, long_name
+    character(len=*), intent(in) :: values(:)
+    type(error_type), allocatable, intent(inout) :: error
+    character(kind=c_char, len=:), allocatable, target :: buf
+    type(c_ptr), allocatable, target :: ptrs(:)
+    integer(hid_t) :: tid, sid, did, scale
+    integer :: hdferr, k, p, e
+    integer(hsize_t) :: dims(1)
+    integer, allocatable :: starts(:)
+    if (allocated(error)) return
+    ! all strings, each NUL-terminated, in one buffer; ptrs(k) points at string k
+    allocate(starts(size(values)))
+    buf = ""
+    do k = 1, size(values)
+      starts(k) = len(buf) + 1
+      buf = buf // trim(values(k)) // c_null_char
+    end do
+    allocate(ptrs(size(values)))
+    do k = 1, size(values)
+      p = starts(k)
+      ptrs(k) = c_loc(buf(p:p))
+    end do
+    if (size(values) == 0) ptrs = c_null_ptr
+    dims = size(values)
+    e = 0
+    ! HDF5's Fortran H5T_STRING is the variable-length C string type
+    call h5tcopy_f(H5T_STRING, tid, hdferr); e = e + abs(hdferr)
+    call h5tset_strpad_f(tid, H5T_STR_NULLTERM_F, hdferr); e = e + abs(hdferr)
+    call h5screate_simple_f(1, dims, sid, hdferr); e = e + abs(hdferr)
+    call h5dcreate_f(self%fid, name, tid, sid, did, hdferr); e = e + abs(hdferr)
+    call h5dwrite_f(did, tid, c_loc(ptrs), hdferr); e = e + abs(hdferr)
+    call h5dopen_f(self%fid, dim, scale, hdferr); e = e + abs(hdferr)
+    call h5dsattach_scale_f(did, scale, 1, hdferr); e = e + abs(hdferr)
+    call h5dclose_f(scale, hdferr)
+    call h5dclose_f(did, hdferr)
+    call h5sclose_f(sid, hdferr)
+    call h5tclose_f(tid, hdferr)
+    if (e /= 0) then
+      call fatal_error(error, self%tmp_path // ": cannot write the string variable " // name)
+      return
+    end if
+    call self%add_text_att(name, "long_name", long_name, error)
+  end subroutine nc_add_string_var_1d
 
   ! ---------------------------------------------------------------------
 
