@@ -11,10 +11,12 @@
 !> added to the canopy mass in translation (m + m_a) a = F; scaled with the
 !> inflation like the drag area.
 module airlaunch_parachute
-  use airlaunch_kinds, only: dp, pi
+  use airlaunch_kinds, only: dp, pi, g0
+  use airlaunch_atmosphere, only: isa, air_state
   implicit none
   private
-  public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter
+  public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter, &
+    canopy_node_acceleration
 
   !> Canopy data.
   type :: parachute
@@ -65,4 +67,33 @@ contains
     dp_ = 0.7_dp*parachute_nominal_diameter(p)
     ma = p%added_mass_factor*rho*pi/6*dp_**3*inflation(p, t)
   end function parachute_added_mass
+
+  !> Acceleration of the line's last node, which carries the canopy (both line
+  !> couplings, DESIGN §4): mass = the node's share of the line + canopy +
+  !> apparent mass; loads = the line's force on the node, the canopy's drag in
+  !> still air (if `with_drag`) and the canopy's weight (if `with_weight`).
+  !> `ok` is false if the node left the atmosphere model (then acc = 0).
+  pure subroutine canopy_node_acceleration(p, t, x, v, node_mass, line_force, with_drag, with_weight, &
+      acc, drag, ok)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: t                 !< time [s]
+    real(dp), intent(in) :: x(3), v(3)        !< node position (y = altitude) [m], velocity [m/s]
+    real(dp), intent(in) :: node_mass         !< the line's mass lumped at the node [kg]
+    real(dp), intent(in) :: line_force(3)     !< the line's force on the node [N]
+    logical, intent(in) :: with_drag, with_weight
+    real(dp), intent(out) :: acc(3)           !< acceleration [m/s^2]
+    real(dp), intent(out) :: drag(3)          !< canopy drag [N]
+    logical, intent(out) :: ok
+    type(air_state) :: air
+    real(dp) :: w(3)
+    acc = 0.0_dp
+    drag = 0.0_dp
+    air = isa(x(2))
+    ok = air%in_range
+    if (.not. ok) return
+    if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(v)*v
+    w = 0.0_dp
+    if (with_weight) w(2) = -g0*p%mass
+    acc = (line_force + drag + w)/(node_mass + p%mass + parachute_added_mass(p, air%density, t))
+  end subroutine canopy_node_acceleration
 end module airlaunch_parachute

@@ -32,7 +32,7 @@ module airlaunch_launch_system
   use airlaunch_separation, only: separation_system, separation_nroots
   use airlaunch_cut_joint, only: phase_free
   use airlaunch_line_model, only: line_model
-  use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass
+  use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_launch_loads, only: launch_loads
   implicit none
   private
@@ -124,8 +124,7 @@ contains
     real(dp), intent(out) :: ydot(:)
     integer, intent(out) :: status
     integer :: k, n, i
-    real(dp) :: m, vrel(3)
-    type(air_state) :: air
+    logical :: ok
     call self%prepare(t, y, status)
     if (status /= rhs_ok) return
     call self%sep%rhs(t, self%yabs(1:rigid_size), ydot(1:rigid_size), status)
@@ -144,17 +143,14 @@ contains
     end do
     ! node N: the parachute
     i = rigid_size + 6*(n - 1)
-    air = isa(self%x(2, n))
-    if (.not. air%in_range) then
+    ydot(i+1:i+3) = y(i+4:i+6)
+    call canopy_node_acceleration(self%chute, t, self%x(:, n), self%v(:, n), self%line%node_mass(n), &
+      self%f(:, n), .true., .true., ydot(i+4:i+6), self%chute_drag, ok)
+    if (.not. ok) then
       self%failure = "parachute altitude " // str(self%x(2, n)) // " m is outside the atmosphere model"
       status = rhs_fatal
       return
     end if
-    vrel = self%v(:, n)
-    self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vrel)*vrel
-    m = self%line%node_mass(n) + self%chute%mass + parachute_added_mass(self%chute, air%density, t)
-    ydot(i+1:i+3) = y(i+4:i+6)
-    ydot(i+4:i+6) = (self%f(:, n) + self%chute_drag + [0.0_dp, -g0*self%chute%mass, 0.0_dp])/m
     status = rhs_ok
   end subroutine launch_rhs
 

@@ -63,7 +63,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize
-  use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, &
+  use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, canopy_node_acceleration, &
     parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -530,8 +530,7 @@ contains
     real(dp), intent(out) :: ydot(:)
     integer, intent(out) :: status
     integer :: k, i, n, st
-    real(dp) :: m, vrel(3), w(3)
-    type(air_state) :: air
+    logical :: ok
     n = self%model%n
     call self%unpack(t, y)
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
@@ -547,22 +546,14 @@ contains
     end do
     if (.not. self%far_kinematic) then
       i = 6*(n - 1)
-      air = isa(self%x(2, n))
-      if (.not. air%in_range) then
+      ydot(i+1:i+3) = y(i+4:i+6)
+      call canopy_node_acceleration(self%chute, t, self%x(:, n), self%v(:, n), self%model%node_mass(n), &
+        self%f(:, n), self%model%p%air, self%model%p%gravity, ydot(i+4:i+6), self%chute_drag, ok)
+      if (.not. ok) then
         self%failure = "parachute altitude " // str(self%x(2, n)) // " m is outside the atmosphere model"
         status = rhs_fatal
         return
       end if
-      self%chute_drag = 0.0_dp
-      w = 0.0_dp
-      if (self%model%p%air) then
-        vrel = self%v(:, n)
-        self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vrel)*vrel
-      end if
-      if (self%model%p%gravity) w(2) = -g0*self%chute%mass
-      m = self%model%node_mass(n) + self%chute%mass + parachute_added_mass(self%chute, air%density, t)
-      ydot(i+1:i+3) = y(i+4:i+6)
-      ydot(i+4:i+6) = (self%f(:, n) + self%chute_drag + w)/m
     end if
     status = rhs_ok
   end subroutine line_rhs
