@@ -127,7 +127,7 @@ def main():
               f"{r['error']:9.2e}  {'*' if i in front else ''}")
     default = next((i for i, r in enumerate(rows) if (r["coupling"], r["rtol"], r["n"]) == DEFAULT), None)
     on_front = default in front if default is not None else None
-    print(f"\ndefault (direct, rtol 1e-6, N = 60) on the Pareto front: {on_front}")
+    print(f"\ndefault ({DEFAULT[0]}, rtol {DEFAULT[1]:.0e}, N = {DEFAULT[2]}) on the Pareto front: {on_front}")
     try:
         import matplotlib
         matplotlib.use("Agg")
