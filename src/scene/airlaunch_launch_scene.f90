@@ -23,21 +23,24 @@ module airlaunch_launch_scene
   use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size
   use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
     record_milestones, write_milestones, event_or_minus, segment_distance, handle_launch_event
+  use airlaunch_coupling_choice, only: coupling_plan, auto_settings, coupling_direct, coupling_rigidized, &
+    coupling_index
   implicit none
   private
-  public :: launch_result, run_launch, setup_launch
+  public :: launch_result, run_launch, setup_launch, coupling_plan_of
 
 
   interface
-    !> The scene with coupling (a), `&line coupling = 'rigidized'`: the line as
-    !> the virtual rigid body of the Kane chain (submodule airlaunch_launch_rigidized).
-    module subroutine run_rigidized(run, cfg, echo, res, error)
+    !> The scene with the line coupled as `plan` says: direct (b), rigidized
+    !> (a), per phase or automatically (submodule airlaunch_launch_coupled).
+    module subroutine run_coupled(run, cfg, plan, echo, res, error)
       type(run_config), intent(in) :: run
       type(scenario_config), intent(in) :: cfg
+      type(coupling_plan), intent(in) :: plan
       character(len=*), intent(in) :: echo
       type(launch_result), intent(inout) :: res
       type(error_type), allocatable, intent(inout) :: error
-    end subroutine run_rigidized
+    end subroutine run_coupled
   end interface
 
 contains
@@ -242,190 +245,39 @@ contains
     end subroutine residual
   end subroutine settle_line
 
-  !> Run the scene and write its output (unless run%trajectory is false).
+  !> Run the scene and write its output (unless run%trajectory is false),
+  !> with the line coupling(s) of `&line coupling`.
   subroutine run_launch(run, cfg, echo, res, error)
     type(run_config), intent(in) :: run
     type(scenario_config), intent(in) :: cfg
     character(len=*), intent(in) :: echo
     type(launch_result), intent(out) :: res
     type(error_type), allocatable, intent(inout) :: error
-    type(launch_system), target :: sys
-    type(cvode_solver) :: solver
-    type(cvode_options) :: opts
-    type(error_type), allocatable :: run_error
-    real(dp), allocatable :: y0(:)
-    type(launch_history) :: hist
-    integer :: nmax, n
-    real(dp) :: tout, last_record_of_extremum
-    integer :: k
-
-    if (cfg%line%coupling == "rigidized") then
-      call run_rigidized(run, cfg, echo, res, error)
-      return
-    end if
-    last_record_of_extremum = 0.0_dp
-    call setup_launch(cfg, sys, y0, res, error)
-    if (allocated(error)) return
-    n = sys%line%n
-    opts%rtol = run%rtol
-    opts%atol = run%atol
-    opts%linear_solver = "band"
-    ! The band holds the stiff couplings: the line's node chain and node 1 with
-    ! the rocket's position and attitude (offsets up to 18).  The aircraft-rocket
-    ! coupling through the CFA (offsets to 25) and aircraft-node 1 (31) are soft
-    ! and left out of the Newton matrix (a modified Newton iteration): measured
-    ! 27 % faster than the full band with the same milestones (docs/performance.md).
-    opts%upper_bandwidth = 18
-    opts%lower_bandwidth = 18
-    opts%atol_vector = atol_scaling(run%atol, size(y0))
-    ! BDF orders above 2 are not A-stable: on the line's lightly damped axial
-    ! modes they force tiny steps (measured: 6.2k steps at order 2, 40k at 4,
-    ! 72k at 3 for the paper scenario, same milestones), so the scene default
-    ! is order 2 (&run max_order = 0).
-    opts%max_order = run%max_order
-    if (opts%max_order == 0) opts%max_order = 2
-    if (.not. sys%has_line) call rigid_only_options(run, opts)
-    call solver%init(sys, 0.0_dp, y0, opts, error)
-    if (allocated(error)) return
-
-    res%has_line = sys%has_line
-    nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
-    if (run%trajectory) call hist%init(nmax, n, sys%has_line)
-    call record()
-    do k = 1, nmax - 1
-      tout = min(k*run%output_dt, run%t_end)
-      call advance_to(tout, run_error)
-      if (allocated(run_error)) exit
-      call record()
-      if (tout >= run%t_end) exit
-      if (run%stop_when_final .and. milestones_final()) exit
-    end do
-    call add_stats(res%stats, solver%stats())
-    res%end_time = solver%t
-    res%release_time = event_or_minus(sys%sep%event_time(1))
-    res%edge_time = event_or_minus(sys%sep%event_time(2))
-    res%separation_time = event_or_minus(sys%sep%event_time(3))
-    res%early_separation = sys%sep%early_separation
-    res%edge_pull_time = event_or_minus(sys%sep%edge_pull_time)
-    if (allocated(run_error)) then
-      res%status = "failed"
-      res%failure = run_error%message
-    end if
-    call solver%free()
-    if (run%trajectory) call write_output()
-    if (allocated(run_error)) call move_alloc(run_error, error)
-  contains
-
-    !> Integrate to tout, handling the events on the way.
-    subroutine advance_to(t_target, err)
-      real(dp), intent(in) :: t_target
-      type(error_type), allocatable, intent(inout) :: err
-      logical :: event, changed
-      integer :: which(launch_nroots), guard, status
-
-      do guard = 1, 100
-        call solver%advance(t_target, err, event, which)
-        if (allocated(err)) then
-          err%message = phase_name(sys%sep%phase) // ": " // err%message
-          return
-        end if
-        if (.not. event) return
-        call sys%prepare(solver%t, solver%y, status)
-        call handle_launch_event(res, solver%t, sys%sep, sys%yabs(1:rigid_size), which(1:launch_nroots-1), &
-          which(launch_nroots), sys%find_pitch_max, changed, err)
-        if (allocated(err)) return
-        if (changed) then
-          ! the constraint set changed: restart CVODE from the event (its
-          ! counters restart too, so keep the totals)
-          call add_stats(res%stats, solver%stats())
-          call solver%reinit(solver%t, solver%y, err)
-          if (allocated(err)) return
-        end if
-        if (solver%t >= t_target) return
-      end do
-      call fatal_error(err, phase_name(sys%sep%phase) // ", t = " // str(solver%t) // &
-        " s: too many events before the output time")
-    end subroutine advance_to
-
-    !> The milestones cannot change any more (for &run stop_when_final): the
-    !> rocket is free, its first pitch maximum is found, and 1 s has passed
-    !> since both, during which the rocket-empennage clearance only grew (so its
-    !> minimum is behind) and the aircraft's pitch excursion and load factor did
-    !> not set a new maximum.  A later snatch of the line is not waited for.
-    logical function milestones_final()
-      milestones_final = .false.
-      if (sys%sep%phase /= phase_free .or. res%pitch_max_time < 0.0_dp) return
-      if (solver%t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
-      milestones_final = solver%t >= last_record_of_extremum + 1.0_dp
-    end function milestones_final
-
-    !> Sample the state at the solver's time (outputs and milestones).
-    subroutine record()
-      integer :: status
-      type(error_type), allocatable :: eval_error
-      type(launch_sample) :: smp
-      call sys%prepare(solver%t, solver%y, status)
-      call sys%sep%evaluate(solver%t, sys%yabs(1:rigid_size), eval_error)
-      smp = sample_launch(cfg, sys%sep, sys%iloads)
-      if (sys%has_line) then
-        if (record_milestones(res, solver%t, smp, sys%sep, sys%tension)) last_record_of_extremum = solver%t
-      else
-        if (record_milestones(res, solver%t, smp, sys%sep)) last_record_of_extremum = solver%t
-      end if
-      res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(solver%y(7:10)) - 1.0_dp), &
-        abs(norm2(solver%y(20:23)) - 1.0_dp))
-      if (.not. run%trajectory) return
-      if (sys%has_line) then
-        call hist%append(solver%t, smp, sys%sep, sys%x, sys%tension, sys%x(:, n))
-      else
-        call hist%append(solver%t, smp, sys%sep)
-      end if
-    end subroutine record
-
-    subroutine write_output()
-      type(nc_writer) :: w
-      type(error_type), allocatable :: werr
-      call w%create(run%output, werr)
-      call hist%write_contract(w, "parachute (the line's last node), earth frame", "", werr)
-      if (sys%has_line) then
-        call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
-          "(Zheng & Zhang 2018, §5.2)", echo, werr)
-      else
-        call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket separation without line or " // &
-          "parachute (gravity drop, rail release)", echo, werr)
-      end if
-      call write_milestones(w, res, werr)
-      call w%finish(werr)
-      if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
-    end subroutine write_output
+    call run_coupled(run, cfg, coupling_plan_of(cfg), echo, res, error)
   end subroutine run_launch
 
-
-
-
-  !> Solver settings of a scene without a line (26 rigid states): a dense
-  !> Newton matrix (the band of the line is gone; 26 x 26 costs nothing), and
-  !> BDF up to order 5 unless &run max_order says otherwise (the order-2
-  !> default exists for the line's lightly damped axial modes).
-  subroutine rigid_only_options(run, opts)
-    type(run_config), intent(in) :: run
-    type(cvode_options), intent(inout) :: opts
-    opts%linear_solver = "dense"
-    if (run%max_order == 0 .and. opts%method == "bdf") opts%max_order = 5
-  end subroutine rigid_only_options
-
-  !> Per-component absolute tolerances: positions and velocities in m and
-  !> m/s (relative variables, small numbers), quaternions and rates tighter.
-  pure function atol_scaling(atol, n) result(a)
-    real(dp), intent(in) :: atol
-    integer, intent(in) :: n
-    real(dp) :: a(n)
-    integer :: i
-    a = atol*1.0e2_dp
-    do i = 0, 1
-      a(13*i+7:13*i+10) = atol
-      a(13*i+11:13*i+13) = atol*10
-    end do
-  end function atol_scaling
+  !> How the run chooses the line coupling, from `&line` (a scene without a
+  !> line is direct: it has nothing to rigidize).
+  pure function coupling_plan_of(cfg) result(plan)
+    type(scenario_config), intent(in) :: cfg
+    type(coupling_plan) :: plan
+    integer :: k
+    plan%mode = cfg%line%coupling
+    plan%by_phase = coupling_direct
+    select case (cfg%line%coupling)
+    case ("rigidized")
+      plan%by_phase = coupling_rigidized
+    case ("per_phase")
+      do k = 0, 3
+        plan%by_phase(k) = coupling_index(cfg%line%coupling_by_phase(k))
+      end do
+    end select
+    plan%auto = auto_settings(min_strain=cfg%line%auto_min_strain, max_strain_change=cfg%line%auto_max_strain_change, &
+      dwell=cfg%line%auto_dwell, interval=cfg%line%outer_dt)
+    if (.not. cfg%line%enabled) then
+      plan%mode = "direct"
+      plan%by_phase = coupling_direct
+    end if
+  end function coupling_plan_of
 
 end module airlaunch_launch_scene

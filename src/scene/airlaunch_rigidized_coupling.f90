@@ -70,7 +70,8 @@ module airlaunch_rigidized_coupling
   implicit none
   private
   public :: rigidized_settings, virtual_line, virtual_line_body, rigidized_loads, rigidized_chain, &
-    rigidized_line, rigidized_coupling, rigidized_nroots, chain_atol, line_body_attitude, chain_size
+    rigidized_line, rigidized_coupling, rigidized_nroots, chain_atol, line_body_attitude, chain_size, &
+    continue_phase_machine
 
   !> Events: the separation scene's and the rocket's Euler-pitch maximum.
   integer, parameter :: rigidized_nroots = separation_nroots + 1
@@ -566,7 +567,12 @@ contains
   !> absent) and the states of bodies 0 (aircraft) and 1 (rocket), absolute.
   !> x0, v0: the line's nodes (absolute, node 0 at the tie-down point), which
   !> also place B2 along the chord and B3 at node N.  `phase`: start phase.
-  subroutine coupling_init(self, sep, iloads, iline, model, chute, x0, v0, v_ref, h_ref, t0, phase, opts, error)
+  !> `machine`: a separation system whose phase machine the chain continues
+  !> (a switch from the direct coupling during a run: its phase, event times
+  !> and the cut joint's references captured at the run's start) instead of
+  !> starting a new one in `phase`.
+  subroutine coupling_init(self, sep, iloads, iline, model, chute, x0, v0, v_ref, h_ref, t0, phase, opts, error, &
+      machine)
     class(rigidized_coupling), intent(inout) :: self       !< the coupling (re-initialised)
     type(separation_system), intent(in) :: sep             !< configured chain scene
     integer, intent(in) :: iloads                          !< launch_loads source index (0: none)
@@ -579,6 +585,7 @@ contains
     integer, intent(in) :: phase                           !< start phase
     type(rigidized_settings), intent(in) :: opts           !< settings
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    type(separation_system), intent(in), optional :: machine !< phase machine to continue
     type(cvode_options) :: copt, lopt
     real(dp) :: y(chain_size), e(3)
     real(dp), allocatable :: yl(:), atol_l(:)
@@ -586,6 +593,16 @@ contains
 
     call self%free()
     self%opts = opts
+    ! a fresh start: counters and books of a previous run of this coupling go
+    self%chain_totals = cvode_stats()
+    self%n_refresh = 0
+    self%n_guard_mass = 0
+    self%n_guard_inertia = 0
+    self%momentum_jump = 0.0_dp
+    self%angular_momentum_jump = 0.0_dp
+    self%kinetic_energy_jump = 0.0_dp
+    self%n_saved = 0
+    self%motion_set = .false.
     if (.not. (opts%outer_dt > 0.0_dp)) then
       call fatal_error(error, "rigidized coupling: outer_dt = " // str(opts%outer_dt) // " s must be > 0")
       return
@@ -606,6 +623,7 @@ contains
     end if
     allocate(self%chain, self%line)
     self%chain%sep = sep
+    if (present(machine)) call continue_phase_machine(self%chain%sep, machine)
     self%chain%iloads = iloads
     self%chain%iline = iline
     self%chain%v_ref = v_ref
@@ -648,7 +666,11 @@ contains
         "rocket's tie-down point at t = " // str(t0) // " s")
       return
     end if
-    call self%chain%sep%start(t0, self%chain%yabs, phase, error)
+    if (present(machine)) then
+      call self%chain%sep%evaluate(t0, self%chain%yabs, error)
+    else
+      call self%chain%sep%start(t0, self%chain%yabs, phase, error)
+    end if
     if (allocated(error)) return
     copt = cvode_options(method="bdf", linear_solver="dense", rtol=opts%chain_rtol, &
       atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000)
@@ -669,6 +691,22 @@ contains
       self%b3_x + opts%outer_dt*self%b3_v, self%b3_v)
     call self%line_solver%init(self%line, t0, yl, lopt, error)
   end subroutine coupling_init
+
+  !> Continue the phase machine of `from` in `to` (separation systems of the
+  !> same aircraft, rocket and cut joint, possibly with different chains):
+  !> the phase, the event times, the edge flags and the joint's constraint
+  !> references (captured once, at the run's start: a new capture would take
+  !> the present constraint drift for exact).  The caller then loads the state
+  !> and evaluates, as `start` would.
+  pure subroutine continue_phase_machine(to, from)
+    type(separation_system), intent(inout) :: to
+    type(separation_system), intent(in) :: from
+    to%phase = from%phase
+    to%event_time = from%event_time
+    to%early_separation = from%early_separation
+    to%edge_pull_time = from%edge_pull_time
+    to%joint = from%joint
+  end subroutine continue_phase_machine
 
   !> Give B2 the virtual body self%vl and B3 its mass at time t (chain state y,
   !> relative); updates the rod length in the loads.

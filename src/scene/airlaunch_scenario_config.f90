@@ -22,11 +22,18 @@ module airlaunch_scenario_config
     "aircraft", "bay", "rocket", "parachute", "line"]
 
   !> Variables of &line (air-launch scene).
-  type(nml_var), parameter :: line_vars(13) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
+  type(nml_var), parameter :: line_vars(17) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
     nml_var("cd_tangential", "real"), nml_var("coupling", "string"), nml_var("outer_dt", "real"), &
-    nml_var("inner_rtol", "real"), nml_var("far_end", "string")]
+    nml_var("inner_rtol", "real"), nml_var("far_end", "string"), nml_var("coupling_by_phase", "string"), &
+    nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real")]
+
+  !> The couplings `&line coupling` may name (DESIGN §4 (a), (b)), and the two
+  !> ways of choosing between them during a run.
+  character(len=16), parameter :: single_couplings(2) = [character(len=16) :: "direct", "rigidized"]
+  character(len=16), parameter :: coupling_modes(4) = [character(len=16) :: "direct", "rigidized", &
+    "per_phase", "auto"]
 
   !> Flight condition and trim.
   type :: flight_config
@@ -86,11 +93,18 @@ module airlaunch_scenario_config
     real(dp) :: diameter = 0.025_dp         !< [m]
     real(dp) :: cd_normal = 1.2_dp
     real(dp) :: cd_tangential = 0.01_dp
-    character(len=16) :: coupling = "direct"  !< "direct" (nodes with the bodies) or "rigidized" (§2.4)
+    !> "direct" (nodes with the bodies), "rigidized" (§2.4), "per_phase"
+    !> (coupling_by_phase) or "auto" (the auto_* indicator, docs/model.md)
+    character(len=16) :: coupling = "direct"
     real(dp) :: outer_dt = 0.02_dp          !< rigidized: outer step of §2.4 Steps 3-6 [s]
     real(dp) :: inner_rtol = 0.0_dp         !< rigidized: line sub-step tolerance (0: &run rtol)
     character(len=16) :: far_end = "parachute"  !< rigidized: node N "parachute" (far-end force) or "chain"
     logical :: enabled = .true.             !< false: no line and no parachute
+    !> per_phase: the coupling ("direct" or "rigidized") of Case 0, 1, 2, 3
+    character(len=16) :: coupling_by_phase(0:3) = ""
+    real(dp) :: auto_min_strain = 1.0e-3_dp       !< auto: taut when every segment's strain reaches this
+    real(dp) :: auto_max_strain_change = 0.05_dp  !< auto: slow when the stretch changes less per outer step
+    real(dp) :: auto_dwell = 0.1_dp               !< auto: safe this long before switching to rigidized [s]
   end type line_config
 
   !> Everything the air-launch scene reads.
@@ -458,22 +472,31 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
-    real(dp) :: outer_dt, inner_rtol
+    real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell
     integer :: n_seg, u, ios
-    character(len=16) :: coupling, far_end
+    character(len=16) :: coupling, far_end, coupling_by_phase(4)
     logical :: present
     character(len=256) :: msg
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
-      coupling, outer_dt, inner_rtol, far_end
+      coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, auto_min_strain, auto_max_strain_change, &
+      auto_dwell
     enabled = .true.
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
     cd_tangential = c%cd_tangential; coupling = c%coupling
     outer_dt = c%outer_dt; inner_rtol = c%inner_rtol; far_end = c%far_end
+    coupling_by_phase = c%coupling_by_phase
+    auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
+    auto_dwell = c%auto_dwell
     call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
     if (present) then
+      call check_list_length(f, "line", "coupling_by_phase", 4, "a coupling for each of Case 0, 1, 2, 3", error)
+      if (allocated(error)) then
+        close(u)
+        return
+      end if
       read(u, nml=line, iostat=ios, iomsg=msg)
       close(u)
       if (ios /= 0) then
@@ -489,20 +512,184 @@ contains
     call require_positive(f, "line", "diameter", diameter, "m", error)
     call require_nonnegative(f, "line", "cd_normal", cd_normal, "", error)
     call require_nonnegative(f, "line", "cd_tangential", cd_tangential, "", error)
-    call require_choice(f, "line", "coupling", coupling, [character(len=16) :: "direct", "rigidized"], error)
+    call require_choice(f, "line", "coupling", coupling, coupling_modes, error)
     call require_range(f, "line", "outer_dt", outer_dt, 1.0e-5_dp, 0.1_dp, "s", error)
     call require_range(f, "line", "inner_rtol", inner_rtol, 0.0_dp, 1.0e-2_dp, "(0: &run rtol)", error)
     call require_choice(f, "line", "far_end", far_end, [character(len=16) :: "parachute", "chain"], error)
-    if (.not. allocated(error) .and. coupling == "rigidized" .and. far_end == "chain" .and. n_seg < 2) &
+    call check_coupling_choice(f, coupling, coupling_by_phase, error)
+    call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, error)
+    if (.not. allocated(error) .and. coupling /= "direct" .and. far_end == "chain" .and. n_seg < 2) &
       call fatal_error(error, f%path // ": &line: n_seg = " // str(n_seg) // " is not allowed with " // &
         "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
     if (allocated(error)) return
     c = line_config(length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, coupling, &
       outer_dt, inner_rtol, far_end, enabled)
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=line)
-    call echo_namelist_unit(u, echo)
+    if (coupling == "per_phase") c%coupling_by_phase = coupling_by_phase
+    c%auto_min_strain = auto_min_strain
+    c%auto_max_strain_change = auto_max_strain_change
+    c%auto_dwell = auto_dwell
+    call echo_line(c, echo)
   end subroutine read_line
+
+  !> The resolved &line group: the variables of the chosen coupling mode only
+  !> (coupling_by_phase with 'per_phase', the auto_* thresholds with 'auto'),
+  !> so that the echo reads back without a contradiction.
+  subroutine echo_line(c, echo)
+    type(line_config), intent(in) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
+    real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell
+    integer :: n_seg, u
+    character(len=16) :: coupling, far_end, coupling_by_phase(4)
+    logical :: enabled
+    namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
+      coupling, outer_dt, inner_rtol, far_end
+    enabled = c%enabled
+    length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
+    damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
+    cd_tangential = c%cd_tangential; coupling = c%coupling
+    outer_dt = c%outer_dt; inner_rtol = c%inner_rtol; far_end = c%far_end
+    coupling_by_phase = c%coupling_by_phase
+    auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
+    auto_dwell = c%auto_dwell
+    open(newunit=u, status="scratch", action="readwrite")
+    select case (coupling)
+    case ("per_phase")
+      call write_per_phase(u)
+    case ("auto")
+      call write_auto(u)
+    case default
+      write(u, nml=line)
+    end select
+    call echo_namelist_unit(u, echo)
+  contains
+    subroutine write_per_phase(unit)
+      integer, intent(in) :: unit
+      namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
+        coupling, outer_dt, inner_rtol, far_end, coupling_by_phase
+      write(unit, nml=line)
+    end subroutine write_per_phase
+    subroutine write_auto(unit)
+      integer, intent(in) :: unit
+      namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
+        coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell
+      write(unit, nml=line)
+    end subroutine write_auto
+  end subroutine echo_line
+
+  !> `coupling_by_phase` belongs to coupling = 'per_phase' and names a single
+  !> coupling for each of the four phases.
+  subroutine check_coupling_choice(f, coupling, by_phase, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: coupling
+    character(len=*), intent(in) :: by_phase(:)   !< Case 0..3
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: k
+    if (allocated(error)) return
+    if (coupling /= "per_phase") then
+      if (f%is_set("line", "coupling_by_phase")) call fatal_error(error, f%path // ": &line: coupling_by_phase " // &
+        "is not allowed with coupling = '" // trim(coupling) // "' (it is read with coupling = 'per_phase' only: " // &
+        "remove it, or set coupling = 'per_phase')")
+      return
+    end if
+    if (.not. f%is_set("line", "coupling_by_phase")) then
+      call fatal_error(error, f%path // ": &line: missing required value coupling_by_phase (with coupling = " // &
+        "'per_phase': four couplings, direct or rigidized, for Case 0, 1, 2, 3)")
+      return
+    end if
+    do k = 1, size(by_phase)
+      call require_choice(f, "line", "coupling_by_phase (Case " // str(k - 1) // ")", by_phase(k), &
+        single_couplings, error)
+    end do
+  end subroutine check_coupling_choice
+
+  !> The auto_* thresholds belong to coupling = 'auto'.
+  subroutine check_auto_settings(f, coupling, min_strain, max_strain_change, dwell, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: coupling
+    real(dp), intent(in) :: min_strain, max_strain_change, dwell
+    type(error_type), allocatable, intent(inout) :: error
+    character(len=32), parameter :: names(3) = [character(len=32) :: "auto_min_strain", &
+      "auto_max_strain_change", "auto_dwell"]
+    integer :: k
+    if (allocated(error)) return
+    if (coupling /= "auto") then
+      do k = 1, size(names)
+        if (f%is_set("line", trim(names(k)))) then
+          call fatal_error(error, f%path // ": &line: " // trim(names(k)) // " is not allowed with coupling = '" // &
+            trim(coupling) // "' (it is read with coupling = 'auto' only: remove it, or set coupling = 'auto')")
+          return
+        end if
+      end do
+      return
+    end if
+    call require_range(f, "line", "auto_min_strain", min_strain, 0.0_dp, 0.5_dp, "", error)
+    call require_range(f, "line", "auto_max_strain_change", max_strain_change, 1.0e-6_dp, 10.0_dp, "", error)
+    call require_range(f, "line", "auto_dwell", dwell, 0.0_dp, 1.0e3_dp, "s", error)
+  end subroutine check_auto_settings
+
+  !> A list variable must have `n` values (counted as written, `r*value`
+  !> repeats included): fewer would leave the rest at their defaults, more
+  !> would not read.
+  subroutine check_list_length(f, group, name, n, what, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: group, name, what
+    integer, intent(in) :: n
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: i, m
+    if (allocated(error) .or. .not. allocated(f%items)) return
+    do i = 1, size(f%items)
+      associate(it => f%items(i))
+        if (it%group /= group .or. it%name /= name) cycle
+        m = list_length(it%value)
+        if (m /= n) then
+          call fatal_error(error, f%where(it) // name // " = " // it%value // " is not allowed (" // str(m) // &
+            merge(" value ", " values", m == 1) // "; it needs " // str(n) // ": " // what // ")")
+          return
+        end if
+      end associate
+    end do
+  end subroutine check_list_length
+
+  !> Number of values in a namelist list value: items separated by commas or
+  !> blanks outside quotes, `r*value` counting r.
+  pure integer function list_length(v) result(m)
+    character(len=*), intent(in) :: v
+    integer :: i, j, r, ios
+    character :: quote
+    logical :: in_item
+    m = 0
+    i = 1
+    in_item = .false.
+    do while (i <= len(v))
+      select case (v(i:i))
+      case (",", " ")
+        in_item = .false.
+      case ("'", '"')
+        quote = v(i:i)
+        j = index(v(i+1:), quote)
+        if (j == 0) j = len(v) - i
+        if (.not. in_item) m = m + 1
+        in_item = .true.
+        i = i + j
+      case ("*")
+        ! r*value: the repeat count was counted as one item, the value
+        ! after the star belongs to it
+        j = i - 1
+        do while (j >= 1)
+          if (verify(v(j:j), "0123456789") /= 0) exit
+          j = j - 1
+        end do
+        read(v(j+1:i-1), *, iostat=ios) r
+        if (ios == 0) m = m + r - 1
+        in_item = .true.
+      case default
+        if (.not. in_item) m = m + 1
+        in_item = .true.
+      end select
+      i = i + 1
+    end do
+  end function list_length
 
   !> The value of `&line enabled` as the file sets it (true if the file does
   !> not set it, or sets something that is not a logical: read_line reports that).

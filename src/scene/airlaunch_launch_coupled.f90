@@ -1,0 +1,862 @@
+!> The air-launch scene's run with its two line couplings (DESIGN §4) as two
+!> engines over one set of records, and the hand-over between them:
+!>  * direct (b): the launch_system (bodies + line nodes) in one CVODE;
+!>  * rigidized (a): the paper's equivalent rigidization (§2.4 Steps 1-6, the
+!>    Kane chain rocket - virtual line - parachute and the sub-stepped flexible
+!>    line, airlaunch_rigidized_coupling).
+!> Both start from the same set-up (`setup_launch`: trim of the Case 0 system,
+!> the line in its static equilibrium), share the milestones (`res`), the
+!> output times and the history of the output contract (docs/output.md).
+!>
+!> The plan (airlaunch_coupling_choice) says which engine runs: one for the
+!> whole run ('direct', 'rigidized'), one per phase ('per_phase': the switch
+!> happens at the event that changes the phase), or the automatic choice
+!> ('auto': checked every outer step H = `&line outer_dt`).  A switch hands
+!> over the state at one instant t: the aircraft and the rocket (r, v, q, w),
+!> the line's nodes 1..N (positions and velocities; node N carries the
+!> parachute in both couplings), the phase machine (phase, event times, the
+!> cut joint's references of the run's start) and the pitch-maximum search;
+!> the new engine's CVODE starts there (as after every event).  The records
+!> continue: output times before t were recorded by the old engine, the rest
+!> by the new one; counters are summed.
+submodule (airlaunch_launch_scene) airlaunch_launch_coupled
+  use airlaunch_multibody, only: separation_system, separation_nroots
+  use airlaunch_rigidized_coupling, only: rigidized_settings, rigidized_coupling, rigidized_loads, &
+    rigidized_nroots, virtual_line, virtual_line_body, continue_phase_machine
+  use airlaunch_coupling_choice, only: auto_switch, line_indicator, line_indicator_of, coupling_name
+  implicit none
+
+  !> One run: the two engines, the choice between them and the records.
+  type :: coupled_run
+    type(coupling_plan) :: plan                       !< how the coupling is chosen
+    integer :: active = coupling_direct               !< the engine in use
+    ! --- the direct coupling (b)
+    type(launch_system), pointer :: dsys => null()    !< on the heap: CVODE keeps its address
+    type(cvode_solver) :: dsolver                     !< its integrator
+    type(cvode_options) :: dopts                      !< its settings
+    logical :: dsolver_started = .false.              !< dsolver was initialised
+    ! --- the rigidized coupling (a)
+    type(separation_system) :: chain                  !< the configured chain (bodies set at each start)
+    type(rigidized_settings) :: ropt                  !< outer step and sub-step settings
+    type(rigidized_coupling) :: cpl                   !< both subsystems while it runs
+    integer :: n_refresh = 0, n_guard_mass = 0, n_guard_inertia = 0   !< over all its stints
+    real(dp) :: min_rigid_tension = huge(1.0_dp)      !< smallest axial force of the rigid line [N]
+    real(dp) :: max_mismatch = 0.0_dp                 !< largest node N - B3 distance [m]
+    ! --- the automatic choice and the switches
+    type(auto_switch) :: auto                         !< hysteresis state
+    real(dp) :: next_check = 0.0_dp                   !< next check of the indicator (direct engine) [s]
+    integer :: switches = 0                           !< hand-overs so far
+    character(len=:), allocatable :: switch_log       !< "t s: from -> to; ..."
+    logical :: done = .false.                         !< the run reached its end
+    ! --- output times and records
+    real(dp), allocatable :: t_out(:)                 !< output times after 0
+    integer :: nout = 0, iout = 1                     !< their number, the next one to record
+    type(launch_history) :: hist                      !< the output contract
+    real(dp) :: last_record_of_extremum = 0.0_dp      !< for stop_when_final [s]
+    logical :: extras = .false.                       !< record the coupling's own variables
+    real(dp), allocatable :: m_rig(:), j_rig(:), d_rig(:), f_rig(:, :), mismatch(:)
+    real(dp), allocatable :: active_rec(:), strain_rec(:), change_rec(:)
+    ! --- work arrays: the line's state of the rigidized engine
+    real(dp), allocatable :: xl(:, :), vl(:, :), ten(:)
+  end type coupled_run
+
+contains
+
+  !> Run the scene (see the submodule header).
+  module subroutine run_coupled(run, cfg, plan, echo, res, error)
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(coupling_plan), intent(in) :: plan
+    character(len=*), intent(in) :: echo
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: error
+    type(coupled_run) :: r
+    type(error_type), allocatable :: run_error
+    real(dp), allocatable :: y0(:)
+    logical :: switch
+
+    r%plan = plan
+    allocate(r%dsys)
+    call setup_launch(cfg, r%dsys, y0, res, error)
+    if (.not. allocated(error)) call prepare_run(r, run, cfg, size(y0), error)
+    if (.not. allocated(error)) call start_engine(r, y0, error)
+    if (allocated(error)) then
+      call release(r)
+      return
+    end if
+    res%has_line = r%dsys%has_line
+    call record_now(r, run, cfg, res, run_error)
+    switch = .false.
+    if (r%plan%mode == "auto" .and. .not. allocated(run_error)) call auto_check(r, 0.0_dp, switch)
+    do while (.not. (r%done .or. allocated(run_error)))
+      if (switch) then
+        call hand_over(r, res, run_error)
+        if (allocated(run_error)) exit
+      end if
+      if (r%active == coupling_direct) then
+        call direct_segment(r, run, cfg, res, switch, run_error)
+      else
+        call rigidized_segment(r, run, cfg, res, switch, run_error)
+      end if
+    end do
+    call finish_result(r, res)
+    if (allocated(run_error)) then
+      res%status = "failed"
+      res%failure = run_error%message
+    end if
+    if (run%trajectory) call write_output(r, run, echo, res, run_error)
+    call release(r)
+    if (allocated(run_error)) call move_alloc(run_error, error)
+  end subroutine run_coupled
+
+  ! ------------------------------------------------------------ set-up
+
+  !> Output times, records, solver settings and (if the plan may use it) the
+  !> rigidized coupling's chain.
+  subroutine prepare_run(r, run, cfg, n_state, error)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    integer, intent(in) :: n_state
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: nmax, k, n
+    n = r%dsys%line%n
+    call set_direct_options(run, n_state, r%dsys%has_line, r%dopts)
+    nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
+    allocate(r%t_out(nmax))
+    r%nout = 0
+    do k = 1, nmax - 1
+      r%nout = r%nout + 1
+      r%t_out(r%nout) = min(k*run%output_dt, run%t_end)
+      if (r%t_out(r%nout) >= run%t_end) exit
+    end do
+    r%iout = 1
+    r%extras = r%plan%mode /= "direct"
+    if (run%trajectory) then
+      call r%hist%init(nmax, n, r%dsys%has_line)
+      if (r%extras) allocate(r%m_rig(nmax), r%j_rig(nmax), r%d_rig(nmax), r%f_rig(3, nmax), r%mismatch(nmax), &
+        r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax))
+    end if
+    r%active = r%plan%initial()
+    r%auto%active = r%active
+    if (.not. r%plan%uses_rigidized()) return
+    allocate(r%xl(3, 0:n), r%vl(3, 0:n), r%ten(n))
+    r%ropt = rigidized_options(run, cfg)
+    call build_chain(cfg, r%dsys, r%chain, error)
+  end subroutine prepare_run
+
+  !> Settings of the rigidized coupling from &run and &line.
+  function rigidized_options(run, cfg) result(ropt)
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(rigidized_settings) :: ropt
+    ropt%outer_dt = cfg%line%outer_dt
+    ropt%far_end = cfg%line%far_end
+    ropt%chain_rtol = run%rtol
+    ropt%chain_atol = run%atol
+    ropt%inner_rtol = run%rtol
+    if (cfg%line%inner_rtol > 0.0_dp) ropt%inner_rtol = cfg%line%inner_rtol
+    ropt%inner_atol = 100.0_dp*run%atol   ! as the direct scene's line nodes (atol_scaling)
+    ropt%chain_max_order = 2
+    ropt%inner_max_order = 2
+    if (run%max_order > 0) then
+      ropt%chain_max_order = run%max_order
+      ropt%inner_max_order = run%max_order
+    end if
+  end function rigidized_options
+
+  !> The chain of the rigidized coupling: the same aircraft, rocket, cut joint
+  !> and loads as the direct system `dsys`, three bodies (rocket, virtual
+  !> line, parachute).  The line's end force is not applied (the chain's B2
+  !> carries the line).
+  subroutine build_chain(cfg, dsys, sep, error)
+    type(scenario_config), intent(in) :: cfg
+    type(launch_system), intent(in) :: dsys
+    type(separation_system), intent(out) :: sep
+    type(error_type), allocatable, intent(inout) :: error
+    type(rigidized_loads) :: rl
+    call sep%init(dsys%sep%bodies(0), dsys%sep%bodies(1), dsys%tie_down, 3, dsys%sep%joint%geo, &
+      dsys%sep%joint%opt, dsys%sep%t0, error, aircraft_prescribed=dsys%sep%aircraft_prescribed)
+    if (allocated(error)) return
+    sep%edge_bilateral = dsys%sep%edge_bilateral
+    sep%quat_gain = dsys%sep%quat_gain
+    ! gravity on the aircraft and the rocket; B2 and B3 get their weights from
+    ! rigidized_loads (the line's true weight; no weight on the apparent mass)
+    call sep%add_source(gravity_source(first=0, last=1))
+    call sep%add_source(dsys%sep%sources(dsys%iloads)%source)
+    select type (s => sep%sources(2)%source)
+    type is (launch_loads)
+      s%line_force = 0.0_dp   ! not applied: the chain's B2 carries the line
+    end select
+    rl%line_mass = dsys%line%total_mass()
+    rl%diameter = cfg%line%diameter
+    rl%cd_normal = cfg%line%cd_normal
+    rl%cd_tangential = cfg%line%cd_tangential
+    rl%chute = dsys%chute
+    call sep%add_source(rl)
+  end subroutine build_chain
+
+  !> The first engine at t = 0 from the set-up state y0.
+  subroutine start_engine(r, y0, error)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: y0(:)
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: status
+    if (r%active == coupling_direct) then
+      call r%dsolver%init(r%dsys, 0.0_dp, y0, r%dopts, error)
+      r%dsolver_started = .true.
+      return
+    end if
+    call r%dsys%prepare(0.0_dp, y0, status)
+    call r%cpl%init(r%chain, 2, 3, r%dsys%line, r%dsys%chute, r%dsys%x, r%dsys%v, r%dsys%v_ref, r%dsys%h_ref, &
+      0.0_dp, phase_preparation, r%ropt, error)
+    if (allocated(error)) error%message = phase_name(phase_preparation) // ", t = 0 s: " // error%message
+  end subroutine start_engine
+
+  ! ------------------------------------------------------------ direct engine
+
+  !> CVODE settings of the direct coupling (the whole system in one solver).
+  subroutine set_direct_options(run, n_state, has_line, opts)
+    type(run_config), intent(in) :: run
+    integer, intent(in) :: n_state
+    logical, intent(in) :: has_line
+    type(cvode_options), intent(out) :: opts
+    opts%rtol = run%rtol
+    opts%atol = run%atol
+    opts%linear_solver = "band"
+    ! The band holds the stiff couplings: the line's node chain and node 1 with
+    ! the rocket's position and attitude (offsets up to 18).  The aircraft-rocket
+    ! coupling through the CFA (offsets to 25) and aircraft-node 1 (31) are soft
+    ! and left out of the Newton matrix (a modified Newton iteration): measured
+    ! 27 % faster than the full band with the same milestones (docs/performance.md).
+    opts%upper_bandwidth = 18
+    opts%lower_bandwidth = 18
+    allocate(opts%atol_vector(n_state))
+    opts%atol_vector(:) = atol_scaling(run%atol, n_state)
+    ! BDF orders above 2 are not A-stable: on the line's lightly damped axial
+    ! modes they force tiny steps (measured: 6.2k steps at order 2, 40k at 4,
+    ! 72k at 3 for the paper scenario, same milestones), so the scene default
+    ! is order 2 (&run max_order = 0).
+    opts%max_order = run%max_order
+    if (opts%max_order == 0) opts%max_order = 2
+    if (.not. has_line) call rigid_only_options(run, opts)
+  end subroutine set_direct_options
+
+  !> Solver settings of a scene without a line (26 rigid states): a dense
+  !> Newton matrix (the band of the line is gone; 26 x 26 costs nothing), and
+  !> BDF up to order 5 unless &run max_order says otherwise (the order-2
+  !> default exists for the line's lightly damped axial modes).
+  subroutine rigid_only_options(run, opts)
+    type(run_config), intent(in) :: run
+    type(cvode_options), intent(inout) :: opts
+    opts%linear_solver = "dense"
+    if (run%max_order == 0 .and. opts%method == "bdf") opts%max_order = 5
+  end subroutine rigid_only_options
+
+  !> Per-component absolute tolerances: positions and velocities in m and
+  !> m/s (relative variables, small numbers), quaternions and rates tighter.
+  pure function atol_scaling(atol, n) result(a)
+    real(dp), intent(in) :: atol
+    integer, intent(in) :: n
+    real(dp) :: a(n)
+    integer :: i
+    a = atol*1.0e2_dp
+    do i = 0, 1
+      a(13*i+7:13*i+10) = atol
+      a(13*i+11:13*i+13) = atol*10
+    end do
+  end function atol_scaling
+
+  !> The direct coupling from the next output time on, until the run ends or
+  !> the plan switches (`switch`: the state at the solver's time is handed over).
+  subroutine direct_segment(r, run, cfg, res, switch, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    logical, intent(out) :: switch
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp) :: tout, t_stop
+    switch = .false.
+    do while (r%iout <= r%nout)
+      tout = r%t_out(r%iout)
+      t_stop = tout
+      if (r%plan%mode == "auto") t_stop = min(tout, r%next_check)
+      call direct_advance(r, t_stop, res, switch, err)
+      if (allocated(err)) return
+      if (r%dsolver%t >= tout) then
+        call record_now(r, run, cfg, res, err)
+        r%iout = r%iout + 1
+        if (tout >= run%t_end .or. stop_now(r, run, res, r%dsys%sep%phase, r%dsolver%t)) then
+          r%done = .true.
+          return
+        end if
+      end if
+      if (switch) return
+      if (r%plan%mode == "auto" .and. r%dsolver%t >= r%next_check) then
+        call auto_check(r, r%dsolver%t, switch)
+        if (switch) return
+      end if
+    end do
+    r%done = .true.
+  end subroutine direct_segment
+
+  !> Integrate the direct system to t_target, handling the events on the way;
+  !> stops early (`switch`) at a phase change the plan gives to the other coupling.
+  subroutine direct_advance(r, t_target, res, switch, err)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t_target
+    type(launch_result), intent(inout) :: res
+    logical, intent(inout) :: switch
+    type(error_type), allocatable, intent(inout) :: err
+    logical :: event, changed
+    integer :: which(launch_nroots), guard, status
+    real(dp), allocatable :: y(:)
+    do guard = 1, 100
+      call r%dsolver%advance(t_target, err, event, which)
+      if (allocated(err)) then
+        err%message = phase_name(r%dsys%sep%phase) // ": " // err%message
+        return
+      end if
+      if (.not. event) return
+      call r%dsys%prepare(r%dsolver%t, r%dsolver%y, status)
+      call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), which(1:launch_nroots-1), &
+        which(launch_nroots), r%dsys%find_pitch_max, changed, err)
+      if (allocated(err)) return
+      if (changed) then
+        if (leaves_at_phase(r, coupling_direct, r%dsys%sep%phase)) then
+          switch = .true.
+          return
+        end if
+        ! the constraint set changed: restart CVODE from the event (its
+        ! counters restart too, so keep the totals)
+        call add_stats(res%stats, r%dsolver%stats())
+        y = r%dsolver%y
+        call r%dsolver%reinit(r%dsolver%t, y, err)
+        if (allocated(err)) return
+      end if
+      if (r%dsolver%t >= t_target) return
+    end do
+    call fatal_error(err, phase_name(r%dsys%sep%phase) // ", t = " // str(r%dsolver%t) // &
+      " s: too many events before the output time")
+  end subroutine direct_advance
+
+  !> The direct coupling resumes at time t: the aircraft and the rocket from
+  !> `machine` (bodies loaded, absolute), its phase machine, the line nodes
+  !> x, v (0:N, absolute) and the pitch-maximum search.
+  subroutine direct_resume(r, t, machine, x, v, find_pitch_max, err)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t
+    type(separation_system), intent(in) :: machine
+    real(dp), intent(in) :: x(:, 0:), v(:, 0:)
+    logical, intent(in) :: find_pitch_max
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp), allocatable :: y(:)
+    integer :: i, k, n, status
+    n = r%dsys%line%n
+    allocate(y(rigid_size + 6*n))
+    associate(s => r%dsys)
+      s%sep%bodies(0) = machine%bodies(0)
+      s%sep%bodies(1) = machine%bodies(1)
+      call s%sep%pack_state(y(1:rigid_size))
+      do i = 0, 1
+        y(13*i+1:13*i+3) = y(13*i+1:13*i+3) - [s%v_ref*t, s%h_ref, 0.0_dp]
+        y(13*i+4) = y(13*i+4) - s%v_ref
+      end do
+      do k = 1, n
+        i = rigid_size + 6*(k - 1)
+        y(i+1:i+3) = x(:, k) - [s%v_ref*t, s%h_ref, 0.0_dp]
+        y(i+4:i+6) = v(:, k) - [s%v_ref, 0.0_dp, 0.0_dp]
+      end do
+      call continue_phase_machine(s%sep, machine)
+      s%find_pitch_max = find_pitch_max
+      call s%prepare(t, y, status)
+      call s%sep%evaluate(t, s%yabs(1:rigid_size), err)
+      if (allocated(err)) return
+    end associate
+    if (r%dsolver_started) then
+      call r%dsolver%reinit(t, y, err)
+    else
+      call r%dsolver%init(r%dsys, t, y, r%dopts, err)
+      r%dsolver_started = .true.
+    end if
+  end subroutine direct_resume
+
+  ! ------------------------------------------------------------ rigidized engine
+
+  !> Outer steps of the rigidized coupling (§2.4 Steps 3-6) until the run ends
+  !> or the plan switches; the outputs are recorded from inside the steps.
+  subroutine rigidized_segment(r, run, cfg, res, switch, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    logical, intent(out) :: switch
+    type(error_type), allocatable, intent(inout) :: err
+    logical :: event, changed, leave
+    integer :: which(rigidized_nroots), n_events, j
+    real(dp) :: t_target, eps, t_last, h
+    switch = .false.
+    h = r%ropt%outer_dt
+    eps = 1.0e-12_dp*max(1.0_dp, run%t_end)
+    n_events = 0
+    t_last = r%cpl%t
+    do while (run%t_end - r%cpl%t > eps)
+      t_target = min(r%cpl%t + h, run%t_end)
+      if (run%t_end - t_target < 1.0e-6_dp*h) t_target = run%t_end
+      ! end on an output time when the step reaches it (no round-off slivers)
+      if (r%iout <= r%nout) then
+        if (abs(r%t_out(r%iout) - t_target) < 1.0e-6_dp*h) t_target = r%t_out(r%iout)
+      end if
+      call r%cpl%begin_step(t_target, event, which, err, r%t_out(r%iout:r%nout))
+      do j = 1, r%cpl%n_saved
+        if (allocated(err)) exit
+        call r%cpl%line_to(r%cpl%saved_t(j), err)
+        if (.not. allocated(err)) call rigidized_record(r, run, cfg, res, r%cpl%saved_t(j), r%cpl%saved_y(:, j), err)
+      end do
+      if (.not. allocated(err)) call r%cpl%end_step(err)
+      if (allocated(err)) then
+        if (index(err%message, "phase ") /= 1) err%message = phase_name(r%cpl%chain%sep%phase) // ": " // err%message
+        return
+      end if
+      leave = .false.
+      if (event) then
+        ! several events within one output interval are allowed, not a cascade
+        if (r%cpl%t - t_last > run%output_dt) n_events = 0
+        t_last = r%cpl%t
+        n_events = n_events + 1
+        if (n_events > 100) then
+          call fatal_error(err, phase_name(r%cpl%chain%sep%phase) // ", t = " // str(r%cpl%t) // &
+            " s: too many events before the output time")
+          return
+        end if
+        associate(c => r%cpl%chain)
+          call c%prepare(r%cpl%t, r%cpl%chain_solver%y)
+          call handle_launch_event(res, r%cpl%t, c%sep, c%yabs, which(1:separation_nroots), &
+            which(rigidized_nroots), c%find_pitch_max, changed, err)
+          if (allocated(err)) return
+        end associate
+        leave = changed .and. leaves_at_phase(r, coupling_rigidized, r%cpl%chain%sep%phase)
+        ! every event restarts the chain at its time (the outer step ended there)
+        if (.not. leave) call r%cpl%restart_chain(err)
+        if (allocated(err)) return
+        ! an output time that coincides with the event
+        if (r%iout <= r%nout) then
+          if (abs(r%t_out(r%iout) - r%cpl%t) <= eps) call rigidized_record(r, run, cfg, res, r%cpl%t, &
+            r%cpl%chain_solver%y, err)
+          if (allocated(err)) return
+        end if
+      end if
+      call skip_recorded(r, run)
+      if (stop_now(r, run, res, r%cpl%chain%sep%phase, r%cpl%t)) exit
+      switch = leave
+      if (r%plan%mode == "auto") call auto_check(r, r%cpl%t, switch)
+      if (switch) return
+    end do
+    r%done = .true.
+  end subroutine rigidized_segment
+
+  !> The next output time is the first one after the rigidized coupling's time.
+  subroutine skip_recorded(r, run)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    do while (r%iout <= r%nout)
+      if (r%t_out(r%iout) > r%cpl%t + 1.0e-12_dp*max(1.0_dp, run%t_end)) exit
+      r%iout = r%iout + 1
+    end do
+  end subroutine skip_recorded
+
+  !> The rigidized coupling (re)starts at time t from the direct system's
+  !> state (bodies, nodes and phase machine loaded by its `prepare`).
+  subroutine rigidized_resume(r, t, err)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t
+    type(error_type), allocatable, intent(inout) :: err
+    associate(s => r%dsys)
+      r%chain%bodies(0) = s%sep%bodies(0)
+      r%chain%bodies(1) = s%sep%bodies(1)
+      call r%cpl%init(r%chain, 2, 3, s%line, s%chute, s%x, s%v, s%v_ref, s%h_ref, t, s%sep%phase, r%ropt, err, &
+        machine=s%sep)
+      if (allocated(err)) return
+      r%cpl%chain%find_pitch_max = s%find_pitch_max
+    end associate
+  end subroutine rigidized_resume
+
+  !> Add the rigidized coupling's counters of its present stint to the run's.
+  subroutine add_rigidized_counts(r, res)
+    type(coupled_run), intent(inout) :: r
+    type(launch_result), intent(inout) :: res
+    call add_stats(res%stats, r%cpl%stats())
+    r%n_refresh = r%n_refresh + r%cpl%n_refresh
+    r%n_guard_mass = r%n_guard_mass + r%cpl%n_guard_mass
+    r%n_guard_inertia = r%n_guard_inertia + r%cpl%n_guard_inertia
+  end subroutine add_rigidized_counts
+
+  ! ------------------------------------------------------------ the choice
+
+  !> The engine `from` hands over at the phase change into `phase` (per_phase).
+  pure logical function leaves_at_phase(r, from, phase) result(leave)
+    type(coupled_run), intent(in) :: r
+    integer, intent(in) :: from, phase
+    leave = r%plan%mode == "per_phase" .and. r%plan%for_phase(phase) /= from
+  end function leaves_at_phase
+
+  !> The automatic choice at time t from the active engine's line state;
+  !> `switch` if it wants the other coupling.  Sets the next check time.
+  subroutine auto_check(r, t, switch)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t
+    logical, intent(inout) :: switch
+    type(line_indicator) :: ind
+    ind = current_indicator(r, t)
+    call r%auto%decide(r%plan%auto, t, ind)
+    switch = switch .or. r%auto%active /= r%active
+    call set_next_check(r, t)
+  end subroutine auto_check
+
+  !> The next check of the indicator one outer step after t, on an output
+  !> time if it falls within round-off of one (no slivers of a step).
+  subroutine set_next_check(r, t)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t
+    real(dp) :: tol
+    integer :: j
+    r%next_check = t + r%plan%auto%interval
+    tol = 1.0e-6_dp*r%plan%auto%interval
+    do j = r%iout, r%nout
+      if (r%t_out(j) > r%next_check + tol) exit
+      if (abs(r%t_out(j) - r%next_check) <= tol) r%next_check = r%t_out(j)
+    end do
+  end subroutine set_next_check
+
+  !> The indicator of the active engine's line at its present time t.
+  function current_indicator(r, t) result(ind)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t
+    type(line_indicator) :: ind
+    integer :: status
+    if (r%active == coupling_direct) then
+      call r%dsys%prepare(t, r%dsolver%y, status)
+      ind = line_indicator_of(r%dsys%x, r%dsys%v, r%dsys%line%l0, r%plan%auto)
+    else
+      call r%cpl%line_state(r%xl, r%vl, r%ten)
+      ind = line_indicator_of(r%xl, r%vl, r%dsys%line%l0, r%plan%auto)
+    end if
+  end function current_indicator
+
+  !> Hand the state over to the other engine at the active one's time.
+  subroutine hand_over(r, res, err)
+    type(coupled_run), intent(inout) :: r
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp) :: t
+    integer :: status, from
+    from = r%active
+    if (from == coupling_direct) then
+      t = r%dsolver%t
+      call add_stats(res%stats, r%dsolver%stats())
+      call r%dsys%prepare(t, r%dsolver%y, status)
+      call rigidized_resume(r, t, err)
+      r%active = coupling_rigidized
+    else
+      t = r%cpl%t
+      call add_rigidized_counts(r, res)
+      call r%cpl%chain%prepare(t, r%cpl%chain_solver%y)
+      call r%cpl%line_state(r%xl, r%vl, r%ten)
+      call direct_resume(r, t, r%cpl%chain%sep, r%xl, r%vl, r%cpl%chain%find_pitch_max, err)
+      call r%cpl%free()
+      r%active = coupling_direct
+    end if
+    if (allocated(err)) then
+      err%message = phase_name(r%dsys%sep%phase) // ", t = " // str(t) // " s: switching from the " // &
+        coupling_name(from) // " to the " // coupling_name(1 - from) // " coupling: " // err%message
+      return
+    end if
+    r%auto%active = r%active
+    call set_next_check(r, t)
+    r%switches = r%switches + 1
+    if (.not. allocated(r%switch_log)) r%switch_log = ""
+    if (r%switches > 1) r%switch_log = r%switch_log // "; "
+    r%switch_log = r%switch_log // str(t) // " s: " // coupling_name(from) // " -> " // coupling_name(r%active)
+  end subroutine hand_over
+
+  !> &run stop_when_final: the milestones cannot change any more (the rocket
+  !> is free, its first pitch maximum found, and 1 s has passed since both,
+  !> during which no extremum moved).  A later snatch of the line is not
+  !> waited for.
+  logical function stop_now(r, run, res, phase, t)
+    type(coupled_run), intent(in) :: r
+    type(run_config), intent(in) :: run
+    type(launch_result), intent(in) :: res
+    integer, intent(in) :: phase
+    real(dp), intent(in) :: t
+    stop_now = .false.
+    if (.not. run%stop_when_final) return
+    if (phase /= phase_free .or. res%pitch_max_time < 0.0_dp) return
+    if (t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
+    stop_now = t >= r%last_record_of_extremum + 1.0_dp
+  end function stop_now
+
+  ! ------------------------------------------------------------ records
+
+  !> Sample the active engine at its present time.
+  subroutine record_now(r, run, cfg, res, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: err
+    if (r%active == coupling_direct) then
+      call direct_record(r, run, cfg, res)
+    else
+      call rigidized_record(r, run, cfg, res, r%cpl%t, r%cpl%chain_solver%y, err)
+    end if
+  end subroutine record_now
+
+  !> Sample the direct system at the solver's time (outputs and milestones).
+  subroutine direct_record(r, run, cfg, res)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    integer :: status
+    real(dp) :: t
+    type(error_type), allocatable :: eval_error
+    type(launch_sample) :: smp
+    t = r%dsolver%t
+    associate(s => r%dsys, y => r%dsolver%y)
+      call s%prepare(t, y, status)
+      call s%sep%evaluate(t, s%yabs(1:rigid_size), eval_error)
+      smp = sample_launch(cfg, s%sep, s%iloads)
+      if (s%has_line) then
+        if (record_milestones(res, t, smp, s%sep, s%tension)) r%last_record_of_extremum = t
+      else
+        if (record_milestones(res, t, smp, s%sep)) r%last_record_of_extremum = t
+      end if
+      res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(y(7:10)) - 1.0_dp), &
+        abs(norm2(y(20:23)) - 1.0_dp))
+      if (.not. run%trajectory) return
+      if (s%has_line) then
+        call r%hist%append(t, smp, s%sep, s%x, s%tension, s%x(:, s%line%n))
+      else
+        call r%hist%append(t, smp, s%sep)
+      end if
+      if (r%extras) call record_extras(r, s%x, s%v, s%f(:, 0), 0.0_dp)
+    end associate
+  end subroutine direct_record
+
+  !> Sample the rigidized coupling at time t (outputs and milestones): the
+  !> chain's state y (relative frame), the line's from its sub-stepping solver at t.
+  subroutine rigidized_record(r, run, cfg, res, t, y, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    real(dp), intent(in) :: t, y(:)
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp) :: frig(3), axis(3), mm
+    integer :: j, o
+    type(error_type), allocatable :: eval_error
+    type(launch_sample) :: smp
+    if (allocated(err)) return
+    call r%cpl%line_state(r%xl, r%vl, r%ten)
+    call r%cpl%chain%prepare(t, y)
+    call r%cpl%chain%sep%evaluate(t, r%cpl%chain%yabs, eval_error)
+    associate(sp => r%cpl%chain%sep, b1 => r%cpl%chain%sep%bodies(1), b3 => r%cpl%chain%sep%bodies(3))
+      smp = sample_launch(cfg, sp, 2)
+      if (record_milestones(res, t, smp, sp, r%ten)) r%last_record_of_extremum = t
+      do j = 0, 3   ! aircraft, rocket, line body, parachute
+        o = merge(7 + 13*j, 27 + 7*(j - 2), j < 2)
+        res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(y(o:o+3)) - 1.0_dp))
+      end do
+      ! the rigidized model's own quantities
+      frig = r%cpl%chain%line_force()
+      axis = b3%r - b1%point_position(sp%tie_down)
+      r%min_rigid_tension = min(r%min_rigid_tension, dot_product(frig, axis)/norm2(axis))
+      mm = norm2(r%xl(:, r%dsys%line%n) - b3%r)
+      r%max_mismatch = max(r%max_mismatch, mm)
+      if (.not. run%trajectory) return
+      call r%hist%append(t, smp, sp, r%xl, r%ten, b3%r)
+      call record_extras(r, r%xl, r%vl, frig, mm)
+    end associate
+  end subroutine rigidized_record
+
+  !> The coupling's own variables of the last history record: the virtual
+  !> line body of the line state x, v, the line's force on the rocket, the
+  !> node N - B3 distance and (mixed plans) the active coupling and the indicator.
+  subroutine record_extras(r, x, v, force, mismatch)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: x(:, 0:), v(:, 0:), force(3), mismatch
+    type(virtual_line) :: vb
+    type(line_indicator) :: ind
+    integer :: k
+    k = r%hist%nrec
+    vb = virtual_line_body(r%dsys%line, x, v, r%ropt%guard_band)
+    r%m_rig(k) = vb%mass
+    r%j_rig(k) = vb%inertia
+    r%d_rig(k) = vb%length
+    r%f_rig(:, k) = force
+    r%mismatch(k) = mismatch
+    ind = line_indicator_of(x, v, r%dsys%line%l0, r%plan%auto)
+    r%active_rec(k) = r%active
+    r%strain_rec(k) = ind%min_strain
+    r%change_rec(k) = ind%strain_change
+  end subroutine record_extras
+
+  ! ------------------------------------------------------------ end of the run
+
+  !> The event times, end time and counters of the engine the run ended in.
+  subroutine finish_result(r, res)
+    type(coupled_run), intent(inout) :: r
+    type(launch_result), intent(inout) :: res
+    if (r%active == coupling_direct) then
+      if (r%dsolver_started) call add_stats(res%stats, r%dsolver%stats())
+      res%end_time = r%dsolver%t
+      call events_of(r%dsys%sep)
+    else
+      call add_rigidized_counts(r, res)
+      res%end_time = r%cpl%t
+      call events_of(r%cpl%chain%sep)
+    end if
+  contains
+    subroutine events_of(sep)
+      type(separation_system), intent(in) :: sep
+      res%release_time = event_or_minus(sep%event_time(1))
+      res%edge_time = event_or_minus(sep%event_time(2))
+      res%separation_time = event_or_minus(sep%event_time(3))
+      res%early_separation = sep%early_separation
+      res%edge_pull_time = event_or_minus(sep%edge_pull_time)
+    end subroutine events_of
+  end subroutine finish_result
+
+  !> Free both engines.
+  subroutine release(r)
+    type(coupled_run), intent(inout) :: r
+    call r%dsolver%free()
+    call r%cpl%free()
+    if (associated(r%dsys)) deallocate(r%dsys)
+    nullify(r%dsys)
+  end subroutine release
+
+  !> The output file: the contract, and the coupling's own variables and
+  !> attributes (docs/output.md).
+  subroutine write_output(r, run, echo, res, run_error)
+    type(coupled_run), intent(in) :: r
+    type(run_config), intent(in) :: run
+    character(len=*), intent(in) :: echo
+    type(launch_result), intent(in) :: res
+    type(error_type), allocatable, intent(inout) :: run_error
+    type(nc_writer) :: w
+    type(error_type), allocatable :: werr
+    call w%create(run%output, werr)
+    select case (r%plan%mode)
+    case ("direct")
+      call r%hist%write_contract(w, "parachute (the line's last node), earth frame", "", werr)
+      if (r%dsys%has_line) then
+        call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
+          "(Zheng & Zhang 2018, §5.2)", echo, werr)
+      else
+        call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket separation without line or " // &
+          "parachute (gravity drop, rail release)", echo, werr)
+      end if
+      call write_milestones(w, res, werr)
+    case ("rigidized")
+      call r%hist%write_contract(w, "parachute (chain body B3), earth frame", " (sub-stepped flexible line)", werr)
+      call write_rigidized_variables(r, w, .false., werr)
+      call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
+        "(Zheng & Zhang 2018, §5.2), line by equivalent rigidization (§2.4)", echo, werr)
+      call write_milestones(w, res, werr)
+      call write_rigidized_attributes(r, w, werr)
+    case default
+      call r%hist%write_contract(w, "parachute: the line's last node (direct coupling) or the chain's body B3 " // &
+        "(rigidized coupling), earth frame", "", werr)
+      call write_rigidized_variables(r, w, .true., werr)
+      call write_choice_variables(r, w, werr)
+      call write_run_metadata(w, "airlaunch", "airlaunch: aircraft-rocket-line-parachute separation " // &
+        "(Zheng & Zhang 2018, §5.2), line coupling chosen " // &
+        trim(merge("per phase    ", "automatically", r%plan%mode == "per_phase")), echo, werr)
+      call write_milestones(w, res, werr)
+      call write_rigidized_attributes(r, w, werr)
+      call write_choice_attributes(r, w, werr)
+    end select
+    call w%finish(werr)
+    if (allocated(werr) .and. .not. allocated(run_error)) call move_alloc(werr, run_error)
+  end subroutine write_output
+
+  !> The virtual line body over time (`mixed`: also in the direct coupling's
+  !> records, from its line nodes).
+  subroutine write_rigidized_variables(r, w, mixed, werr)
+    type(coupled_run), intent(in) :: r
+    type(nc_writer), intent(inout) :: w
+    logical, intent(in) :: mixed
+    type(error_type), allocatable, intent(inout) :: werr
+    integer :: nrec
+    character(len=:), allocatable :: force_text
+    nrec = r%hist%nrec
+    force_text = "force of the virtual line body on the rocket at the tie-down point (chain joint force), earth frame"
+    if (mixed) force_text = "force of the line on the rocket at the tie-down point: the virtual body's joint " // &
+      "force (rigidized coupling) or the line's end force (direct coupling), earth frame"
+    call w%add_var_1d("m_rigid_kg", ["time"], r%m_rig(1:nrec), "kg", &
+      "virtual line body: mass m_rigid (Eq. (31), kinetic-energy equivalent, guarded)", werr)
+    call w%add_var_1d("j_rigid_kg_m2", ["time"], r%j_rig(1:nrec), "kg m2", &
+      "virtual line body: transverse moment of inertia J_rigid (Eq. (32), guarded)", werr)
+    call w%add_var_1d("d_rigid_m", ["time"], r%d_rig(1:nrec), "m", &
+      "virtual line body: length d_rigid (Eq. (20), chord of the flexible line)", werr)
+    call w%add_var_2d("rigid_line_force_N", ["xyz ", "time"], r%f_rig(:, 1:nrec), "N", force_text, werr)
+    call w%add_var_1d("line_end_mismatch_m", ["time"], r%mismatch(1:nrec), "m", &
+      "distance between the flexible line's node N and the chain's parachute B3" // &
+      trim(merge(" (0 in the direct coupling)", "                           ", mixed)), werr)
+  end subroutine write_rigidized_variables
+
+  !> The rigidized coupling's attributes (over all its stints).
+  subroutine write_rigidized_attributes(r, w, werr)
+    type(coupled_run), intent(in) :: r
+    type(nc_writer), intent(inout) :: w
+    type(error_type), allocatable, intent(inout) :: werr
+    call w%add_text_att("/", "line_coupling", trim(r%plan%mode), werr)
+    call w%add_real_att("/", "outer_dt_s", r%ropt%outer_dt, werr)
+    call w%add_real_att("/", "refreshes", real(r%n_refresh, dp), werr)
+    call w%add_real_att("/", "guarded_mass_refreshes", real(r%n_guard_mass, dp), werr)
+    call w%add_real_att("/", "guarded_inertia_refreshes", real(r%n_guard_inertia, dp), werr)
+    call w%add_real_att("/", "min_rigid_line_tension_N", r%min_rigid_tension, werr)
+    call w%add_real_att("/", "max_line_end_mismatch_m", r%max_mismatch, werr)
+  end subroutine write_rigidized_attributes
+
+  !> Which coupling each record comes from, and the indicator there.
+  subroutine write_choice_variables(r, w, werr)
+    type(coupled_run), intent(in) :: r
+    type(nc_writer), intent(inout) :: w
+    type(error_type), allocatable, intent(inout) :: werr
+    integer :: nrec
+    nrec = r%hist%nrec
+    call w%add_var_1d("line_coupling_active", ["time"], r%active_rec(1:nrec), "1", &
+      "line coupling of the record: 0 direct, 1 rigidized", werr)
+    call w%add_var_1d("line_min_strain", ["time"], r%strain_rec(1:nrec), "1", &
+      "automatic choice, taut indicator: smallest segment strain of the flexible line", werr)
+    call w%add_var_1d("line_strain_change", ["time"], r%change_rec(1:nrec), "1", &
+      "automatic choice, slow indicator: largest segment strain rate times the outer step, over the mean " // &
+      "strain (at least auto_min_strain)", werr)
+  end subroutine write_choice_variables
+
+  !> The plan and the switches.
+  subroutine write_choice_attributes(r, w, werr)
+    type(coupled_run), intent(in) :: r
+    type(nc_writer), intent(inout) :: w
+    type(error_type), allocatable, intent(inout) :: werr
+    integer :: k
+    character(len=:), allocatable :: by_phase
+    if (r%plan%mode == "per_phase") then
+      by_phase = coupling_name(r%plan%by_phase(0))
+      do k = 1, 3
+        by_phase = by_phase // ", " // coupling_name(r%plan%by_phase(k))
+      end do
+      call w%add_text_att("/", "coupling_by_phase", by_phase, werr)
+    else
+      call w%add_real_att("/", "auto_min_strain", r%plan%auto%min_strain, werr)
+      call w%add_real_att("/", "auto_max_strain_change", r%plan%auto%max_strain_change, werr)
+      call w%add_real_att("/", "auto_dwell_s", r%plan%auto%dwell, werr)
+    end if
+    call w%add_real_att("/", "coupling_switches", real(r%switches, dp), werr)
+    if (r%switches > 0) call w%add_text_att("/", "coupling_switch_log", r%switch_log, werr)
+  end subroutine write_choice_attributes
+end submodule airlaunch_launch_coupled
