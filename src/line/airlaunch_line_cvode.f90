@@ -192,7 +192,7 @@ contains
     scheme%t = t0
     scheme%sys%x = x0
     scheme%sys%v = v0
-    scheme%opts = cvode_options(method="bdf", linear_solver="band", upper_bandwidth=line_band_upper, &
+    scheme%opts = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%rtol, atol=opts%atol, max_step=opts%max_step, &
       max_order=opts%max_order, max_num_steps=1000000)
     if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends

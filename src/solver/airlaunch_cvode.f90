@@ -24,6 +24,7 @@ module airlaunch_cvode
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
   use airlaunch_lapack_band, only: new_lapack_band_solver
+  use airlaunch_second_order_band, only: new_second_order_band_solver, second_order_band_ok
   implicit none
   private
   public :: cvode_options, cvode_solver, cvode_stats, add_stats
@@ -31,7 +32,9 @@ module airlaunch_cvode
   !> How to integrate.
   type :: cvode_options
     character(len=16) :: method = "bdf"          !< "bdf" (stiff) or "adams"
-    character(len=16) :: linear_solver = "dense" !< "dense", "band" (LAPACK), "sundials_band" or "none" (fixed point)
+    !> "dense", "band" (LAPACK), "second_order_band" (LAPACK on the velocity system of
+    !> [x, v]-per-node states, airlaunch_second_order_band), "sundials_band" or "none" (fixed point)
+    character(len=24) :: linear_solver = "dense"
     integer :: upper_bandwidth = 0               !< band solver: upper half-bandwidth
     integer :: lower_bandwidth = 0               !< band solver: lower half-bandwidth
     real(dp) :: rtol = 1.0e-6_dp                 !< relative tolerance
@@ -162,6 +165,17 @@ contains
         int(opts%lower_bandwidth, c_long), self%ctx)
       self%ls => new_lapack_band_solver(self%mat, self%ctx)
       ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
+    case ("second_order_band")
+      if (.not. second_order_band_ok(int(neq), opts%upper_bandwidth, opts%lower_bandwidth)) then
+        call fatal_error(error, "CVODE: second_order_band needs 6 states per node and half-bandwidths " // &
+          ">= 8 (upper) and >= 11 (lower); got " // str(int(neq)) // " states, " // &
+          str(opts%upper_bandwidth) // "/" // str(opts%lower_bandwidth))
+        return
+      end if
+      self%mat => FSUNBandMatrix(neq, int(opts%upper_bandwidth, c_long), &
+        int(opts%lower_bandwidth, c_long), self%ctx)
+      self%ls => new_second_order_band_solver(self%mat, self%ctx)
+      ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
     case ("sundials_band")
       ! SUNDIALS' own band LU (kept for comparison in the benchmarks)
       self%mat => FSUNBandMatrix(neq, int(opts%upper_bandwidth, c_long), &
@@ -173,7 +187,7 @@ contains
       ierr = FCVodeSetNonlinearSolver(self%mem, self%nls)
     case default
       call fatal_error(error, "CVODE: unknown linear solver '" // trim(opts%linear_solver) // &
-        "' (allowed: dense, band, sundials_band, none)")
+        "' (allowed: dense, band, second_order_band, sundials_band, none)")
       return
     end select
     if (ierr /= 0) then

@@ -46,16 +46,74 @@ contains
   end subroutine roots
 end module oscillator_system
 
+!> A 3-D chain of point masses joined by linear springs and dashpots, the
+!> first fixed: x' = v, v' = a(x, v), states node by node [x, v] (the layout
+!> of the lumped line), for the velocity-reduced linear solver.
+module spring_chain_system
+  use airlaunch_kinds, only: dp
+  use airlaunch_ode, only: ode_system, rhs_ok
+  implicit none
+  private
+  public :: spring_chain
+
+  type, extends(ode_system) :: spring_chain
+    integer :: nodes = 8
+    real(dp) :: k = 4.0e4_dp, c = 20.0_dp, m = 1.0_dp, l0 = 1.0_dp
+  contains
+    procedure :: rhs => chain_rhs
+  end type spring_chain
+contains
+  subroutine chain_rhs(self, t, y, ydot, status)
+    class(spring_chain), intent(inout) :: self
+    real(dp), intent(in) :: t, y(:)
+    real(dp), intent(out) :: ydot(:)
+    integer, intent(out) :: status
+    real(dp) :: xa(3), va(3), xb(3), vb(3), d(3), l, f(3), e(3)
+    integer :: j
+    ydot = 0.0_dp
+    do j = 1, self%nodes
+      ydot(6*j-5:6*j-3) = y(6*j-2:6*j)
+      ydot(6*j-1) = -9.81_dp
+    end do
+    do j = 1, self%nodes
+      xb = y(6*j-5:6*j-3); vb = y(6*j-2:6*j)
+      if (j == 1) then
+        xa = 0.0_dp; va = 0.0_dp
+      else
+        xa = y(6*j-11:6*j-9); va = y(6*j-8:6*j-6)
+      end if
+      d = xb - xa
+      l = norm2(d)
+      e = d/l
+      f = (self%k*(l - self%l0) + self%c*dot_product(e, vb - va))*e   ! pull on a towards b
+      ydot(6*j-2:6*j) = ydot(6*j-2:6*j) - f/self%m
+      if (j > 1) ydot(6*j-8:6*j-6) = ydot(6*j-8:6*j-6) + f/self%m
+    end do
+    status = rhs_ok
+    if (.false.) ydot(1) = t
+  end subroutine chain_rhs
+end module spring_chain_system
+
 program test_cvode
   use airlaunch_kinds, only: dp, pi
   use airlaunch_error, only: error_type
   use airlaunch_cvode
   use oscillator_system
+  use spring_chain_system
+  use, intrinsic :: iso_c_binding
+  use fsundials_context_mod
+  use fsundials_matrix_mod
+  use fsundials_linearsolver_mod
+  use fsundials_nvector_mod
+  use fnvector_serial_mod
+  use fsunmatrix_band_mod
+  use airlaunch_lapack_band, only: new_lapack_band_solver
+  use airlaunch_second_order_band, only: new_second_order_band_solver
   use testing
   implicit none
   type(oscillator), target :: osc
   type(cvode_solver) :: solver
-  type(cvode_options) :: opts
+  type(cvode_options) :: opts, saved_opts
   type(error_type), allocatable :: error
   character(len=16), parameter :: solvers(4) = [character(len=16) :: "dense", "band", "sundials_band", "none"]
   character(len=8), parameter :: methods(4) = [character(len=8) :: "bdf", "bdf", "bdf", "adams"]
@@ -89,6 +147,112 @@ program test_cvode
   call check_close(solver%t, 3*pi/4, "second zero at 3 pi/4", abs=1e-8_dp)
   call solver%free()
 
+  call section("velocity-reduced band solver: the same linear solve as the full band LU")
+  block
+    ! M = I - gamma J with the [x, v]-per-node structure (position rows exactly
+    ! [I, -gamma I]), velocity rows random 3x3 blocks to the neighbours; the
+    ! reduced solve must give the full band LU's solution to round-off
+    integer, parameter :: nn = 7, n = 6*nn
+    type(c_ptr) :: ctx
+    type(SUNMatrix), pointer :: m_full, m_red
+    type(SUNLinearSolver), pointer :: ls_full, ls_red
+    type(N_Vector), pointer :: nb, nx1, nx2
+    real(c_double), pointer :: bd(:), x1(:), x2(:)
+    real(dp) :: g, r, dense(n, n)
+    integer :: i, j, k, p, q, ierr
+    g = 0.013_dp
+    dense = 0.0_dp
+    do j = 1, nn
+      do p = 1, 3
+        dense(6*j-6+p, 6*j-6+p) = 1.0_dp
+        dense(6*j-6+p, 6*j-3+p) = -g
+        do k = max(1, j - 1), min(nn, j + 1)
+          do q = 1, 6
+            call random_number(r)
+            dense(6*j-3+p, 6*k-6+q) = 2*r - 1
+          end do
+        end do
+        dense(6*j-3+p, 6*j-3+p) = dense(6*j-3+p, 6*j-3+p) + 8.0_dp
+      end do
+    end do
+    ierr = FSUNContext_Create(c_null_ptr, ctx)
+    m_full => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)
+    m_red => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)
+    do j = 1, n
+      do i = max(1, j - 8), min(n, j + 11)
+        call set_band(m_full, i, j, dense(i, j))
+        call set_band(m_red, i, j, dense(i, j))
+      end do
+    end do
+    nb => FN_VNew_Serial(int(n, c_long), ctx)
+    nx1 => FN_VNew_Serial(int(n, c_long), ctx)
+    nx2 => FN_VNew_Serial(int(n, c_long), ctx)
+    bd => FN_VGetArrayPointer(nb)
+    x1 => FN_VGetArrayPointer(nx1)
+    x2 => FN_VGetArrayPointer(nx2)
+    call random_number(bd)
+    ls_full => new_lapack_band_solver(m_full, ctx)
+    ls_red => new_second_order_band_solver(m_red, ctx)
+    ierr = FSUNLinSolSetup(ls_full, m_full)
+    ierr = ierr + FSUNLinSolSolve(ls_full, m_full, nx1, nb, 0.0_c_double)
+    ierr = ierr + FSUNLinSolSetup(ls_red, m_red)
+    ierr = ierr + FSUNLinSolSolve(ls_red, m_red, nx2, nb, 0.0_c_double)
+    call check(ierr == 0, "setup and solve succeed")
+    call check_close(maxval(abs(x1 - x2)), 0.0_dp, "same solution (largest difference)", &
+      abs=1e-12_dp*maxval(abs(x1)))
+    call check_close(maxval(abs(matmul(dense, x2) - bd)), 0.0_dp, "residual of the reduced solve", &
+      abs=1e-12_dp*maxval(abs(bd)))
+    ierr = FSUNLinSolFree(ls_full)
+    ierr = FSUNLinSolFree(ls_red)
+    call FSUNMatDestroy(m_full)
+    call FSUNMatDestroy(m_red)
+    call FN_VDestroy(nb)
+    call FN_VDestroy(nx1)
+    call FN_VDestroy(nx2)
+    ierr = FSUNContext_Free(ctx)
+  end block
+
+  call section("velocity-reduced band solver in CVODE (spring chain, 8 nodes)")
+  saved_opts = opts
+  block
+    ! the Newton matrices differ only by the difference-quotient noise of
+    ! J_xv = I (~1e-8), so the runs may take different steps: both must lie
+    ! within their integration error of a tight reference
+    type(spring_chain), target :: chain
+    real(dp) :: y0(48), y_ref(48), y_band(48), y_red(48)
+    integer :: j
+    do j = 1, 8
+      y0(6*j-5:6*j) = [1.02_dp*j*cos(0.3_dp), 1.02_dp*j*sin(0.3_dp), 0.05_dp*j, 0.0_dp, 0.0_dp, 0.1_dp]
+    end do
+    opts = cvode_options(linear_solver="band", upper_bandwidth=8, lower_bandwidth=11, rtol=1e-12_dp, &
+      atol=1e-13_dp)
+    call solver%init(chain, 0.0_dp, y0, opts, error)
+    call solver%advance(2.0_dp, error)
+    y_ref = solver%y
+    call solver%free()
+    opts = cvode_options(linear_solver="band", upper_bandwidth=8, lower_bandwidth=11, rtol=1e-7_dp, &
+      atol=1e-9_dp, max_order=2)
+    call solver%init(chain, 0.0_dp, y0, opts, error)
+    call solver%advance(2.0_dp, error)
+    y_band = solver%y
+    call solver%free()
+    opts%linear_solver = "second_order_band"
+    call solver%init(chain, 0.0_dp, y0, opts, error)
+    call solver%advance(2.0_dp, error)
+    y_red = solver%y
+    call solver%free()
+    call check(.not. allocated(error), "the three runs complete")
+    call check(maxval(abs(y_red - y_ref)) < 3*maxval(abs(y_band - y_ref)) + 1e-12_dp, &
+      "error of the reduced solver's run within 3x that of the band solver's")
+    print '(a, 2es10.2)', "  errors band / reduced: ", maxval(abs(y_band - y_ref)), maxval(abs(y_red - y_ref))
+    opts%upper_bandwidth = 4
+    call solver%init(chain, 0.0_dp, y0, opts, error)
+    call check(allocated(error), "a band too narrow for the node structure is rejected")
+    if (allocated(error)) deallocate(error)
+    call solver%free()
+  end block
+  opts = saved_opts
+
   call section("failure is reported with time and quantity")
   osc%t_fail = 0.5_dp
   call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
@@ -105,4 +269,17 @@ program test_cvode
   call check(allocated(error), "a second failure is reported too")
   call solver%free()
   call finish()
+contains
+  !> M(i, j) = v in SUNDIALS band storage.
+  subroutine set_band(m, i, j, v)
+    type(SUNMatrix), intent(inout) :: m
+    integer, intent(in) :: i, j
+    real(dp), intent(in) :: v
+    real(c_double), pointer :: ab(:)
+    integer :: ldim, smu
+    ab => FSUNBandMatrix_Data(m)
+    ldim = int(FSUNBandMatrix_LDim(m))
+    smu = int(FSUNBandMatrix_StoredUpperBandwidth(m))
+    ab((j - 1)*ldim + smu + i - j + 1) = v
+  end subroutine set_band
 end program test_cvode

@@ -1,0 +1,198 @@
+!> A SUNDIALS linear solver for second-order systems stored node by node,
+!> y = [x_1, v_1, x_2, v_2, ...] with three positions and three velocities per
+!> node and x' = v (the lumped line, airlaunch_line_cvode).  CVODE's Newton
+!> matrix M = I - gamma J then has, in the position rows, exactly
+!> M_xx = I, M_xv = -gamma I (J_xx = 0, J_xv = I), so
+!>     dx - gamma dv = r_x,      M_vx dx + M_vv dv = r_v
+!> reduces to the velocity system
+!>     (M_vv + gamma M_vx) dv = r_v - M_vx r_x,      dx = r_x + gamma dv,
+!> i.e. (I - gamma B - gamma^2 A) dv = ... with A = da/dx, B = da/dv: half the
+!> unknowns, and block tridiagonal with 3x3 blocks (band 5/5 instead of the
+!> full system's 11/8).  Factored by LAPACK (dgbtrf/dgbtrs); the full band
+!> matrix M is CVODE's (its difference-quotient Jacobian), read, not changed.
+!>
+!> gamma is read from M itself (M(x, v) of the first node = -gamma), so the
+!> solve is exact for the M that CVODE built, whatever gamma it used.
+module airlaunch_second_order_band
+  use, intrinsic :: iso_c_binding
+  use fsundials_context_mod
+  use fsundials_linearsolver_mod
+  use fsundials_matrix_mod
+  use fsundials_nvector_mod
+  use fnvector_serial_mod
+  use fsunmatrix_band_mod
+  implicit none
+  private
+  public :: new_second_order_band_solver, second_order_band_ok
+
+  !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
+  integer, parameter :: kr = 5
+
+  !> What the solver keeps between setup and solve.
+  type :: reduced_content
+    integer :: nodes = 0                  !< number of nodes (n = 6 nodes)
+    integer :: ldab = 0                   !< leading dimension of the reduced band storage
+    real(c_double) :: gamma = 0.0_c_double !< gamma of the factored matrix
+    real(c_double), allocatable :: s(:, :)        !< reduced matrix, LAPACK band storage (ldab, 3 nodes)
+    real(c_double), allocatable :: mvx(:, :, :, :) !< M_vx blocks (3, 3, -1:1, nodes)
+    real(c_double), allocatable :: rv(:)          !< work: reduced right-hand side (3 nodes)
+    integer, allocatable :: ipiv(:)
+    integer(c_long) :: last_flag = 0
+  end type reduced_content
+
+  interface
+    subroutine dgbtrf(m, n, kl, ku, ab, ldab, ipiv, info)
+      import :: c_double
+      integer, intent(in) :: m, n, kl, ku, ldab
+      real(c_double), intent(inout) :: ab(ldab, *)
+      integer, intent(out) :: ipiv(*), info
+    end subroutine dgbtrf
+    subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
+      import :: c_double
+      character, intent(in) :: trans
+      integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb, ipiv(*)
+      real(c_double), intent(in) :: ab(ldab, *)
+      real(c_double), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dgbtrs
+  end interface
+
+contains
+
+  !> True if a band matrix of n states and half-bandwidths mu, ml can carry the
+  !> structure (6 states per node, neighbours only: mu >= 8, ml >= 11).
+  pure logical function second_order_band_ok(n, mu, ml) result(ok)
+    integer, intent(in) :: n, mu, ml  !< states, upper and lower half-bandwidths
+    ok = n > 0 .and. mod(n, 6) == 0 .and. mu >= 8 .and. ml >= 11
+  end function second_order_band_ok
+
+  !> The solver for CVODE's band matrix `a` (FSUNBandMatrix, n = 6 nodes states,
+  !> mu >= 8, ml >= 11: check with second_order_band_ok first).
+  function new_second_order_band_solver(a, ctx) result(ls)
+    type(SUNMatrix), intent(inout) :: a     !< the band matrix CVODE fills
+    type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
+    type(SUNLinearSolver), pointer :: ls
+    type(SUNLinearSolver_Ops), pointer :: ops
+    type(reduced_content), pointer :: c
+    ls => FSUNLinSolNewEmpty(ctx)
+    call c_f_pointer(ls%ops, ops)
+    ops%gettype = c_funloc(reduced_gettype)
+    ops%setup = c_funloc(reduced_setup)
+    ops%solve = c_funloc(reduced_solve)
+    ops%lastflag = c_funloc(reduced_lastflag)
+    ops%free = c_funloc(reduced_free)
+    allocate(c)
+    c%nodes = int(FSUNBandMatrix_Columns(a))/6
+    c%ldab = 3*kr + 1
+    allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
+    ls%content = c_loc(c)
+  end function new_second_order_band_solver
+
+  integer(c_int) function reduced_gettype(s) result(t) bind(C)
+    type(SUNLinearSolver) :: s
+    t = SUNLINEARSOLVER_DIRECT
+    if (.false.) t = int(merge(1, 0, c_associated(s%content)), c_int)
+  end function reduced_gettype
+
+  !> Entry M(i, j) of SUNDIALS' band storage (column-major, smu = mu + ml rows above).
+  pure real(c_double) function band_entry(ab, ldim, smu, i, j) result(m)
+    real(c_double), intent(in) :: ab(:)
+    integer, intent(in) :: ldim, smu, i, j
+    m = ab((j - 1)*ldim + smu + i - j + 1)
+  end function band_entry
+
+  !> Build the reduced velocity matrix from M and factor it (dgbtrf); a zero
+  !> pivot is a recoverable failure (CVODE retries with a smaller step).
+  integer(c_int) function reduced_setup(s, a) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(reduced_content), pointer :: c
+    real(c_double), pointer :: ab(:)
+    integer :: ldim, smu, j, k, p, q, row, col, info, n3
+    real(c_double) :: g
+    call c_f_pointer(s%content, c)
+    ab => FSUNBandMatrix_Data(a)
+    ldim = int(FSUNBandMatrix_LDim(a))
+    smu = int(FSUNBandMatrix_StoredUpperBandwidth(a))
+    g = -band_entry(ab, ldim, smu, 1, 4)
+    c%gamma = g
+    c%s = 0.0_c_double
+    c%mvx = 0.0_c_double
+    n3 = 3*c%nodes
+    do j = 1, c%nodes
+      do k = max(1, j - 1), min(c%nodes, j + 1)
+        do q = 1, 3
+          do p = 1, 3
+            row = 6*(j - 1) + 3 + p
+            col = 6*(k - 1) + q
+            c%mvx(p, q, k - j, j) = band_entry(ab, ldim, smu, row, col)
+            ! S(3(j-1)+p, 3(k-1)+q) = M_vv + gamma M_vx, LAPACK band storage (kl = ku = kr)
+            c%s(2*kr + 1 + 3*(j - k) + p - q, 3*(k - 1) + q) = &
+              band_entry(ab, ldim, smu, row, col + 3) + g*c%mvx(p, q, k - j, j)
+          end do
+        end do
+      end do
+    end do
+    call dgbtrf(n3, n3, kr, kr, c%s, c%ldab, c%ipiv, info)
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+  end function reduced_setup
+
+  !> x = M^-1 b through the velocity system.
+  integer(c_int) function reduced_solve(s, a, x, b, tol) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(N_Vector) :: x, b
+    real(c_double), value :: tol
+    type(reduced_content), pointer :: c
+    real(c_double), pointer :: xd(:), bd(:)
+    integer :: j, k, p, q, i0, info
+    real(c_double) :: r
+    call c_f_pointer(s%content, c)
+    xd => FN_VGetArrayPointer(x)
+    bd => FN_VGetArrayPointer(b)
+    ! r = r_v - M_vx r_x (explicit loops: no temporaries in the solve)
+    do j = 1, c%nodes
+      i0 = 6*(j - 1)
+      do p = 1, 3
+        r = bd(i0 + 3 + p)
+        do k = max(1, j - 1), min(c%nodes, j + 1)
+          do q = 1, 3
+            r = r - c%mvx(p, q, k - j, j)*bd(6*(k - 1) + q)
+          end do
+        end do
+        c%rv(3*(j - 1) + p) = r
+      end do
+    end do
+    call dgbtrs('N', 3*c%nodes, kr, kr, 1, c%s, c%ldab, c%ipiv, c%rv, 3*c%nodes, info)
+    do j = 1, c%nodes
+      i0 = 6*(j - 1)
+      xd(i0+4:i0+6) = c%rv(3*j-2:3*j)
+      xd(i0+1:i0+3) = bd(i0+1:i0+3) + c%gamma*c%rv(3*j-2:3*j)
+    end do
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
+    if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
+  end function reduced_solve
+
+  integer(c_long) function reduced_lastflag(s) result(f) bind(C)
+    type(SUNLinearSolver) :: s
+    type(reduced_content), pointer :: c
+    call c_f_pointer(s%content, c)
+    f = c%last_flag
+  end function reduced_lastflag
+
+  integer(c_int) function reduced_free(s) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(reduced_content), pointer :: c
+    if (c_associated(s%content)) then
+      call c_f_pointer(s%content, c)
+      deallocate(c)
+      s%content = c_null_ptr
+    end if
+    call FSUNLinSolFreeEmpty(s)
+    ierr = 0
+  end function reduced_free
+end module airlaunch_second_order_band
