@@ -150,7 +150,7 @@ def test_far_end_chain_freezes_the_line(airlaunch_exe, tmp_path, paper_pair):
 
 
 @pytest.mark.parametrize("line,fragment", [
-    (("  coupling = 'paper'",), "&line: coupling = 'paper' is not allowed (one of: direct, rigidized)"),
+    (("  coupling = 'paper'",), "&line: coupling = 'paper' is not allowed (one of: direct, rigidized, per_phase, auto)"),
     (("  coupling = 'rigidized'", "  outer_dt = 0.0"), "&line: outer_dt = 0.0 is not allowed"),
     (("  coupling = 'rigidized'", "  inner_rtol = 0.5"), "&line: inner_rtol = 0.5 is not allowed"),
     (("  coupling = 'rigidized'", "  far_end = 'aircraft'"), "&line: far_end = 'aircraft' is not allowed"),
