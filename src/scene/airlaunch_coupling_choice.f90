@@ -3,23 +3,32 @@
 !>  * a single one for the whole run ('direct', 'rigidized');
 !>  * one per phase ('per_phase', `coupling_by_phase` for Case 0..3): the scene
 !>    switches at the phase changes (events, where CVODE restarts anyway);
-!>  * automatically ('auto'): the rigidized coupling while an indicator of the
-!>    flexible line's state says that a rigid rod frozen over an outer step
-!>    represents it, the direct coupling otherwise.
+!>  * automatically ('auto'): the rigidized coupling while it is both safe (an
+!>    indicator of the flexible line's state says that a rigid rod frozen over
+!>    an outer step represents it) and worth it (the line forces the direct
+!>    coupling into short steps), the direct coupling otherwise.
 !>
 !> The indicator (`line_indicator_of`, docs/model.md "Choosing the coupling"):
 !>  * taut: the smallest segment strain min eps_k.  The virtual body is rigid:
 !>    it pushes where the line would go slack and transmits a snatch at once
 !>    instead of through the line's elastic wave;
 !>  * slow: the relative change of the line's stretch over one outer step H,
-!>    max_k |eps_dot_k| H / max(mean eps, eps_min): the virtual body's length,
-!>    mass and deformation velocity are frozen over H.
-!> Hysteresis (`auto_switch`): the rigidized coupling is taken when both hold
-!> (min eps >= auto_min_strain and the change <= auto_max_strain_change) at every
-!> check for `auto_dwell` seconds; the direct coupling is taken back at the
-!> first check with min eps < auto_min_strain/2 or a change >
-!> 2 auto_max_strain_change.  Between the two thresholds the current coupling
-!> stays, so an indicator hovering near a threshold does not chatter.
+!>    max_k |eps_dot_k| H / max(mean eps, auto_min_strain): the virtual body's
+!>    length, mass and deformation velocity are frozen over H;
+!>  * busy: the steps per outer step of the integrator that carries the line
+!>    (the caller measures it: the direct coupling's whole system, or the
+!>    rigidized coupling's line sub-steps).  Both couplings integrate the same
+!>    stiff line, and the rigidized one adds the chain's steps, so it only pays
+!>    when the line forces many short steps on the direct coupling's whole
+!>    system (the line sub-steps are cheaper than steps of the whole system).
+!> Hysteresis (`auto_switch`): the rigidized coupling is taken when the line is
+!> taut, slow and busy (min eps >= auto_min_strain, change <=
+!> auto_max_strain_change, steps >= auto_min_steps) at every check for
+!> `auto_dwell` seconds.  The direct coupling is taken back at the first check
+!> with min eps < auto_min_strain/2 or a change > 2 auto_max_strain_change
+!> (accuracy), or after `auto_dwell` seconds of fewer than auto_min_steps/2
+!> line sub-steps per outer step (cost).  Between the thresholds the current
+!> coupling stays, so an indicator hovering near a threshold does not chatter.
 !>
 !> Pure logic without solvers (unit-tested in tests/unit/test_coupling_choice.f90).
 module airlaunch_coupling_choice
@@ -41,6 +50,9 @@ module airlaunch_coupling_choice
     real(dp) :: max_strain_change = 0.05_dp   !< slow: largest relative stretch change per outer step
     real(dp) :: dwell = 0.1_dp                !< the indicator must say safe this long first [s]
     real(dp) :: interval = 0.02_dp            !< check cadence and H of the strain change (outer_dt) [s]
+    !> busy: the integrator that carries the line takes at least this many
+    !> steps per outer step (0: the choice looks at the line's state only)
+    real(dp) :: min_steps = 8.0_dp
   end type auto_settings
 
   !> The state of the flexible line as the automatic choice sees it.
@@ -49,6 +61,10 @@ module airlaunch_coupling_choice
     real(dp) :: mean_strain = 0.0_dp     !< mean segment strain
     real(dp) :: max_strain_rate = 0.0_dp !< largest |d eps/dt| of a segment [1/s]
     real(dp) :: strain_change = 0.0_dp   !< max |eps_dot| H / max(mean eps, min_strain threshold)
+    !> steps per outer step of the integrator that carries the line (the direct
+    !> coupling's, or the rigidized coupling's line sub-steps) over the last
+    !> check interval (set by the caller; not a property of the line state)
+    real(dp) :: steps = 0.0_dp
   end type line_indicator
 
   !> How the couplings are chosen over a run.
@@ -66,7 +82,8 @@ module airlaunch_coupling_choice
   !> The automatic choice over time (hysteresis state).
   type :: auto_switch
     integer :: active = coupling_direct   !< the coupling in use
-    real(dp) :: safe_since = -1.0_dp      !< start of the current safe stretch (< 0: not safe) [s]
+    !> start of the present stretch in which the other coupling is wanted (< 0: none) [s]
+    real(dp) :: since = -1.0_dp
   contains
     procedure :: decide => switch_decide
   end type auto_switch
@@ -153,22 +170,36 @@ contains
     type(auto_settings), intent(in) :: s
     real(dp), intent(in) :: t
     type(line_indicator), intent(in) :: ind
-    logical :: safe, unsafe
+    logical :: safe, unsafe, busy, idle
     safe = ind%min_strain >= s%min_strain .and. ind%strain_change <= s%max_strain_change
     unsafe = ind%min_strain < s%min_strain/auto_hysteresis .or. &
       ind%strain_change > s%max_strain_change*auto_hysteresis
+    busy = ind%steps >= s%min_steps
+    idle = ind%steps < s%min_steps/auto_hysteresis
     if (self%active == coupling_rigidized) then
       if (unsafe) then
+        ! accuracy: back at once
         self%active = coupling_direct
-        self%safe_since = -1.0_dp
+        self%since = -1.0_dp
+      else if (idle) then
+        ! cost: one system is cheaper than two once the line is quiet
+        call wait_then_switch(coupling_direct)
+      else
+        self%since = -1.0_dp
       end if
-      return
+    else if (safe .and. busy) then
+      call wait_then_switch(coupling_rigidized)
+    else
+      self%since = -1.0_dp
     end if
-    if (.not. safe) then
-      self%safe_since = -1.0_dp
-      return
-    end if
-    if (self%safe_since < 0.0_dp) self%safe_since = t
-    if (t - self%safe_since >= s%dwell*(1.0_dp - 1.0e-9_dp)) self%active = coupling_rigidized
+  contains
+    subroutine wait_then_switch(to)
+      integer, intent(in) :: to
+      if (self%since < 0.0_dp) self%since = t
+      if (t - self%since >= s%dwell*(1.0_dp - 1.0e-9_dp)) then
+        self%active = to
+        self%since = -1.0_dp
+      end if
+    end subroutine wait_then_switch
   end subroutine switch_decide
 end module airlaunch_coupling_choice

@@ -45,6 +45,9 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     ! --- the automatic choice and the switches
     type(auto_switch) :: auto                         !< hysteresis state
     real(dp) :: next_check = 0.0_dp                   !< next check of the indicator (direct engine) [s]
+    real(dp) :: direct_steps = 0.0_dp                 !< direct steps before the solver's last restart
+    real(dp) :: chk_steps = 0.0_dp, chk_t = 0.0_dp    !< line-carrying steps and time at the last check
+    real(dp) :: rec_steps = 0.0_dp, rec_t = 0.0_dp    !< the same at the last record
     integer :: switches = 0                           !< hand-overs so far
     character(len=:), allocatable :: switch_log       !< "t s: from -> to; ..."
     logical :: done = .false.                         !< the run reached its end
@@ -55,7 +58,7 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     real(dp) :: last_record_of_extremum = 0.0_dp      !< for stop_when_final [s]
     logical :: extras = .false.                       !< record the coupling's own variables
     real(dp), allocatable :: m_rig(:), j_rig(:), d_rig(:), f_rig(:, :), mismatch(:)
-    real(dp), allocatable :: active_rec(:), strain_rec(:), change_rec(:)
+    real(dp), allocatable :: active_rec(:), strain_rec(:), change_rec(:), steps_rec(:)
     ! --- work arrays: the line's state of the rigidized engine
     real(dp), allocatable :: xl(:, :), vl(:, :), ten(:)
   end type coupled_run
@@ -135,7 +138,7 @@ contains
     if (run%trajectory) then
       call r%hist%init(nmax, n, r%dsys%has_line)
       if (r%extras) allocate(r%m_rig(nmax), r%j_rig(nmax), r%d_rig(nmax), r%f_rig(3, nmax), r%mismatch(nmax), &
-        r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax))
+        r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax), r%steps_rec(nmax))
     end if
     r%active = r%plan%initial()
     r%auto%active = r%active
@@ -331,6 +334,7 @@ contains
         ! the constraint set changed: restart CVODE from the event (its
         ! counters restart too, so keep the totals)
         call add_stats(res%stats, r%dsolver%stats())
+        r%direct_steps = r%direct_steps + solver_steps(r%dsolver)
         y = r%dsolver%y
         call r%dsolver%reinit(r%dsolver%t, y, err)
         if (allocated(err)) return
@@ -501,14 +505,17 @@ contains
     leave = r%plan%mode == "per_phase" .and. r%plan%for_phase(phase) /= from
   end function leaves_at_phase
 
-  !> The automatic choice at time t from the active engine's line state;
-  !> `switch` if it wants the other coupling.  Sets the next check time.
+  !> The automatic choice at time t from the active engine's line state and
+  !> step rate; `switch` if it wants the other coupling.  Sets the next check time.
   subroutine auto_check(r, t, switch)
     type(coupled_run), intent(inout) :: r
     real(dp), intent(in) :: t
     logical, intent(inout) :: switch
     type(line_indicator) :: ind
     ind = current_indicator(r, t)
+    ind%steps = steps_per_outer_step(r, r%chk_steps, r%chk_t, t)
+    r%chk_steps = line_steps(r)
+    r%chk_t = t
     call r%auto%decide(r%plan%auto, t, ind)
     switch = switch .or. r%auto%active /= r%active
     call set_next_check(r, t)
@@ -528,6 +535,36 @@ contains
       if (abs(r%t_out(j) - r%next_check) <= tol) r%next_check = r%t_out(j)
     end do
   end subroutine set_next_check
+
+  !> Steps taken so far by the integrator that carries the line: the direct
+  !> coupling's (over its restarts) or the rigidized coupling's line sub-steps.
+  function line_steps(r) result(n)
+    type(coupled_run), intent(in) :: r
+    real(dp) :: n
+    if (r%active == coupling_direct) then
+      n = r%direct_steps + solver_steps(r%dsolver)
+    else
+      n = solver_steps(r%cpl%line_solver)
+    end if
+  end function line_steps
+
+  !> Steps of a solver since its last (re)start.
+  function solver_steps(solver) result(n)
+    type(cvode_solver), intent(in) :: solver
+    real(dp) :: n
+    type(cvode_stats) :: st
+    st = solver%stats()
+    n = real(st%steps, dp)
+  end function solver_steps
+
+  !> Steps per outer step of the line-carrying integrator since (n0, t0).
+  function steps_per_outer_step(r, n0, t0, t) result(rate)
+    type(coupled_run), intent(in) :: r
+    real(dp), intent(in) :: n0, t0, t
+    real(dp) :: rate
+    rate = 0.0_dp
+    if (t > t0) rate = (line_steps(r) - n0)*r%plan%auto%interval/(t - t0)
+  end function steps_per_outer_step
 
   !> The indicator of the active engine's line at its present time t.
   function current_indicator(r, t) result(ind)
@@ -555,6 +592,7 @@ contains
     if (from == coupling_direct) then
       t = r%dsolver%t
       call add_stats(res%stats, r%dsolver%stats())
+      r%direct_steps = r%direct_steps + solver_steps(r%dsolver)
       call r%dsys%prepare(t, r%dsolver%y, status)
       call rigidized_resume(r, t, err)
       r%active = coupling_rigidized
@@ -574,6 +612,10 @@ contains
     end if
     r%auto%active = r%active
     call set_next_check(r, t)
+    r%chk_steps = line_steps(r)
+    r%chk_t = t
+    r%rec_steps = r%chk_steps
+    r%rec_t = t
     r%switches = r%switches + 1
     if (.not. allocated(r%switch_log)) r%switch_log = ""
     if (r%switches > 1) r%switch_log = r%switch_log // "; "
@@ -701,6 +743,9 @@ contains
     r%active_rec(k) = r%active
     r%strain_rec(k) = ind%min_strain
     r%change_rec(k) = ind%strain_change
+    r%steps_rec(k) = steps_per_outer_step(r, r%rec_steps, r%rec_t, r%hist%time(k))
+    r%rec_steps = line_steps(r)
+    r%rec_t = r%hist%time(k)
   end subroutine record_extras
 
   ! ------------------------------------------------------------ end of the run
@@ -836,6 +881,9 @@ contains
     call w%add_var_1d("line_strain_change", ["time"], r%change_rec(1:nrec), "1", &
       "automatic choice, slow indicator: largest segment strain rate times the outer step, over the mean " // &
       "strain (at least auto_min_strain)", werr)
+    call w%add_var_1d("line_steps_per_outer_step", ["time"], r%steps_rec(1:nrec), "1", &
+      "automatic choice, busy indicator: steps of the integrator that carries the line (the direct coupling's, " // &
+      "or the rigidized coupling's line sub-steps) per outer step since the previous record", werr)
   end subroutine write_choice_variables
 
   !> The plan and the switches.
@@ -855,6 +903,7 @@ contains
       call w%add_real_att("/", "auto_min_strain", r%plan%auto%min_strain, werr)
       call w%add_real_att("/", "auto_max_strain_change", r%plan%auto%max_strain_change, werr)
       call w%add_real_att("/", "auto_dwell_s", r%plan%auto%dwell, werr)
+      call w%add_real_att("/", "auto_min_steps", r%plan%auto%min_steps, werr)
     end if
     call w%add_real_att("/", "coupling_switches", real(r%switches, dp), werr)
     if (r%switches > 0) call w%add_text_att("/", "coupling_switch_log", r%switch_log, werr)

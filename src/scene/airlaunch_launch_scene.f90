@@ -273,7 +273,7 @@ contains
       end do
     end select
     plan%auto = auto_settings(min_strain=cfg%line%auto_min_strain, max_strain_change=cfg%line%auto_max_strain_change, &
-      dwell=cfg%line%auto_dwell, interval=cfg%line%outer_dt)
+      dwell=cfg%line%auto_dwell, interval=cfg%line%outer_dt, min_steps=cfg%line%auto_min_steps)
     if (.not. cfg%line%enabled) then
       plan%mode = "direct"
       plan%by_phase = coupling_direct

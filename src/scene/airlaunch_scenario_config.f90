@@ -22,12 +22,13 @@ module airlaunch_scenario_config
     "aircraft", "bay", "rocket", "parachute", "line"]
 
   !> Variables of &line (air-launch scene).
-  type(nml_var), parameter :: line_vars(17) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
+  type(nml_var), parameter :: line_vars(18) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
     nml_var("cd_tangential", "real"), nml_var("coupling", "string"), nml_var("outer_dt", "real"), &
     nml_var("inner_rtol", "real"), nml_var("far_end", "string"), nml_var("coupling_by_phase", "string"), &
-    nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real")]
+    nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real"), &
+    nml_var("auto_min_steps", "real")]
 
   !> The couplings `&line coupling` may name (DESIGN §4 (a), (b)), and the two
   !> ways of choosing between them during a run.
@@ -104,7 +105,8 @@ module airlaunch_scenario_config
     character(len=16) :: coupling_by_phase(0:3) = ""
     real(dp) :: auto_min_strain = 1.0e-3_dp       !< auto: taut when every segment's strain reaches this
     real(dp) :: auto_max_strain_change = 0.05_dp  !< auto: slow when the stretch changes less per outer step
-    real(dp) :: auto_dwell = 0.1_dp               !< auto: safe this long before switching to rigidized [s]
+    real(dp) :: auto_dwell = 0.1_dp               !< auto: wanted this long before a switch [s]
+    real(dp) :: auto_min_steps = 8.0_dp           !< auto: busy when the line costs this many steps per outer step
   end type line_config
 
   !> Everything the air-launch scene reads.
@@ -472,7 +474,7 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
-    real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell
+    real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
     integer :: n_seg, u, ios
     character(len=16) :: coupling, far_end, coupling_by_phase(4)
     logical :: present
@@ -480,7 +482,7 @@ contains
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
       coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, auto_min_strain, auto_max_strain_change, &
-      auto_dwell
+      auto_dwell, auto_min_steps
     enabled = .true.
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -488,7 +490,7 @@ contains
     outer_dt = c%outer_dt; inner_rtol = c%inner_rtol; far_end = c%far_end
     coupling_by_phase = c%coupling_by_phase
     auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
-    auto_dwell = c%auto_dwell
+    auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
     call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -517,7 +519,8 @@ contains
     call require_range(f, "line", "inner_rtol", inner_rtol, 0.0_dp, 1.0e-2_dp, "(0: &run rtol)", error)
     call require_choice(f, "line", "far_end", far_end, [character(len=16) :: "parachute", "chain"], error)
     call check_coupling_choice(f, coupling, coupling_by_phase, error)
-    call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, error)
+    call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps, &
+      error)
     if (.not. allocated(error) .and. coupling /= "direct" .and. far_end == "chain" .and. n_seg < 2) &
       call fatal_error(error, f%path // ": &line: n_seg = " // str(n_seg) // " is not allowed with " // &
         "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
@@ -528,6 +531,7 @@ contains
     c%auto_min_strain = auto_min_strain
     c%auto_max_strain_change = auto_max_strain_change
     c%auto_dwell = auto_dwell
+    c%auto_min_steps = auto_min_steps
     call echo_line(c, echo)
   end subroutine read_line
 
@@ -538,7 +542,7 @@ contains
     type(line_config), intent(in) :: c
     character(len=:), allocatable, intent(inout) :: echo
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
-    real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell
+    real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
     integer :: n_seg, u
     character(len=16) :: coupling, far_end, coupling_by_phase(4)
     logical :: enabled
@@ -551,7 +555,7 @@ contains
     outer_dt = c%outer_dt; inner_rtol = c%inner_rtol; far_end = c%far_end
     coupling_by_phase = c%coupling_by_phase
     auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
-    auto_dwell = c%auto_dwell
+    auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
     open(newunit=u, status="scratch", action="readwrite")
     select case (coupling)
     case ("per_phase")
@@ -572,7 +576,8 @@ contains
     subroutine write_auto(unit)
       integer, intent(in) :: unit
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
-        coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell
+        coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell, &
+        auto_min_steps
       write(unit, nml=line)
     end subroutine write_auto
   end subroutine echo_line
@@ -604,13 +609,13 @@ contains
   end subroutine check_coupling_choice
 
   !> The auto_* thresholds belong to coupling = 'auto'.
-  subroutine check_auto_settings(f, coupling, min_strain, max_strain_change, dwell, error)
+  subroutine check_auto_settings(f, coupling, min_strain, max_strain_change, dwell, min_steps, error)
     type(nml_file), intent(in) :: f
     character(len=*), intent(in) :: coupling
-    real(dp), intent(in) :: min_strain, max_strain_change, dwell
+    real(dp), intent(in) :: min_strain, max_strain_change, dwell, min_steps
     type(error_type), allocatable, intent(inout) :: error
-    character(len=32), parameter :: names(3) = [character(len=32) :: "auto_min_strain", &
-      "auto_max_strain_change", "auto_dwell"]
+    character(len=32), parameter :: names(4) = [character(len=32) :: "auto_min_strain", &
+      "auto_max_strain_change", "auto_dwell", "auto_min_steps"]
     integer :: k
     if (allocated(error)) return
     if (coupling /= "auto") then
@@ -626,6 +631,7 @@ contains
     call require_range(f, "line", "auto_min_strain", min_strain, 0.0_dp, 0.5_dp, "", error)
     call require_range(f, "line", "auto_max_strain_change", max_strain_change, 1.0e-6_dp, 10.0_dp, "", error)
     call require_range(f, "line", "auto_dwell", dwell, 0.0_dp, 1.0e3_dp, "s", error)
+    call require_range(f, "line", "auto_min_steps", min_steps, 0.0_dp, 1.0e6_dp, "(0: the line's state alone)", error)
   end subroutine check_auto_settings
 
   !> A list variable must have `n` values (counted as written, `r*value`

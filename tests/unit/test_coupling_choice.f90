@@ -6,10 +6,12 @@
 !>    strain eps and strain rate eps_dot exactly); the same line turning
 !>    rigidly (v = w x x: no strain rate); a slack segment (strain < 0).
 !>    Tolerances 1e-12 relative: a few flops on exact inputs.
-!> 2. The hysteresis against a scripted indicator history: safe for less than
-!>    the dwell keeps the direct coupling, a full dwell switches, values between
-!>    the two thresholds keep the rigidized coupling (no chatter), an unsafe
-!>    value switches back at once and the dwell starts again.
+!> 2. The hysteresis against a scripted indicator history: safe and busy for
+!>    less than the dwell keeps the direct coupling, a full dwell switches,
+!>    values between the two thresholds keep the rigidized coupling (no
+!>    chatter), an unsafe value switches back at once and the dwell starts
+!>    again; a safe but quiet line (few steps per outer step) stays direct, and
+!>    a rigidized run whose line turns idle goes back after the dwell.
 !> 3. The plan from the &line input (coupling_plan_of): per phase, single
 !>    couplings, and a scene without a line is direct.
 program test_coupling_choice
@@ -77,22 +79,28 @@ contains
   subroutine test_hysteresis()
     type(auto_settings) :: s
     type(auto_switch) :: sw
-    type(line_indicator) :: safe, between, unsafe_slack, unsafe_fast
+    type(line_indicator) :: safe, between, unsafe_slack, unsafe_fast, quiet, calm
     integer :: k, switches, last
     real(dp) :: t
-    s = auto_settings(min_strain=1.0e-3_dp, max_strain_change=0.05_dp, dwell=0.1_dp, interval=0.02_dp)
-    safe = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.01_dp)
+    s = auto_settings(min_strain=1.0e-3_dp, max_strain_change=0.05_dp, dwell=0.1_dp, interval=0.02_dp, &
+      min_steps=8.0_dp)
+    ! taut, slow and busy (the line costs 20 steps per outer step)
+    safe = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.01_dp, steps=20.0_dp)
     ! between the thresholds: neither safe (change > 0.05) nor unsafe (< 0.1)
-    between = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.07_dp)
-    unsafe_slack = line_indicator(min_strain=0.4e-3_dp, mean_strain=0.05_dp, strain_change=0.0_dp)
-    unsafe_fast = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.11_dp)
-    ! safe from t = 0: direct until the dwell is over (checks at 0, 0.02, ...)
+    between = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.07_dp, steps=20.0_dp)
+    unsafe_slack = line_indicator(min_strain=0.4e-3_dp, mean_strain=0.05_dp, strain_change=0.0_dp, steps=20.0_dp)
+    unsafe_fast = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.11_dp, steps=20.0_dp)
+    ! taut and slow, but the line hardly costs steps: not busy (6 < 8), not idle (6 >= 4)
+    calm = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.01_dp, steps=6.0_dp)
+    ! ... and idle (3 < 8/2)
+    quiet = line_indicator(min_strain=0.05_dp, mean_strain=0.05_dp, strain_change=0.01_dp, steps=3.0_dp)
+    ! safe and busy from t = 0: direct until the dwell is over (checks at 0, 0.02, ...)
     do k = 0, 4
       call sw%decide(s, k*0.02_dp, safe)
     end do
-    call check(sw%active == coupling_direct, "safe for 0.08 s < dwell 0.1 s: still direct")
+    call check(sw%active == coupling_direct, "safe and busy for 0.08 s < dwell 0.1 s: still direct")
     call sw%decide(s, 0.1_dp, safe)
-    call check(sw%active == coupling_rigidized, "safe for the dwell: rigidized")
+    call check(sw%active == coupling_rigidized, "safe and busy for the dwell: rigidized")
     call sw%decide(s, 0.12_dp, between)
     call check(sw%active == coupling_rigidized, "between the thresholds: stays rigidized")
     call sw%decide(s, 0.14_dp, unsafe_fast)
@@ -105,10 +113,34 @@ contains
     do k = 1, 4
       call sw%decide(s, 0.2_dp + k*0.02_dp, safe)
     end do
-    call check(sw%active == coupling_rigidized, "safe for the dwell again: rigidized")
+    call check(sw%active == coupling_rigidized, "safe and busy for the dwell again: rigidized")
     call sw%decide(s, 0.3_dp, unsafe_slack)
     call check(sw%active == coupling_direct, "min strain < threshold/" // "2: direct at once")
     call check(auto_hysteresis == 2.0_dp, "hysteresis factor 2")
+    ! the cost condition
+    sw = auto_switch()
+    do k = 0, 50
+      call sw%decide(s, k*0.02_dp, calm)
+    end do
+    call check(sw%active == coupling_direct, "safe but not busy (6 < 8 steps per outer step): stays direct")
+    sw = auto_switch(active=coupling_rigidized)
+    do k = 0, 50
+      call sw%decide(s, k*0.02_dp, calm)
+    end do
+    call check(sw%active == coupling_rigidized, "rigidized, 6 steps (between 4 and 8): stays rigidized")
+    do k = 0, 4
+      call sw%decide(s, 1.02_dp + k*0.02_dp, quiet)
+    end do
+    call check(sw%active == coupling_rigidized, "idle (3 < 4 steps) for 0.08 s < dwell: stays rigidized")
+    call sw%decide(s, 1.12_dp, quiet)
+    call check(sw%active == coupling_direct, "idle for the dwell: direct (one system is cheaper)")
+    s%min_steps = 0.0_dp
+    sw = auto_switch()
+    do k = 0, 5
+      call sw%decide(s, k*0.02_dp, quiet)
+    end do
+    call check(sw%active == coupling_rigidized, "min_steps = 0: the line's state alone decides")
+    s%min_steps = 8.0_dp
     ! an indicator hovering around the safe threshold: no chatter
     sw = auto_switch()
     switches = 0
