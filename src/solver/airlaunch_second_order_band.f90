@@ -23,7 +23,7 @@ module airlaunch_second_order_band
   use fsunmatrix_band_mod
   implicit none
   private
-  public :: new_second_order_band_solver, second_order_band_ok
+  public :: new_second_order_band_solver, second_order_band_ok, band_data
 
   !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
   integer, parameter :: kr = 5
@@ -94,6 +94,17 @@ contains
     if (.false.) t = int(merge(1, 0, c_associated(s%content)), c_int)
   end function reduced_gettype
 
+  !> The whole band storage of `a` (ldim x columns); the Fortran interface's
+  !> FSUNBandMatrix_Data carries no length.
+  function band_data(a, ldim) result(ab)
+    type(SUNMatrix), intent(inout) :: a
+    integer, intent(in) :: ldim
+    real(c_double), pointer :: ab(:)
+    real(c_double), pointer :: first(:)
+    first => FSUNBandMatrix_Data(a)
+    call c_f_pointer(c_loc(first(1)), ab, [ldim*int(FSUNBandMatrix_Columns(a))])
+  end function band_data
+
   !> Entry M(i, j) of SUNDIALS' band storage (column-major, smu = mu + ml rows above).
   pure real(c_double) function band_entry(ab, ldim, smu, i, j) result(m)
     real(c_double), intent(in) :: ab(:)
@@ -111,9 +122,9 @@ contains
     integer :: ldim, smu, j, k, p, q, row, col, info, n3
     real(c_double) :: g
     call c_f_pointer(s%content, c)
-    ab => FSUNBandMatrix_Data(a)
     ldim = int(FSUNBandMatrix_LDim(a))
     smu = int(FSUNBandMatrix_StoredUpperBandwidth(a))
+    ab => band_data(a, ldim)
     g = -band_entry(ab, ldim, smu, 1, 4)
     c%gamma = g
     c%s = 0.0_c_double

@@ -108,7 +108,7 @@ program test_cvode
   use fnvector_serial_mod
   use fsunmatrix_band_mod
   use airlaunch_lapack_band, only: new_lapack_band_solver
-  use airlaunch_second_order_band, only: new_second_order_band_solver
+  use airlaunch_second_order_band, only: new_second_order_band_solver, band_data
   use testing
   implicit none
   type(oscillator), target :: osc
@@ -277,9 +277,9 @@ contains
     real(dp), intent(in) :: v
     real(c_double), pointer :: ab(:)
     integer :: ldim, smu
-    ab => FSUNBandMatrix_Data(m)
     ldim = int(FSUNBandMatrix_LDim(m))
     smu = int(FSUNBandMatrix_StoredUpperBandwidth(m))
+    ab => band_data(m, ldim)
     ab((j - 1)*ldim + smu + i - j + 1) = v
   end subroutine set_band
 end program test_cvode
