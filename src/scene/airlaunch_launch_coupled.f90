@@ -397,7 +397,7 @@ contains
     type(launch_result), intent(inout) :: res
     logical, intent(out) :: switch
     type(error_type), allocatable, intent(inout) :: err
-    logical :: event, changed, leave
+    logical :: event, leave
     integer :: which(rigidized_nroots), n_events, j
     real(dp) :: t_target, eps, t_last, h
     switch = .false.
@@ -434,22 +434,8 @@ contains
             " s: too many events before the output time")
           return
         end if
-        associate(c => r%cpl%chain)
-          call c%prepare(r%cpl%t, r%cpl%chain_solver%y)
-          call handle_launch_event(res, r%cpl%t, c%sep, c%yabs, which(1:separation_nroots), &
-            which(rigidized_nroots), c%find_pitch_max, changed, err)
-          if (allocated(err)) return
-        end associate
-        leave = changed .and. leaves_at_phase(r, coupling_rigidized, r%cpl%chain%sep%phase)
-        ! every event restarts the chain at its time (the outer step ended there)
-        if (.not. leave) call r%cpl%restart_chain(err)
+        call rigidized_event(r, run, cfg, res, which, leave, err)
         if (allocated(err)) return
-        ! an output time that coincides with the event
-        if (r%iout <= r%nout) then
-          if (abs(r%t_out(r%iout) - r%cpl%t) <= eps) call rigidized_record(r, run, cfg, res, r%cpl%t, &
-            r%cpl%chain_solver%y, err)
-          if (allocated(err)) return
-        end if
       end if
       call skip_recorded(r, run)
       if (stop_now(r, run, res, r%cpl%chain%sep%phase, r%cpl%t)) exit
@@ -459,6 +445,35 @@ contains
     end do
     r%done = .true.
   end subroutine rigidized_segment
+
+  !> An event of the chain at the coupling's time (CVODE root info `which`):
+  !> milestones and phase change; `leave` if the plan gives the new phase to
+  !> the direct coupling, else the chain restarts there; an output time that
+  !> coincides with the event is recorded.
+  subroutine rigidized_event(r, run, cfg, res, which, leave, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    integer, intent(in) :: which(:)
+    logical, intent(out) :: leave
+    type(error_type), allocatable, intent(inout) :: err
+    logical :: changed
+    leave = .false.
+    associate(c => r%cpl%chain)
+      call c%prepare(r%cpl%t, r%cpl%chain_solver%y)
+      call handle_launch_event(res, r%cpl%t, c%sep, c%yabs, which(1:separation_nroots), &
+        which(rigidized_nroots), c%find_pitch_max, changed, err)
+      if (allocated(err)) return
+    end associate
+    leave = changed .and. leaves_at_phase(r, coupling_rigidized, r%cpl%chain%sep%phase)
+    ! every event restarts the chain at its time (the outer step ended there)
+    if (.not. leave) call r%cpl%restart_chain(err)
+    if (allocated(err)) return
+    if (r%iout > r%nout) return
+    if (abs(r%t_out(r%iout) - r%cpl%t) <= 1.0e-12_dp*max(1.0_dp, run%t_end)) &
+      call rigidized_record(r, run, cfg, res, r%cpl%t, r%cpl%chain_solver%y, err)
+  end subroutine rigidized_event
 
   !> The next output time is the first one after the rigidized coupling's time.
   subroutine skip_recorded(r, run)
