@@ -66,13 +66,8 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
 contains
 
   !> Run the scene (see the submodule header).
-  module subroutine run_coupled(run, cfg, plan, echo, res, error)
-    type(run_config), intent(in) :: run
-    type(scenario_config), intent(in) :: cfg
-    type(coupling_plan), intent(in) :: plan
-    character(len=*), intent(in) :: echo
-    type(launch_result), intent(inout) :: res
-    type(error_type), allocatable, intent(inout) :: error
+  !> (interface in airlaunch_launch_scene)
+  module procedure run_coupled
     type(coupled_run) :: r
     type(error_type), allocatable :: run_error
     real(dp), allocatable :: y0(:)
@@ -110,7 +105,7 @@ contains
     if (run%trajectory) call write_output(r, run, echo, res, run_error)
     call release(r)
     if (allocated(run_error)) call move_alloc(run_error, error)
-  end subroutine run_coupled
+  end procedure run_coupled
 
   ! ------------------------------------------------------------ set-up
 

@@ -15,7 +15,7 @@ module airlaunch_lapack_band
   use fsunmatrix_band_mod
   implicit none
   private
-  public :: new_lapack_band_solver
+  public :: new_lapack_band_solver, dgbtrf, dgbtrs
 
   !> What the solver keeps between setup and solve.
   type :: band_content

@@ -21,6 +21,7 @@ module airlaunch_second_order_band
   use fsundials_nvector_mod
   use fnvector_serial_mod
   use fsunmatrix_band_mod
+  use airlaunch_lapack_band, only: dgbtrf, dgbtrs
   implicit none
   private
   public :: new_second_order_band_solver, second_order_band_ok, band_data
@@ -40,22 +41,6 @@ module airlaunch_second_order_band
     integer(c_long) :: last_flag = 0
   end type reduced_content
 
-  interface
-    subroutine dgbtrf(m, n, kl, ku, ab, ldab, ipiv, info)
-      import :: c_double
-      integer, intent(in) :: m, n, kl, ku, ldab
-      real(c_double), intent(inout) :: ab(ldab, *)
-      integer, intent(out) :: ipiv(*), info
-    end subroutine dgbtrf
-    subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
-      import :: c_double
-      character, intent(in) :: trans
-      integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb, ipiv(*)
-      real(c_double), intent(in) :: ab(ldab, *)
-      real(c_double), intent(inout) :: b(ldb, *)
-      integer, intent(out) :: info
-    end subroutine dgbtrs
-  end interface
 
 contains
 
