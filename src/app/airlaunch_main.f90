@@ -10,7 +10,7 @@ program airlaunch
   use airlaunch_error, only: error_type
   use airlaunch_version, only: code_version
   use airlaunch_namelist, only: nml_file
-  use airlaunch_run_config, only: run_config, read_run_config
+  use airlaunch_run_config, only: run_config, read_run_config, require_output_directory
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
@@ -58,6 +58,14 @@ program airlaunch
   if (.not. allocated(error)) call read_run_config(f, run, echo, error)
   if (allocated(error)) call fail_input(error%message)
   if (len(output_override) > 0) run%output = output_override
+  if (.not. allocated(error) .and. run%trajectory) then
+    if (len(output_override) > 0) then
+      call require_output_directory("--output", run%output, error)
+    else
+      call require_output_directory(path // ": &run: output", run%output, error)
+    end if
+    if (allocated(error)) call fail_input(error%message)
+  end if
 
   select case (trim(run%scene))
   case ("drop")

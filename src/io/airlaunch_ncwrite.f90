@@ -63,6 +63,9 @@ contains
     self%tmp_path = trim(path) // ".part"
     allocate(self%dim_names(0), self%dim_sizes(0))
     call h5open_f(hdferr)
+    ! library code never prints: HDF5's own error stack goes silent, its
+    ! failures come back as error values with the file's name
+    call h5eset_auto_f(0, hdferr)
     ! netCDF-4 tracks link and attribute creation order; set it the same way.
     call h5pcreate_f(H5P_FILE_CREATE_F, fcpl, hdferr)
     call h5pset_link_creation_order_f(fcpl, ior(H5P_CRT_ORDER_TRACKED_F, H5P_CRT_ORDER_INDEXED_F), hdferr)

@@ -6,7 +6,7 @@ module airlaunch_run_config
   use airlaunch_namelist
   implicit none
   private
-  public :: run_config, read_run_config, echo_namelist_unit, scene_names
+  public :: run_config, read_run_config, echo_namelist_unit, scene_names, require_output_directory
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -71,6 +71,7 @@ contains
       call fatal_error(error, f%path // ": &run: output = '' is not allowed (a file name, e.g. 'output/run.nc')")
       return
     end if
+
     cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final)
     block
       integer :: u
@@ -79,6 +80,22 @@ contains
       call echo_namelist_unit(u, echo)
     end block
   end subroutine read_run_config
+
+  !> The directory of the output file must exist: checked before the run (by
+  !> the program, after any command-line override), not found missing after it.
+  !> `what` names where the value came from, e.g. "case.nml: &run: output".
+  subroutine require_output_directory(what, output, error)
+    character(len=*), intent(in) :: what                  !< origin of the value, for the message
+    character(len=*), intent(in) :: output                !< output file name
+    type(error_type), allocatable, intent(inout) :: error !< set if the directory is missing
+    integer :: slash
+    logical :: exists
+    slash = index(trim(output), "/", back=.true.)
+    if (slash <= 1) return   ! the working directory, or the root
+    inquire(file=output(1:slash-1), exist=exists)
+    if (.not. exists) call fatal_error(error, what // " = '" // trim(output) // &
+      "' is not allowed: its directory '" // output(1:slash-1) // "' does not exist (create it, or choose another path)")
+  end subroutine require_output_directory
 
   !> Append the text written to scratch unit `u` to `echo`, and close `u`.
   subroutine echo_namelist_unit(u, echo)

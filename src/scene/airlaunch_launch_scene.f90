@@ -141,7 +141,7 @@ contains
     end do
     if (sys%has_line) then
       allocate(sys%x(3, 0:n), sys%v(3, 0:n), sys%f(3, 0:n), sys%tension(n))
-      call place_line(sys, cfg, pull, y0, error)
+      call place_line(sys, cfg, pull, air%density, v0, y0, error)
       if (allocated(error)) return
     end if
     call sys%prepare(0.0_dp, y0, status)
@@ -157,24 +157,89 @@ contains
 
   !> The line's nodes in y: trailing straight aft from the tie-down point,
   !> stretched by the steady pull, then settled to their static equilibrium.
-  subroutine place_line(sys, cfg, pull, y0, error)
+  !> When Newton's method fails from that start (a weak pull, e.g. a packed
+  !> canopy: the line then hangs metres below the straight line and Newton's
+  !> first steps slacken segments), it restarts from the hanging shape
+  !> (`hanging_line`).
+  subroutine place_line(sys, cfg, pull, rho, v0, y0, error)
     type(launch_system), intent(inout) :: sys
     type(scenario_config), intent(in) :: cfg
     real(dp), intent(in) :: pull   !< steady pull of the parachute and line drag [N]
+    real(dp), intent(in) :: rho    !< air density at the flight altitude [kg/m^3]
+    real(dp), intent(in) :: v0     !< flight speed [m/s]
     real(dp), intent(inout) :: y0(:)
     type(error_type), allocatable, intent(inout) :: error
-    real(dp) :: seg, dir(3)
+    real(dp) :: seg, dir(3), x0(3)
     integer :: n, k, i
+    type(error_type), allocatable :: straight_error
     n = sys%line%n
     seg = sys%line%l0*(1.0_dp + pull/cfg%line%ea)
     dir = [-1.0_dp, 0.0_dp, 0.0_dp]
+    x0 = sys%sep%bodies(1)%point_position(sys%tie_down) - [0.0_dp, sys%h_ref, 0.0_dp]
     do k = 1, n
       i = rigid_size + 6*(k - 1)
-      y0(i+1:i+3) = sys%sep%bodies(1)%point_position(sys%tie_down) + k*seg*dir - [0.0_dp, sys%h_ref, 0.0_dp]
+      y0(i+1:i+3) = x0 + k*seg*dir
       y0(i+4:i+6) = 0.0_dp
     end do
+    call settle_line(sys, y0, straight_error)
+    if (.not. allocated(straight_error)) return
+    call hanging_line(sys, cfg%line%ea, rho, v0, x0, y0)
     call settle_line(sys, y0, error)
+    if (allocated(error)) error%message = error%message // " (from a straight and from a hanging start; " // &
+      "the first: " // straight_error%message // ")"
   end subroutine place_line
+
+  !> Node positions of the line in the steady flight, from the far end
+  !> inwards: the force in segment k balances the loads on the nodes beyond it,
+  !>   T_N t_N = D + W_N + A_N(t_N),  T_k t_k = T_(k+1) t_(k+1) + W_k + A_k(t_k),
+  !> with D the canopy's drag (air from ahead at V0), W_k the weights (the
+  !> canopy's at node N) and A_k the air load of segment k (cross-flow and
+  !> skin friction as in the line model, lumped at node k), which depends on
+  !> the segment's direction t_k = S_k/|S_k|: a fixed point, iterated; then
+  !> x_k = x_(k-1) + l0 (1 + T_k/EA) t_k from the tie-down point x0.
+  subroutine hanging_line(sys, ea, rho, v0, x0, y0)
+    type(launch_system), intent(in) :: sys
+    real(dp), intent(in) :: ea                 !< axial stiffness [N]
+    real(dp), intent(in) :: rho                !< air density [kg/m^3]
+    real(dp), intent(in) :: v0                 !< flight speed [m/s]
+    real(dp), intent(in) :: x0(3)              !< tie-down point (reference frame) [m]
+    real(dp), intent(inout) :: y0(:)
+    real(dp) :: s(3, sys%line%n), beyond(3), w(3), x(3), t(3), u(3), ut(3), un(3), ell, cds
+    integer :: n, k, i, fp
+    n = sys%line%n
+    u = [-v0, 0.0_dp, 0.0_dp]   ! air relative to the line
+    cds = sys%chute%drag_area
+    if (sys%chute%deploy_time >= 0.0_dp) cds = sys%chute%packed_drag_area
+    beyond = 0.5_dp*rho*v0**2*cds*[-1.0_dp, 0.0_dp, 0.0_dp]
+    t = [-1.0_dp, 0.0_dp, 0.0_dp]
+    do k = n, 1, -1
+      w = 0.0_dp
+      if (sys%line%p%gravity) w(2) = -g0*sys%line%node_mass(k)
+      if (k == n .and. sys%line%p%gravity) w(2) = w(2) - g0*sys%chute%mass
+      ell = sys%line%l0
+      do fp = 1, 50
+        s(:, k) = beyond + w
+        if (sys%line%p%air) then
+          ut = dot_product(u, t)*t
+          un = u - ut
+          s(:, k) = s(:, k) + rho*ell*(0.5_dp*sys%line%p%cd_normal*sys%line%p%diameter*norm2(un)*un &
+            + 0.5_dp*sys%line%p%cd_tangential*pi*sys%line%p%diameter*norm2(ut)*ut)
+        end if
+        if (norm2(s(:, k)/norm2(s(:, k)) - t) < 1.0e-12_dp) exit
+        t = 0.5_dp*(t + s(:, k)/norm2(s(:, k)))   ! relaxed: the cross-flow load turns with t
+        t = t/norm2(t)
+      end do
+      beyond = s(:, k)
+    end do
+    x = x0
+    do k = 1, n
+      ell = norm2(s(:, k))
+      x = x + sys%line%l0*(1.0_dp + ell/ea)*s(:, k)/ell
+      i = rigid_size + 6*(k - 1)
+      y0(i+1:i+3) = x
+      y0(i+4:i+6) = 0.0_dp
+    end do
+  end subroutine hanging_line
 
   !> Static equilibrium of the trailing line in the trimmed flight: every node
   !> moves with the aircraft at V0, node 0 is the tie-down point, and the node

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, run_airlaunch
+from conftest import ROOT, assert_input_error, run_airlaunch
 
 G0 = 9.80665
 
@@ -115,3 +115,18 @@ def test_plot_script_draws_the_demo_figure(airlaunch_exe, tmp_path):
                          capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert fig.stat().st_size > 10000
+
+
+def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
+    """The output directory is checked before the run (not found missing after
+    it, with HDF5's error stack on stderr): one line naming the value and where
+    it came from, exit 2, nothing written."""
+    nml, _ = drop_nml(tmp_path)
+    text = nml.read_text().replace(f"output = '{tmp_path / 'drop.nc'}'", f"output = '{tmp_path / 'no' / 'drop.nc'}'")
+    nml.write_text(text)
+    res = run_airlaunch(airlaunch_exe, nml)
+    line = assert_input_error(res, f"its directory '{tmp_path / 'no'}' does not exist", tmp_path / "no" / "drop.nc")
+    assert f"{nml}: &run: output" in line
+    res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "none" / "x.nc")
+    line = assert_input_error(res, "--output = ", tmp_path / "none" / "x.nc")
+    assert "HDF5" not in res.stderr
