@@ -58,14 +58,6 @@ program airlaunch
   if (.not. allocated(error)) call read_run_config(f, run, echo, error)
   if (allocated(error)) call fail_input(error%message)
   if (len(output_override) > 0) run%output = output_override
-  if (.not. allocated(error) .and. run%trajectory) then
-    if (len(output_override) > 0) then
-      call require_output_directory("--output", run%output, error)
-    else
-      call require_output_directory(path // ": &run: output", run%output, error)
-    end if
-    if (allocated(error)) call fail_input(error%message)
-  end if
 
   select case (trim(run%scene))
   case ("drop")
@@ -74,6 +66,7 @@ program airlaunch
       call f%check_groups([character(len=16) :: "run", "store"], error)
       if (.not. allocated(error)) call read_drop_config(f, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
+      call check_output_directory()
       call run_drop(run, cfg, echo, summary, error)
     end block
   case ("line")
@@ -82,6 +75,7 @@ program airlaunch
       call f%check_groups([character(len=16) :: "run", "line", "line_scene"], error)
       if (.not. allocated(error)) call read_line_scene_config(f, run, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
+      call check_output_directory()
       call run_line_scene(run, cfg, echo, summary, error)
     end block
   case ("airlaunch")
@@ -90,6 +84,7 @@ program airlaunch
       type(launch_result) :: res
       call read_scenario_config(f, cfg, echo, error, run%t_end)
       if (allocated(error)) call fail_input(error%message)
+      call check_output_directory()
       call run_launch(run, cfg, echo, res, error)
       summary = launch_summary(res)
     end block
@@ -107,6 +102,19 @@ program airlaunch
   if (run%trajectory) write(output_unit, '(a)') "output: " // trim(run%output)
 
 contains
+
+  !> The output file's directory must exist: checked once the whole input is
+  !> read (its own errors first), before the run.
+  subroutine check_output_directory()
+    type(error_type), allocatable :: out_error
+    if (.not. run%trajectory) return
+    if (len(output_override) > 0) then
+      call require_output_directory("--output", run%output, out_error)
+    else
+      call require_output_directory(path // ": &run: output", run%output, out_error)
+    end if
+    if (allocated(out_error)) call fail_input(out_error%message)
+  end subroutine check_output_directory
 
   !> The milestones of an air-launch run, one per line.
   function launch_summary(r) result(s)
