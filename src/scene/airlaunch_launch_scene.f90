@@ -225,10 +225,12 @@ contains
           s(:, k) = s(:, k) + rho*ell*(0.5_dp*sys%line%p%cd_normal*sys%line%p%diameter*norm2(un)*un &
             + 0.5_dp*sys%line%p%cd_tangential*pi*sys%line%p%diameter*norm2(ut)*ut)
         end if
+        if (norm2(s(:, k)) <= tiny(1.0_dp)) exit   ! no load beyond: keep the direction
         if (norm2(s(:, k)/norm2(s(:, k)) - t) < 1.0e-12_dp) exit
         t = 0.5_dp*(t + s(:, k)/norm2(s(:, k)))   ! relaxed: the cross-flow load turns with t
         t = t/norm2(t)
       end do
+      if (norm2(s(:, k)) <= tiny(1.0_dp)) s(:, k) = t   ! a guess: 1 N along the last direction
       beyond = s(:, k)
     end do
     x = x0
