@@ -12,6 +12,8 @@ module airlaunch_linalg
   !> Smallest reciprocal condition number (1-norm) accepted: below it the
   !> solution has fewer than ~2 significant digits in double precision.
   real(dp), parameter :: rcond_limit = 1.0e-14_dp
+  !> Largest system whose LAPACK work space lives on the stack (larger: heap)
+  integer, parameter :: small_n = 32
 
   interface
     subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
@@ -83,41 +85,64 @@ contains
   !> the solve) is replaced by the pivot ratio min|u_ii|/max|u_ii| against the
   !> same limit.
   subroutine solve_general(a, b, error, what, rcond, estimate_condition)
-    real(dp), intent(inout) :: a(:, :)       !< n x n matrix; on exit its LU factors
-    real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
+    real(dp), intent(inout), contiguous :: a(:, :)  !< n x n matrix; on exit its LU factors
+    real(dp), intent(inout), contiguous :: b(:, :)  !< n x nrhs right-hand sides; on exit X
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     character(len=*), intent(in) :: what     !< name of the system, for the message
     real(dp), intent(out), optional :: rcond !< reciprocal condition number (1-norm)
     logical, intent(in), optional :: estimate_condition !< dgecon (default) or the pivot ratio
-    integer :: n, info, ipiv(size(a, 1)), iwork(size(a, 1))
-    real(dp) :: anorm, rc, work(4*size(a, 1))
+    ! work space on the stack for the small systems of the right-hand sides
+    ! (no heap allocation per call), on the heap above small_n
+    integer :: ipiv_s(small_n), iwork_s(small_n)
+    real(dp) :: work_s(4*small_n)
+    integer, allocatable :: ipiv_h(:), iwork_h(:)
+    real(dp), allocatable :: work_h(:)
+    integer :: n
     n = size(a, 1)
     if (size(a, 2) /= n .or. size(b, 1) /= n) then
       call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // str(size(a, 2)) &
         // " and right-hand side has " // str(size(b, 1)) // " rows")
       return
     end if
-    anorm = maxval(sum(abs(a), dim=1))
-    call dgetrf(n, n, a, n, ipiv, info)
-    if (info > 0) then
-      call fatal_error(error, what // ": matrix is singular (zero pivot " // str(info) // " of " // str(n) // ")")
-      return
-    else if (info < 0) then
-      call fatal_error(error, what // ": dgetrf illegal argument " // str(-info))
-      return
-    end if
-    if (wants_estimate(estimate_condition)) then
-      call dgecon('1', n, a, n, anorm, rc, work, iwork, info)
+    if (n <= small_n) then
+      call general_lu(ipiv_s, iwork_s, work_s)
     else
-      rc = pivot_ratio(a)
+      allocate(ipiv_h(n), iwork_h(n), work_h(4*n))
+      call general_lu(ipiv_h, iwork_h, work_h)
     end if
-    if (present(rcond)) rcond = rc
-    if (rc < rcond_limit) then
-      call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
-      return
-    end if
-    call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
-    if (info /= 0) call fatal_error(error, what // ": dgetrs illegal argument " // str(-info))
+  contains
+    subroutine general_lu(ipiv, iwork, work)
+      integer, intent(out), contiguous :: ipiv(:), iwork(:)
+      real(dp), intent(out), contiguous :: work(:)
+      integer :: info, j
+      real(dp) :: anorm, rc
+      anorm = 0.0_dp
+      if (wants_estimate(estimate_condition)) then
+        do j = 1, n
+          anorm = max(anorm, sum(abs(a(:, j))))
+        end do
+      end if
+      call dgetrf(n, n, a, n, ipiv, info)
+      if (info > 0) then
+        call fatal_error(error, what // ": matrix is singular (zero pivot " // str(info) // " of " // str(n) // ")")
+        return
+      else if (info < 0) then
+        call fatal_error(error, what // ": dgetrf illegal argument " // str(-info))
+        return
+      end if
+      if (wants_estimate(estimate_condition)) then
+        call dgecon('1', n, a, n, anorm, rc, work, iwork, info)
+      else
+        rc = pivot_ratio(a)
+      end if
+      if (present(rcond)) rcond = rc
+      if (rc < rcond_limit) then
+        call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
+        return
+      end if
+      call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
+      if (info /= 0) call fatal_error(error, what // ": dgetrs illegal argument " // str(-info))
+    end subroutine general_lu
   end subroutine solve_general
 
   !> Solve A X = B for a symmetric positive-definite A (Cholesky, dpotrf/dpotrs).
@@ -126,48 +151,68 @@ contains
   !> an error naming `what`.  `estimate_condition` as for solve_general (the
   !> pivot ratio is then that of the Cholesky factor, squared).
   subroutine solve_spd(a, b, error, what, rcond, estimate_condition)
-    real(dp), intent(inout) :: a(:, :)       !< n x n SPD matrix; on exit its Cholesky factor
-    real(dp), intent(inout) :: b(:, :)       !< n x nrhs right-hand sides; on exit X
+    real(dp), intent(inout), contiguous :: a(:, :)  !< n x n SPD matrix; on exit its Cholesky factor
+    real(dp), intent(inout), contiguous :: b(:, :)  !< n x nrhs right-hand sides; on exit X
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     character(len=*), intent(in) :: what     !< name of the system, for the message
     real(dp), intent(out), optional :: rcond !< reciprocal condition number (1-norm)
     logical, intent(in), optional :: estimate_condition !< dpocon (default) or the pivot ratio
-    integer :: n, info, i, iwork(size(a, 1))
-    real(dp) :: anorm, rc, work(3*size(a, 1))
+    integer :: iwork_s(small_n)
+    real(dp) :: work_s(3*small_n)
+    integer, allocatable :: iwork_h(:)
+    real(dp), allocatable :: work_h(:)
+    integer :: n
     n = size(a, 1)
     if (size(a, 2) /= n .or. size(b, 1) /= n) then
       call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // str(size(a, 2)) &
         // " and right-hand side has " // str(size(b, 1)) // " rows")
       return
     end if
-    ! 1-norm of the symmetric matrix from its upper triangle
-    anorm = 0.0_dp
-    if (wants_estimate(estimate_condition)) then
-      do i = 1, n
-        anorm = max(anorm, sum(abs(a(1:i, i))) + sum(abs(a(i, i+1:n))))
-      end do
-    end if
-    call dpotrf('U', n, a, n, info)
-    if (info > 0) then
-      call fatal_error(error, what // ": matrix is not positive definite (leading minor " &
-        // str(info) // " of " // str(n) // ")")
-      return
-    else if (info < 0) then
-      call fatal_error(error, what // ": dpotrf illegal argument " // str(-info))
-      return
-    end if
-    if (wants_estimate(estimate_condition)) then
-      call dpocon('U', n, a, n, anorm, rc, work, iwork, info)
+    if (n <= small_n) then
+      call cholesky(iwork_s, work_s)
     else
-      rc = pivot_ratio(a)**2
+      allocate(iwork_h(n), work_h(3*n))
+      call cholesky(iwork_h, work_h)
     end if
-    if (present(rcond)) rcond = rc
-    if (rc < rcond_limit) then
-      call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
-      return
-    end if
-    call dpotrs('U', n, size(b, 2), a, n, b, n, info)
-    if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
+  contains
+    subroutine cholesky(iwork, work)
+      integer, intent(out), contiguous :: iwork(:)
+      real(dp), intent(out), contiguous :: work(:)
+      integer :: info, i, j
+      real(dp) :: anorm, rc, col
+      ! 1-norm of the symmetric matrix from its upper triangle
+      anorm = 0.0_dp
+      if (wants_estimate(estimate_condition)) then
+        do i = 1, n
+          col = 0.0_dp
+          do j = 1, n
+            col = col + abs(a(min(i, j), max(i, j)))
+          end do
+          anorm = max(anorm, col)
+        end do
+      end if
+      call dpotrf('U', n, a, n, info)
+      if (info > 0) then
+        call fatal_error(error, what // ": matrix is not positive definite (leading minor " &
+          // str(info) // " of " // str(n) // ")")
+        return
+      else if (info < 0) then
+        call fatal_error(error, what // ": dpotrf illegal argument " // str(-info))
+        return
+      end if
+      if (wants_estimate(estimate_condition)) then
+        call dpocon('U', n, a, n, anorm, rc, work, iwork, info)
+      else
+        rc = pivot_ratio(a)**2
+      end if
+      if (present(rcond)) rcond = rc
+      if (rc < rcond_limit) then
+        call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
+        return
+      end if
+      call dpotrs('U', n, size(b, 2), a, n, b, n, info)
+      if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
+    end subroutine cholesky
   end subroutine solve_spd
 
   !> True unless the caller asked for the cheap conditioning check.

@@ -184,7 +184,13 @@ contains
       bodies(k)%w = y(o+5:o+7)
       bodies(k)%mass = self%link(k)%mass
       bodies(k)%inertia = self%link(k)%inertia
-      bodies(k)%name = self%link(k)%name
+      ! (re)assigned only when it differs: a deferred-length string assignment
+      ! reallocates, and this runs in every right-hand side
+      if (.not. allocated(bodies(k)%name)) then
+        bodies(k)%name = self%link(k)%name
+      else if (bodies(k)%name /= self%link(k)%name) then
+        bodies(k)%name = self%link(k)%name
+      end if
     end do
     do k = 1, self%n
       do j = 1, self%n

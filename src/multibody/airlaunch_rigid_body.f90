@@ -175,7 +175,7 @@ contains
     real(dp), intent(in) :: moment(:, :)                  !< (3, ncol) moments about the CG, body [N m]
     real(dp), intent(in) :: gyro(:)                       !< (ncol) weight of the gyroscopic term
     real(dp), intent(out) :: a(:, :)                      !< (3, ncol) CG accelerations, earth [m/s^2]
-    real(dp), intent(out) :: wdot(:, :)                   !< (3, ncol) angular accelerations, body [rad/s^2]
+    real(dp), intent(out), contiguous :: wdot(:, :)       !< (3, ncol) angular accelerations, body [rad/s^2]
     type(error_type), allocatable, intent(inout) :: error !< set if J is singular
     real(dp) :: jmat(3, 3), h(3)
     integer :: k
