@@ -99,11 +99,7 @@ contains
     real(dp), allocatable :: work_h(:)
     integer :: n
     n = size(a, 1)
-    if (size(a, 2) /= n .or. size(b, 1) /= n) then
-      call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // str(size(a, 2)) &
-        // " and right-hand side has " // str(size(b, 1)) // " rows")
-      return
-    end if
+    if (.not. shapes_fit(a, b, what, error)) return
     if (n <= small_n) then
       call general_lu(ipiv_s, iwork_s, work_s)
     else
@@ -163,11 +159,7 @@ contains
     real(dp), allocatable :: work_h(:)
     integer :: n
     n = size(a, 1)
-    if (size(a, 2) /= n .or. size(b, 1) /= n) then
-      call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // str(size(a, 2)) &
-        // " and right-hand side has " // str(size(b, 1)) // " rows")
-      return
-    end if
+    if (.not. shapes_fit(a, b, what, error)) return
     if (n <= small_n) then
       call cholesky(iwork_s, work_s)
     else
@@ -214,6 +206,17 @@ contains
       if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
     end subroutine cholesky
   end subroutine solve_spd
+
+  !> A X = B needs a square A and as many rows in B: false (and an error
+  !> naming `what`) if the shapes do not fit.
+  logical function shapes_fit(a, b, what, error) result(ok)
+    real(dp), intent(in) :: a(:, :), b(:, :)              !< matrix and right-hand sides
+    character(len=*), intent(in) :: what                  !< name of the system
+    type(error_type), allocatable, intent(inout) :: error !< set if the shapes do not fit
+    ok = size(a, 2) == size(a, 1) .and. size(b, 1) == size(a, 1)
+    if (.not. ok) call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // &
+      str(size(a, 2)) // " and right-hand side has " // str(size(b, 1)) // " rows")
+  end function shapes_fit
 
   !> True unless the caller asked for the cheap conditioning check.
   pure logical function wants_estimate(estimate_condition)

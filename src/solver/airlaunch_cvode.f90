@@ -23,8 +23,7 @@ module airlaunch_cvode
   use fsunlinsol_band_mod
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
-  use airlaunch_lapack_band, only: new_lapack_band_solver
-  use airlaunch_second_order_band, only: new_second_order_band_solver, second_order_band_ok
+  use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok
   implicit none
   private
   public :: cvode_options, cvode_solver, cvode_stats, add_stats
@@ -33,7 +32,7 @@ module airlaunch_cvode
   type :: cvode_options
     character(len=16) :: method = "bdf"          !< "bdf" (stiff) or "adams"
     !> "dense", "band" (LAPACK), "second_order_band" (LAPACK on the velocity system of
-    !> [x, v]-per-node states, airlaunch_second_order_band), "sundials_band" or "none" (fixed point)
+    !> [x, v]-per-node states, airlaunch_lapack_band), "sundials_band" or "none" (fixed point)
     character(len=24) :: linear_solver = "dense"
     integer :: upper_bandwidth = 0               !< band solver: upper half-bandwidth
     integer :: lower_bandwidth = 0               !< band solver: lower half-bandwidth

@@ -1,10 +1,30 @@
-!> A SUNDIALS linear solver that factors CVODE's band Newton matrix with LAPACK
-!> (dgbtrf/dgbtrs, OpenBLAS here).  Debian's SUNDIALS has no LAPACK band solver;
+!> SUNDIALS linear solvers on CVODE's band Newton matrix, factored by LAPACK
+!> (dgbtrf/dgbtrs, OpenBLAS here): the full band LU, and the velocity-reduced
+!> solve for second-order systems (below); one content type and one set of
+!> SUNDIALS callbacks (type, last flag, free) for both.
+!>
+!> The full band LU.  Debian's SUNDIALS has no LAPACK band solver;
 !> its own band LU (SUNDlsMat_bandGBTRF/GBTRS) took a third of the paper
 !> scenario's run time (docs/performance.md).  SUNDIALS' band storage is
 !> LAPACK's: column j holds A(i, j) at row smu + 1 + i - j with smu = mu + ml
 !> and leading dimension smu + ml + 1 = 2 ml + mu + 1, so the matrix data is
 !> factored in place.
+!>
+!> The velocity-reduced solver, for second-order systems stored node by node,
+!> y = [x_1, v_1, x_2, v_2, ...] with three positions and three velocities per
+!> node and x' = v (the lumped line, airlaunch_line_cvode).  CVODE's Newton
+!> matrix M = I - gamma J then has, in the position rows, exactly
+!> M_xx = I, M_xv = -gamma I (J_xx = 0, J_xv = I), so
+!>     dx - gamma dv = r_x,      M_vx dx + M_vv dv = r_v
+!> reduces to the velocity system
+!>     (M_vv + gamma M_vx) dv = r_v - M_vx r_x,      dx = r_x + gamma dv,
+!> i.e. (I - gamma B - gamma^2 A) dv = ... with A = da/dx, B = da/dv: half the
+!> unknowns, and block tridiagonal with 3x3 blocks (band 5/5 instead of the
+!> full system's 11/8).  Factored by LAPACK (dgbtrf/dgbtrs); the full band
+!> matrix M is CVODE's (its difference-quotient Jacobian), read, not changed.
+!>
+!> gamma is read from M itself (M(x, v) of the first node = -gamma), so the
+!> solve is exact for the M that CVODE built, whatever gamma it used.
 module airlaunch_lapack_band
   use, intrinsic :: iso_c_binding
   use fsundials_context_mod
@@ -15,13 +35,23 @@ module airlaunch_lapack_band
   use fsunmatrix_band_mod
   implicit none
   private
-  public :: new_lapack_band_solver, dgbtrf, dgbtrs
+  public :: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, band_data
 
-  !> What the solver keeps between setup and solve.
+  !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
+  integer, parameter :: kr = 5
+
+  !> What a solver keeps between setup and solve: the full band LU uses n, ml,
+  !> mu, ldab, ipiv; the velocity-reduced solve uses nodes, ldab, ipiv and its
+  !> reduced matrix (s), the M_vx blocks and gamma.
   type :: band_content
     integer :: n = 0, ml = 0, mu = 0, ldab = 0
     integer, allocatable :: ipiv(:)
     integer(c_long) :: last_flag = 0
+    integer :: nodes = 0                              !< reduced: number of nodes (n = 6 nodes)
+    real(c_double) :: gamma = 0.0_c_double            !< reduced: gamma of the factored matrix
+    real(c_double), allocatable :: s(:, :)            !< reduced matrix, LAPACK band storage (ldab, 3 nodes)
+    real(c_double), allocatable :: mvx(:, :, :, :)    !< M_vx blocks (3, 3, -1:1, nodes)
+    real(c_double), allocatable :: rv(:)              !< work: reduced right-hand side (3 nodes)
   end type band_content
 
   interface
@@ -108,6 +138,129 @@ contains
     if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
     if (.false.) xd(1) = tol
   end function band_solve
+
+  !> True if a band matrix of n states and half-bandwidths mu, ml can carry the
+  !> structure (6 states per node, neighbours only: mu >= 8, ml >= 11).
+  pure logical function second_order_band_ok(n, mu, ml) result(ok)
+    integer, intent(in) :: n, mu, ml  !< states, upper and lower half-bandwidths
+    ok = n > 0 .and. mod(n, 6) == 0 .and. mu >= 8 .and. ml >= 11
+  end function second_order_band_ok
+
+  !> The solver for CVODE's band matrix `a` (FSUNBandMatrix, n = 6 nodes states,
+  !> mu >= 8, ml >= 11: check with second_order_band_ok first).
+  function new_second_order_band_solver(a, ctx) result(ls)
+    type(SUNMatrix), intent(inout) :: a     !< the band matrix CVODE fills
+    type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
+    type(SUNLinearSolver), pointer :: ls
+    type(SUNLinearSolver_Ops), pointer :: ops
+    type(band_content), pointer :: c
+    ls => FSUNLinSolNewEmpty(ctx)
+    call c_f_pointer(ls%ops, ops)
+    ops%gettype = c_funloc(band_gettype)
+    ops%setup = c_funloc(reduced_setup)
+    ops%solve = c_funloc(reduced_solve)
+    ops%lastflag = c_funloc(band_lastflag)
+    ops%free = c_funloc(band_free)
+    allocate(c)
+    c%nodes = int(FSUNBandMatrix_Columns(a))/6
+    c%ldab = 3*kr + 1
+    allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
+    ls%content = c_loc(c)
+  end function new_second_order_band_solver
+
+  !> The whole band storage of `a` (ldim x columns); the Fortran interface's
+  !> FSUNBandMatrix_Data carries no length.
+  function band_data(a, ldim) result(ab)
+    type(SUNMatrix), intent(inout) :: a
+    integer, intent(in) :: ldim
+    real(c_double), pointer :: ab(:)
+    real(c_double), pointer :: first(:)
+    first => FSUNBandMatrix_Data(a)
+    call c_f_pointer(c_loc(first(1)), ab, [ldim*int(FSUNBandMatrix_Columns(a))])
+  end function band_data
+
+  !> Entry M(i, j) of SUNDIALS' band storage (column-major, smu = mu + ml rows above).
+  pure real(c_double) function band_entry(ab, ldim, smu, i, j) result(m)
+    real(c_double), intent(in) :: ab(:)
+    integer, intent(in) :: ldim, smu, i, j
+    m = ab((j - 1)*ldim + smu + i - j + 1)
+  end function band_entry
+
+  !> Build the reduced velocity matrix from M and factor it (dgbtrf); a zero
+  !> pivot is a recoverable failure (CVODE retries with a smaller step).
+  integer(c_int) function reduced_setup(s, a) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(band_content), pointer :: c
+    real(c_double), pointer :: ab(:)
+    integer :: ldim, smu, j, k, p, q, row, col, info, n3
+    real(c_double) :: g
+    call c_f_pointer(s%content, c)
+    ldim = int(FSUNBandMatrix_LDim(a))
+    smu = int(FSUNBandMatrix_StoredUpperBandwidth(a))
+    ab => band_data(a, ldim)
+    g = -band_entry(ab, ldim, smu, 1, 4)
+    c%gamma = g
+    c%s = 0.0_c_double
+    c%mvx = 0.0_c_double
+    n3 = 3*c%nodes
+    do j = 1, c%nodes
+      do k = max(1, j - 1), min(c%nodes, j + 1)
+        do q = 1, 3
+          do p = 1, 3
+            row = 6*(j - 1) + 3 + p
+            col = 6*(k - 1) + q
+            c%mvx(p, q, k - j, j) = band_entry(ab, ldim, smu, row, col)
+            ! S(3(j-1)+p, 3(k-1)+q) = M_vv + gamma M_vx, LAPACK band storage (kl = ku = kr)
+            c%s(2*kr + 1 + 3*(j - k) + p - q, 3*(k - 1) + q) = &
+              band_entry(ab, ldim, smu, row, col + 3) + g*c%mvx(p, q, k - j, j)
+          end do
+        end do
+      end do
+    end do
+    call dgbtrf(n3, n3, kr, kr, c%s, c%ldab, c%ipiv, info)
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+  end function reduced_setup
+
+  !> x = M^-1 b through the velocity system.
+  integer(c_int) function reduced_solve(s, a, x, b, tol) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(N_Vector) :: x, b
+    real(c_double), value :: tol
+    type(band_content), pointer :: c
+    real(c_double), pointer :: xd(:), bd(:)
+    integer :: j, k, p, q, i0, info
+    real(c_double) :: r
+    call c_f_pointer(s%content, c)
+    xd => FN_VGetArrayPointer(x)
+    bd => FN_VGetArrayPointer(b)
+    ! r = r_v - M_vx r_x (explicit loops: no temporaries in the solve)
+    do j = 1, c%nodes
+      i0 = 6*(j - 1)
+      do p = 1, 3
+        r = bd(i0 + 3 + p)
+        do k = max(1, j - 1), min(c%nodes, j + 1)
+          do q = 1, 3
+            r = r - c%mvx(p, q, k - j, j)*bd(6*(k - 1) + q)
+          end do
+        end do
+        c%rv(3*(j - 1) + p) = r
+      end do
+    end do
+    call dgbtrs('N', 3*c%nodes, kr, kr, 1, c%s, c%ldab, c%ipiv, c%rv, 3*c%nodes, info)
+    do j = 1, c%nodes
+      i0 = 6*(j - 1)
+      xd(i0+4:i0+6) = c%rv(3*j-2:3*j)
+      xd(i0+1:i0+3) = bd(i0+1:i0+3) + c%gamma*c%rv(3*j-2:3*j)
+    end do
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
+    if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
+  end function reduced_solve
 
   integer(c_long) function band_lastflag(s) result(f) bind(C)
     type(SUNLinearSolver) :: s

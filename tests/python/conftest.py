@@ -1,12 +1,14 @@
-"""Shared fixtures: paths of the built programs and a runner."""
+"""Shared fixtures: paths of the built programs, a runner, input variants."""
 import os
 import pathlib
+import re
 import subprocess
 
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 BIN = pathlib.Path(os.environ.get("AIRLAUNCH_BIN", ROOT / "build" / "release" / "bin"))
+PAPER = ROOT / "input" / "airlaunch_paper.nml"
 
 
 @pytest.fixture(scope="session")
@@ -36,3 +38,20 @@ def assert_input_error(res, fragment, out):
     assert len(lines) == 1 and fragment in lines[0], res.stderr
     assert not pathlib.Path(out).exists()
     return lines[0]
+
+
+def nml_variant(tmp_path, name="variant", edits=(), line=(), base=PAPER):
+    """A copy of the input file `base` (default: the paper scenario) with regex
+    `edits` (each must match exactly one line) and extra `&line` assignments
+    (inserted after its cd_tangential line), written to tmp_path/name.nml."""
+    text = pathlib.Path(base).read_text()
+    for old, new in edits:
+        text, n = re.subn(old, new, text, flags=re.M)
+        assert n == 1, old
+    if line:
+        text, n = re.subn(r"^(  cd_tangential = 0.01 .*)$", lambda m: m.group(1) + "\n" + "\n".join(line), text,
+                          flags=re.M)
+        assert n == 1
+    p = tmp_path / f"{name}.nml"
+    p.write_text(text)
+    return p

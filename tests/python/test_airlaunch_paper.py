@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, assert_input_error, run_airlaunch
+from conftest import PAPER, assert_input_error, nml_variant, run_airlaunch
 
-PAPER = ROOT / "input" / "airlaunch_paper.nml"
 N_SEG = int(re.search(r"^\s*n_seg\s*=\s*(\d+)", PAPER.read_text(), flags=re.M).group(1))
 RTOL = float(re.search(r"^\s*rtol\s*=\s*(\S+)", PAPER.read_text(), flags=re.M).group(1))
 # the paper's own discretization (60 elements, its Fig. 8) at tight tolerances
@@ -42,7 +41,7 @@ def paper_run(airlaunch_exe, tmp_path_factory):
 def paper_fine(airlaunch_exe, tmp_path_factory):
     d = tmp_path_factory.mktemp("paper_fine")
     out = d / "fine.nc"
-    res = run_airlaunch(airlaunch_exe, _variant(d, FINE), "--output", out)
+    res = run_airlaunch(airlaunch_exe, nml_variant(d, edits=FINE), "--output", out)
     assert res.returncode == 0, res.stderr
     ds = xr.open_dataset(out)
     yield ds
@@ -131,16 +130,6 @@ def test_defaults_within_0p1_percent_of_the_paper_discretization(paper_run, pape
     assert mean == pytest.approx(mean_fine, rel=1e-3)
 
 
-def _variant(tmp_path, edits):
-    text = PAPER.read_text()
-    for old, new in edits:
-        text, n = re.subn(old, new, text, flags=re.M)
-        assert n == 1, old
-    p = tmp_path / "variant.nml"
-    p.write_text(text)
-    return p
-
-
 @pytest.mark.parametrize("edits,fragment", [
     ([(r"^  length = 24.5$", "  length = 12.0")], "the rocket does not fit the bay"),
     ([(r"^  length = 60.0 .*$", "  length = 10.0")], "&line: length = 10.0 is not allowed (shorter than"),
@@ -150,7 +139,7 @@ def _variant(tmp_path, edits):
     ([(r"^  deploy_time = -1.0 .*$", "  deploy_time = 20.0")], "the parachute would never inflate"),
 ])
 def test_impossible_scenarios_give_one_clear_line(airlaunch_exe, tmp_path, edits, fragment):
-    nml = _variant(tmp_path, edits)
+    nml = nml_variant(tmp_path, edits=edits)
     out = tmp_path / "x.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert_input_error(res, fragment, out)
@@ -161,7 +150,7 @@ def test_one_sided_edge_separates_early(airlaunch_exe, tmp_path, paper_run):
     force would have to pull: at the time the bilateral run reports (the two
     runs are the same motion up to that instant; 1 ms covers the tolerances)."""
     paper, _ = paper_run
-    nml = _variant(tmp_path, [(r"^  edge_contact = 'bilateral'.*$", "  edge_contact = 'one_sided'"),
+    nml = nml_variant(tmp_path, edits=[(r"^  edge_contact = 'bilateral'.*$", "  edge_contact = 'one_sided'"),
                               (r"^  t_end = 15.0 .*$", "  t_end = 4.5")])
     out = tmp_path / "one.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
@@ -180,7 +169,7 @@ def test_numerical_failure_keeps_readable_output(airlaunch_exe, tmp_path):
     40 s, leaves the atmosphere model at -2 km) ends with status 3 and one line
     naming the phase, the time and the quantity; what was computed is kept,
     readable, with status = "failed"."""
-    nml = _variant(tmp_path, [(r"^  altitude = 10000.0 .*$", "  altitude = 300.0"),
+    nml = nml_variant(tmp_path, edits=[(r"^  altitude = 10000.0 .*$", "  altitude = 300.0"),
                               (r"^  t_end = 15.0 .*$", "  t_end = 40.0")])
     out = tmp_path / "fail.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
@@ -199,7 +188,7 @@ def test_stop_when_final_keeps_the_milestones(airlaunch_exe, tmp_path, paper_run
     """&run stop_when_final (sweeps' summary mode) ends the run once the
     milestones are final; they equal those of the full 15 s run."""
     paper, _ = paper_run
-    nml = _variant(tmp_path, [(r"^  rtol = (\S+)", "  stop_when_final = .true.\n  rtol = \\1")])
+    nml = nml_variant(tmp_path, edits=[(r"^  rtol = (\S+)", "  stop_when_final = .true.\n  rtol = \\1")])
     out = tmp_path / "swf.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert res.returncode == 0, res.stderr
@@ -221,7 +210,7 @@ def test_weak_pull_line_settles_at_fine_resolution(airlaunch_exe, tmp_path, n_se
     starts, and at t = 0 the line at the canopy carries the packed canopy's
     drag and weight, |(q CdS_packed, m_canopy g)| (1 %: the last half segment's
     weight and air load, ~1 N, are lumped with the canopy node)."""
-    nml = _variant(tmp_path, [(r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0"),
+    nml = nml_variant(tmp_path, edits=[(r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0"),
                               (r"^  n_seg = \d+.*$", f"  n_seg = {n_seg}"),
                               (r"^  t_end = \S+.*$", "  t_end = 1.1")])
     out = tmp_path / "weak.nc"

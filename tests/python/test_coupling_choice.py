@@ -38,9 +38,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, assert_input_error, run_airlaunch
+from conftest import PAPER, ROOT, assert_input_error, nml_variant, run_airlaunch
 
-PAPER = ROOT / "input" / "airlaunch_paper.nml"
 GRAVITY_DROP = ROOT / "input" / "airlaunch_gravity_drop.nml"
 
 # Converged reference of the paper scenario (N = 240, rtol 1e-9, atol 1e-10;
@@ -63,28 +62,13 @@ TIGHT = [(r"^  rtol = \S+.*$", "  rtol = 1.0e-7"), (r"^  atol = \S+.*$", "  atol
 SNATCH = [(r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0")]
 
 
-def variant(tmp_path, name, line=(), edits=(), base=PAPER):
-    """The paper file with extra &line assignments and regex edits."""
-    text = base.read_text()
-    for old, new in edits:
-        text, n = re.subn(old, new, text, flags=re.M)
-        assert n == 1, old
-    if line:
-        text, n = re.subn(r"^(  cd_tangential = 0.01 .*)$", lambda m: m.group(1) + "\n" + "\n".join(line), text,
-                          flags=re.M)
-        assert n == 1
-    p = tmp_path / f"{name}.nml"
-    p.write_text(text)
-    return p
-
-
 def per_phase(*couplings):
     return ("  coupling = 'per_phase'", "  coupling_by_phase = " + ", ".join(f"'{c}'" for c in couplings))
 
 
 def run(exe, tmp_path, name, line=(), edits=()):
     nc = tmp_path / f"{name}.nc"
-    res = run_airlaunch(exe, variant(tmp_path, name, line, edits), "--output", nc)
+    res = run_airlaunch(exe, nml_variant(tmp_path, name, line=line, edits=edits), "--output", nc)
     assert res.returncode == 0, res.stderr
     return xr.open_dataset(nc)
 
@@ -311,7 +295,7 @@ def test_auto_records_follow_the_indicator_and_hysteresis(snatch):
 ])
 def test_bad_choice_input_gives_one_clear_line(airlaunch_exe, tmp_path, line, fragment):
     out = tmp_path / "x.nc"
-    nml = variant(tmp_path, "bad", line)
+    nml = nml_variant(tmp_path, "bad", line=line)
     assert str(nml) in assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out), fragment, out)
 
 
@@ -323,8 +307,8 @@ def test_bad_choice_input_gives_one_clear_line(airlaunch_exe, tmp_path, line, fr
     ("  auto_dwell = 1.0", "&line: auto_dwell = 1.0 is not allowed with enabled = .false."),
 ])
 def test_choice_contradicts_a_scene_without_line(airlaunch_exe, tmp_path, extra, fragment):
-    nml = variant(tmp_path, "noline", edits=[(r"^  enabled = .false. .*$", "  enabled = .false.\n" + extra)],
-                  base=GRAVITY_DROP)
+    nml = nml_variant(tmp_path, "noline", edits=[(r"^  enabled = .false. .*$", "  enabled = .false.\n" + extra)],
+                      base=GRAVITY_DROP)
     out = tmp_path / "x.nc"
     assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out), fragment, out)
 

@@ -4,13 +4,12 @@ variables, the rail phase against the analytic sliding block on an inclined
 plane, the free aircraft's recoil, and the one-line errors for contradictory
 input."""
 import math
-import re
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, assert_input_error, run_airlaunch
+from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
 
 EXAMPLE = ROOT / "input" / "airlaunch_gravity_drop.nml"
 G0 = 9.80665                 # m/s^2, the code's standard gravity
@@ -24,16 +23,6 @@ def rail_acceleration(mu):
     """Rocket acceleration along the rail relative to an aircraft in steady flight
     (a block on a plane inclined at the deck angle, Coulomb friction mu)."""
     return G0 * (math.sin(DECK) - mu * math.cos(DECK))
-
-
-def _variant(tmp_path, edits, name="variant.nml"):
-    text = EXAMPLE.read_text()
-    for old, new in edits:
-        text, n = re.subn(old, new, text, flags=re.M)
-        assert n == 1, old
-    p = tmp_path / name
-    p.write_text(text)
-    return p
 
 
 def _run(exe, nml, out):
@@ -98,7 +87,7 @@ def test_rail_phase_against_analytic(airlaunch_exe, tmp_path):
     speed differenced from positions of ~1e3 m), the normal force m g cos 7 and
     the friction -mu N within 1e-6 (measured 2e-10)."""
     mu = 0.05
-    nml = _variant(tmp_path, [PRESCRIBED, (r"^  friction = 0.005 .*$", f"  friction = {mu}"),
+    nml = nml_variant(tmp_path, base=EXAMPLE, edits=[PRESCRIBED, (r"^  friction = 0.005 .*$", f"  friction = {mu}"),
                               (r"^  c_axial = 0.35$", "  c_axial = 0.0"), (r"^  c_dn = 1.2$", "  c_dn = 0.0"),
                               (r"^  fin_count = 4 .*$", "  fin_count = 0")])
     ds, _ = _run(airlaunch_exe, nml, tmp_path / "rail.nc")
@@ -132,7 +121,7 @@ def test_example_rail_phase_with_aerodynamics(airlaunch_exe, tmp_path):
     3 % of the force averaged over the slide, 1-2 % of the time): the edge
     comes sooner than the drag-free sqrt(2 l0 / a) = 4.177 s, by less than
     2 % (measured 0.36 %)."""
-    nml = _variant(tmp_path, [PRESCRIBED])
+    nml = nml_variant(tmp_path, base=EXAMPLE, edits=[PRESCRIBED])
     ds, _ = _run(airlaunch_exe, nml, tmp_path / "held.nc")
     analytic = math.sqrt(2 * L0 / rail_acceleration(0.005))
     dt = ds.attrs["edge_time_s"] - ds.attrs["release_time_s"]
@@ -175,7 +164,7 @@ def test_free_aircraft_recoil(example_run):
 def test_contradictory_input_gives_one_clear_line(airlaunch_exe, tmp_path, edits, fragment):
     """docs/input.md: a scene without a line has no parachute and no line
     properties; saying otherwise is rejected before anything runs."""
-    nml = _variant(tmp_path, edits)
+    nml = nml_variant(tmp_path, base=EXAMPLE, edits=edits)
     out = tmp_path / "x.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert str(nml) in assert_input_error(res, fragment, out)

@@ -20,15 +20,13 @@ both sides of the coupling), and `far_end = 'chain'` (both end motions from
 the chain) must show why it is not the default: d_rigid frozen and the line's
 tension stuck near its initial stretch.
 """
-import re
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, assert_input_error, run_airlaunch
+from conftest import assert_input_error, nml_variant, run_airlaunch
 
-PAPER = ROOT / "input" / "airlaunch_paper.nml"
 
 CONTRACT_VARS = ["phase", "aircraft_position", "aircraft_euler_deg", "aircraft_alpha_deg",
                  "rocket_position", "rocket_velocity", "rocket_euler_deg", "rocket_pitch_rate_deg_s",
@@ -37,28 +35,13 @@ CONTRACT_VARS = ["phase", "aircraft_position", "aircraft_euler_deg", "aircraft_a
 RIGIDIZED_VARS = ["m_rigid_kg", "j_rigid_kg_m2", "d_rigid_m", "rigid_line_force_N", "line_end_mismatch_m"]
 
 
-def variant(tmp_path, name, line=(), edits=()):
-    """The paper file with extra &line assignments and regex edits."""
-    text = PAPER.read_text()
-    for old, new in edits:
-        text, n = re.subn(old, new, text, flags=re.M)
-        assert n == 1, old
-    if line:
-        text, n = re.subn(r"^(  cd_tangential = 0.01 .*)$", lambda m: m.group(1) + "\n" + "\n".join(line), text,
-                          flags=re.M)
-        assert n == 1
-    p = tmp_path / f"{name}.nml"
-    p.write_text(text)
-    return p
-
-
 @pytest.fixture(scope="module")
 def paper_pair(airlaunch_exe, tmp_path_factory):
     d = tmp_path_factory.mktemp("rigidized")
     out = {}
     for name, line in [("direct", ()), ("rigidized", ("  coupling = 'rigidized'",))]:
         nc = d / f"{name}.nc"
-        res = run_airlaunch(airlaunch_exe, variant(d, name, line), "--output", nc)
+        res = run_airlaunch(airlaunch_exe, nml_variant(d, name, line=line), "--output", nc)
         assert res.returncode == 0, res.stderr
         out[name] = xr.open_dataset(nc)
     yield out["direct"], out["rigidized"]
@@ -134,8 +117,8 @@ def test_far_end_chain_freezes_the_line(airlaunch_exe, tmp_path, paper_pair):
     near its initial stretch, while the direct model's pull falls by 17 %
     in 6 s (the rocket slows down)."""
     direct, _ = paper_pair
-    nml = variant(tmp_path, "chain", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
-                  edits=[(r"^  t_end = 15.0 .*$", "  t_end = 6.0")])
+    nml = nml_variant(tmp_path, "chain", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
+                      edits=[(r"^  t_end = 15.0 .*$", "  t_end = 6.0")])
     out = tmp_path / "chain.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert res.returncode == 0, res.stderr
@@ -157,13 +140,13 @@ def test_far_end_chain_freezes_the_line(airlaunch_exe, tmp_path, paper_pair):
 ])
 def test_bad_rigidized_input_gives_one_clear_line(airlaunch_exe, tmp_path, line, fragment):
     out = tmp_path / "x.nc"
-    res = run_airlaunch(airlaunch_exe, variant(tmp_path, "bad", line), "--output", out)
+    res = run_airlaunch(airlaunch_exe, nml_variant(tmp_path, "bad", line=line), "--output", out)
     assert_input_error(res, fragment, out)
 
 
 def test_far_end_chain_needs_two_segments(airlaunch_exe, tmp_path):
-    nml = variant(tmp_path, "one", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
-                  edits=[(r"^  n_seg = \d+ .*$", "  n_seg = 1")])
+    nml = nml_variant(tmp_path, "one", line=("  coupling = 'rigidized'", "  far_end = 'chain'"),
+                      edits=[(r"^  n_seg = \d+ .*$", "  n_seg = 1")])
     res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc")
     assert res.returncode == 2
     assert "n_seg = 1 is not allowed with far_end = 'chain'" in res.stderr

@@ -107,8 +107,7 @@ program test_cvode
   use fsundials_nvector_mod
   use fnvector_serial_mod
   use fsunmatrix_band_mod
-  use airlaunch_lapack_band, only: new_lapack_band_solver
-  use airlaunch_second_order_band, only: new_second_order_band_solver, band_data
+  use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, band_data
   use testing
   implicit none
   type(oscillator), target :: osc
