@@ -78,22 +78,13 @@ contains
     type(SUNMatrix), intent(inout) :: a     !< the band matrix CVODE will fill
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
-    type(SUNLinearSolver_Ops), pointer :: ops
     type(band_content), pointer :: c
-    ls => FSUNLinSolNewEmpty(ctx)
-    call c_f_pointer(ls%ops, ops)
-    ops%gettype = c_funloc(band_gettype)
-    ops%setup = c_funloc(band_setup)
-    ops%solve = c_funloc(band_solve)
-    ops%lastflag = c_funloc(band_lastflag)
-    ops%free = c_funloc(band_free)
-    allocate(c)
+    ls => new_solver(ctx, c_funloc(band_setup), c_funloc(band_solve), c)
     c%n = int(FSUNBandMatrix_Columns(a))
     c%ml = int(FSUNBandMatrix_LowerBandwidth(a))
     c%mu = int(FSUNBandMatrix_UpperBandwidth(a))
     c%ldab = int(FSUNBandMatrix_LDim(a))
     allocate(c%ipiv(c%n))
-    ls%content = c_loc(c)
   end function new_lapack_band_solver
 
   integer(c_int) function band_gettype(s) result(t) bind(C)
@@ -152,21 +143,31 @@ contains
     type(SUNMatrix), intent(inout) :: a     !< the band matrix CVODE fills
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
-    type(SUNLinearSolver_Ops), pointer :: ops
     type(band_content), pointer :: c
-    ls => FSUNLinSolNewEmpty(ctx)
-    call c_f_pointer(ls%ops, ops)
-    ops%gettype = c_funloc(band_gettype)
-    ops%setup = c_funloc(reduced_setup)
-    ops%solve = c_funloc(reduced_solve)
-    ops%lastflag = c_funloc(band_lastflag)
-    ops%free = c_funloc(band_free)
-    allocate(c)
+    ls => new_solver(ctx, c_funloc(reduced_setup), c_funloc(reduced_solve), c)
     c%nodes = int(FSUNBandMatrix_Columns(a))/6
     c%ldab = 3*kr + 1
     allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
-    ls%content = c_loc(c)
   end function new_second_order_band_solver
+
+  !> An empty SUNDIALS linear solver with the given setup and solve, the shared
+  !> type, last-flag and free callbacks, and a new content `c` attached.
+  function new_solver(ctx, setup, solve, c) result(ls)
+    type(c_ptr), intent(in) :: ctx                  !< SUNDIALS context
+    type(c_funptr), intent(in) :: setup, solve      !< the solver's setup and solve callbacks
+    type(band_content), pointer, intent(out) :: c   !< its content (to be filled by the caller)
+    type(SUNLinearSolver), pointer :: ls
+    type(SUNLinearSolver_Ops), pointer :: ops
+    ls => FSUNLinSolNewEmpty(ctx)
+    call c_f_pointer(ls%ops, ops)
+    ops%gettype = c_funloc(band_gettype)
+    ops%setup = setup
+    ops%solve = solve
+    ops%lastflag = c_funloc(band_lastflag)
+    ops%free = c_funloc(band_free)
+    allocate(c)
+    ls%content = c_loc(c)
+  end function new_solver
 
   !> The whole band storage of `a` (ldim x columns); the Fortran interface's
   !> FSUNBandMatrix_Data carries no length.
