@@ -79,7 +79,12 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    ls => new_solver(ctx, c_funloc(band_setup), c_funloc(band_solve), c)
+    type(c_funptr) :: setup, solve
+    ! Through variables: a c_funloc constant as an actual argument lands in .rodata
+    ! with a run-time relocation (DT_TEXTREL in the PIE executable).
+    setup = c_funloc(band_setup)
+    solve = c_funloc(band_solve)
+    ls => new_solver(ctx, setup, solve, c)
     c%n = int(FSUNBandMatrix_Columns(a))
     c%ml = int(FSUNBandMatrix_LowerBandwidth(a))
     c%mu = int(FSUNBandMatrix_UpperBandwidth(a))
@@ -144,7 +149,12 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    ls => new_solver(ctx, c_funloc(reduced_setup), c_funloc(reduced_solve), c)
+    type(c_funptr) :: setup, solve
+    ! Through variables: a c_funloc constant as an actual argument lands in .rodata
+    ! with a run-time relocation (DT_TEXTREL in the PIE executable).
+    setup = c_funloc(reduced_setup)
+    solve = c_funloc(reduced_solve)
+    ls => new_solver(ctx, setup, solve, c)
     c%nodes = int(FSUNBandMatrix_Columns(a))/6
     c%ldab = 3*kr + 1
     allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
