@@ -301,6 +301,7 @@ contains
     type(joint_state), intent(inout) :: js !< result
     real(dp) :: p(3), dv(3), wd(3), bw(3), om(3), bom(3), phi(3), rerr(3, 3), kp, kd
     real(dp) :: dz(3), epsd(3), beps(3), rh1(3), g(3), m(3), pos(3)
+    real(dp) :: wp(3), wwp(3), u(3)   ! cross products, kept out of matmul (no heap temporaries)
     integer :: i, k
     js%phase = phase
     js%ncomp = joint_components(phase)
@@ -321,10 +322,12 @@ contains
     case (phase_preparation, phase_extraction)
       p = self%geo%contact_point
       js%w = matmul(transpose(b0%c), b1%r + matmul(b1%c, p) - b0%r)
-      dv = b1%v + matmul(b1%c, cross(b1%w, p)) - b0%v
-      wd = matmul(transpose(b0%c), dv) - cross(b0%w, js%w)
-      bw = matmul(transpose(b0%c), matmul(b1%c, cross(b1%w, cross(b1%w, p)))) &
-        - cross(b0%w, matmul(transpose(b0%c), dv)) - cross(b0%w, wd)
+      wp = cross(b1%w, p)
+      wwp = cross(b1%w, wp)
+      dv = b1%v + matmul(b1%c, wp) - b0%v
+      u = matmul(transpose(b0%c), dv)
+      wd = u - cross(b0%w, js%w)
+      bw = matmul(transpose(b0%c), matmul(b1%c, wwp)) - cross(b0%w, u) - cross(b0%w, wd)
       ! small-angle attitude error vee(Rerr - Rerr^T)/2 of Rerr = R R_ref^T
       rerr = matmul(js%rel, transpose(self%rel_ref))
       phi = 0.5_dp*[rerr(3, 2) - rerr(2, 3), rerr(1, 3) - rerr(3, 1), rerr(2, 1) - rerr(1, 2)]
@@ -365,10 +368,12 @@ contains
     case (phase_rotation)
       p = self%geo%edge_point
       js%eps = matmul(transpose(b1%c), b0%r + matmul(b0%c, p) - b1%r)
-      dz = b0%v + matmul(b0%c, cross(b0%w, p)) - b1%v
-      epsd = matmul(transpose(b1%c), dz) - cross(b1%w, js%eps)
-      beps = matmul(transpose(b1%c), matmul(b0%c, cross(b0%w, cross(b0%w, p)))) &
-        - cross(b1%w, matmul(transpose(b1%c), dz)) - cross(b1%w, epsd)
+      wp = cross(b0%w, p)
+      wwp = cross(b0%w, wp)
+      dz = b0%v + matmul(b0%c, wp) - b1%v
+      u = matmul(transpose(b1%c), dz)
+      epsd = u - cross(b1%w, js%eps)
+      beps = matmul(transpose(b1%c), matmul(b0%c, wwp)) - cross(b1%w, u) - cross(b1%w, epsd)
       ! row 1: slide along the exit direction -x_r; rows 2-3: contact and lateral
       js%bias(1) = beps(1) + self%opt%stick_rate*epsd(1)
       js%bias(2) = beps(2) + kd*epsd(2) + kp*(js%eps(2) - self%geo%contact_point(2))
@@ -409,21 +414,23 @@ contains
     real(dp), intent(in) :: a0(3), wd0(3)  !< aircraft CG acceleration (earth), angular acc. (body)
     real(dp), intent(in) :: a1(3), wd1(3)  !< rocket CG acceleration (earth), angular acc. (body)
     real(dp), intent(out) :: c(:)          !< (ncomp) row accelerations
-    real(dp) :: lw(3), lom(3), p(3)
+    real(dp) :: lw(3), lom(3), p(3), wp(3)   ! wp: a cross product kept out of matmul (no heap temporary)
     integer :: i
     c = 0.0_dp
     lom = matmul(js%rel, wd1) - wd0
     select case (js%phase)
     case (phase_preparation, phase_extraction)
       p = self%geo%contact_point
-      lw = matmul(transpose(js%c0), a1 + matmul(js%c1, cross(wd1, p)) - a0) - cross(wd0, js%w)
+      wp = cross(wd1, p)
+      lw = matmul(transpose(js%c0), a1 + matmul(js%c1, wp) - a0) - cross(wd0, js%w)
       do i = 1, 3
         c(i) = dot_product(self%e(:, i), lw)
         c(3+i) = dot_product(self%e(:, i), lom)
       end do
     case (phase_rotation)
       p = self%geo%edge_point
-      lw = matmul(transpose(js%c1), a0 + matmul(js%c0, cross(wd0, p)) - a1) - cross(wd1, js%eps)
+      wp = cross(wd0, p)
+      lw = matmul(transpose(js%c1), a0 + matmul(js%c0, wp) - a1) - cross(wd1, js%eps)
       c(1:3) = lw
       c(4) = dot_product(lom, js%mdir(:, 1))
       c(5) = dot_product(lom, js%mdir(:, 2))

@@ -66,6 +66,7 @@ module airlaunch_kane_chain
     procedure :: state_size => chain_state_size
     procedure :: speed_size => chain_speed_size
     procedure :: load_bodies => chain_load_bodies
+    procedure :: name_bodies => chain_name_bodies
     procedure :: store_bodies => chain_store_bodies
     procedure :: accelerations => chain_accelerations
     procedure :: state_derivative => chain_state_derivative
@@ -173,24 +174,20 @@ contains
 
   !> Fill bodies(1:n) (mass properties, positions, velocities, attitudes, rates)
   !> from the chain state y; bodies 2..n are placed by the joint kinematics (57).
+  !> Runs in every right-hand side: no allocation (the bodies' names are set where
+  !> the links are set, by the owner of the bodies).
   subroutine chain_load_bodies(self, y, bodies)
     class(kane_chain), intent(inout) :: self    !< chain (c_jk cached)
     real(dp), intent(in) :: y(:)                !< chain state (6 + 7n)
     type(rigid_body), intent(inout) :: bodies(:) !< (n) bodies of the chain, bodies(1) = rocket
     integer :: j, k, o
+    real(dp) :: wc(3)
     do k = 1, self%n
       o = 6 + 7*(k - 1)
       call bodies(k)%set_attitude(y(o+1:o+4))
       bodies(k)%w = y(o+5:o+7)
       bodies(k)%mass = self%link(k)%mass
       bodies(k)%inertia = self%link(k)%inertia
-      ! (re)assigned only when it differs: a deferred-length string assignment
-      ! reallocates, and this runs in every right-hand side
-      if (.not. allocated(bodies(k)%name)) then
-        bodies(k)%name = self%link(k)%name
-      else if (bodies(k)%name /= self%link(k)%name) then
-        bodies(k)%name = self%link(k)%name
-      end if
     end do
     do k = 1, self%n
       do j = 1, self%n
@@ -205,11 +202,26 @@ contains
       bodies(k)%r = y(1:3)
       bodies(k)%v = y(4:6)
       do j = 1, k
+        ! w_j x c_jk in a local first: a function result as a matmul argument
+        ! becomes a heap temporary in gfortran
+        wc = cross(bodies(j)%w, self%cvec(:, j, k))
         bodies(k)%r = bodies(k)%r + matmul(bodies(j)%c, self%cvec(:, j, k))
-        bodies(k)%v = bodies(k)%v + matmul(bodies(j)%c, cross(bodies(j)%w, self%cvec(:, j, k)))
+        bodies(k)%v = bodies(k)%v + matmul(bodies(j)%c, wc)
       end do
     end do
   end subroutine chain_load_bodies
+
+  !> Give bodies(1:n) the names of the links (for messages).  Call it once
+  !> after the links are set, not per right-hand side (a deferred-length
+  !> assignment reallocates).
+  subroutine chain_name_bodies(self, bodies)
+    class(kane_chain), intent(in) :: self         !< chain
+    type(rigid_body), intent(inout) :: bodies(:)  !< (n) bodies of the chain
+    integer :: k
+    do k = 1, min(self%n, size(bodies))
+      bodies(k)%name = self%link(k)%name
+    end do
+  end subroutine chain_name_bodies
 
   !> Write the chain state y from bodies(1:n): r_1, v_1 and every attitude and rate
   !> (positions and velocities of bodies 2..n are implied by the joints).
@@ -242,8 +254,11 @@ contains
     real(dp), intent(in) :: probe_moment(:, :)            !< (3, >= nprobe) body-1 probe moments, body
     integer, intent(in) :: nprobe                         !< number of probes (<= ncol - 1)
     type(error_type), allocatable, intent(inout) :: error !< set if Vhat^T A is singular
-    integer :: j, k, r0, c0
-    real(dp) :: acc(3)
+    integer :: j, k, r0, c0, nu
+    real(dp) :: acc(3), sc(3, 3), wwc(3), jw(3), gyro(3), vtr(3 + 3*max_chain_bodies)
+    ! No allocation here (every right-hand side): function results go to locals
+    ! first; gfortran copies a function result to a heap temporary when it is a
+    ! matmul argument or is assigned to a section of an allocatable component.
     ! Partial velocities (58)-(59) and the velocity terms B u of (63)
     self%vhat = 0.0_dp
     do k = 1, self%n
@@ -254,8 +269,10 @@ contains
       acc = 0.0_dp
       do j = 1, k
         c0 = 3 + 3*(j - 1)
-        self%vhat(r0+1:r0+3, c0+1:c0+3) = -matmul(bodies(j)%c, skew(self%cvec(:, j, k)))
-        acc = acc + matmul(bodies(j)%c, cross(bodies(j)%w, cross(bodies(j)%w, self%cvec(:, j, k))))
+        sc = skew(self%cvec(:, j, k))
+        wwc = cross(bodies(j)%w, cross(bodies(j)%w, self%cvec(:, j, k)))
+        self%vhat(r0+1:r0+3, c0+1:c0+3) = -matmul(bodies(j)%c, sc)
+        acc = acc + matmul(bodies(j)%c, wwc)
       end do
       c0 = 3 + 3*(k - 1)
       self%vhat(r0+4, c0+1) = 1.0_dp
@@ -264,14 +281,22 @@ contains
       ! A = [m_k Vhat_k; J_k what_k]
       self%amat(r0+1:r0+3, :) = self%link(k)%mass*self%vhat(r0+1:r0+3, :)
       self%amat(r0+4:r0+6, :) = matmul(self%link(k)%inertia, self%vhat(r0+4:r0+6, :))
+      jw = matmul(self%link(k)%inertia, bodies(k)%w)
+      gyro = cross(bodies(k)%w, jw)
       self%bu(r0+1:r0+3) = self%link(k)%mass*acc
-      self%bu(r0+4:r0+6) = cross(bodies(k)%w, matmul(self%link(k)%inertia, bodies(k)%w))
+      self%bu(r0+4:r0+6) = gyro
       self%load(r0+1:r0+3) = force(:, k) - self%bu(r0+1:r0+3)
       self%load(r0+4:r0+6) = moment(:, k) - self%bu(r0+4:r0+6)
     end do
     self%mass_matrix = matmul(transpose(self%vhat), self%amat)
     self%rhs = 0.0_dp
-    self%rhs(:, 1) = matmul(transpose(self%vhat), self%load)
+    ! Vhat^T (R - B u) through a local buffer: straight into self%rhs(:, 1),
+    ! libgfortran's matmul would allocate its result (self may alias).  Still
+    ! libgfortran's matmul, not a loop of dot_product: its FMA kernel rounds
+    ! differently, and the rigidized coupling's results stay bit-identical.
+    nu = size(self%rhs, 1)
+    vtr(1:nu) = matmul(transpose(self%vhat), self%load)
+    self%rhs(:, 1) = vtr(1:nu)
     ! A wrench on body 1 enters through Vhat_1 = [E 0], what_1 = [0 E 0]: rows 1:6
     do k = 1, min(nprobe, size(self%rhs, 2) - 1)
       self%rhs(1:3, k+1) = probe_force(:, k)

@@ -23,7 +23,7 @@
 !> joint kinematics and residuals (js), the accelerations and l0/l10 (joint).
 !>
 !> Build a scene: `init` (aircraft and rocket mass properties, chain length, joint
-!> geometry and options, t0); `chain%set_link` / `set_line_body` for bodies 2..n;
+!> geometry and options, t0); `set_link` / `set_line_body` for bodies 2..n;
 !> `add_source` for every load model; set the body states in `bodies(0:n)` (e.g. with
 !> joint%place_on_rail), `pack_state`, `start` (checks and captures the constraint
 !> references), then cvode_solver%init(sys, ...) and `advance` repeatedly.
@@ -94,6 +94,7 @@ module airlaunch_separation
   contains
     procedure :: init => sep_init
     procedure :: add_source => sep_add_source
+    procedure :: set_link => sep_set_link
     procedure :: set_line_body => sep_set_line_body
     procedure :: state_size => sep_state_size
     procedure :: pack_state => sep_pack_state
@@ -133,7 +134,6 @@ contains
     real(dp), intent(in) :: t0                            !< release time [s], >= 0 (checked by start)
     type(error_type), allocatable, intent(inout) :: error !< set on invalid input
     logical, intent(in), optional :: aircraft_prescribed  !< aircraft at constant velocity/rate
-    integer :: k
     self%aircraft_prescribed = .false.
     if (present(aircraft_prescribed)) self%aircraft_prescribed = aircraft_prescribed
     self%t0 = t0
@@ -152,10 +152,7 @@ contains
     self%bodies(0) = aircraft
     self%bodies(0)%name = "aircraft"
     self%bodies(1) = rocket
-    self%bodies(1)%name = "rocket"
-    do k = 2, nchain
-      self%bodies(k)%name = self%chain%link(k)%name
-    end do
+    call self%chain%name_bodies(self%bodies(1:))
     if (.not. allocated(self%sources)) allocate(self%sources(0))
     call self%ws%init()
     self%phase = phase_preparation
@@ -177,6 +174,22 @@ contains
     call move_alloc(tmp, self%sources)
   end subroutine sep_add_source
 
+  !> Set the mass properties and joint points of chain body k (see
+  !> kane_chain%set_link) and the name of its body: once here, not in every
+  !> right-hand side (a deferred-length assignment reallocates).
+  subroutine sep_set_link(self, k, name, mass, inertia, proximal, distal, error)
+    class(separation_system), intent(inout) :: self       !< the scene
+    integer, intent(in) :: k                              !< body number in the chain (1 = rocket)
+    character(len=*), intent(in) :: name                  !< name for messages
+    real(dp), intent(in) :: mass                          !< [kg]
+    real(dp), intent(in) :: inertia(3, 3)                 !< about the CG, body axes [kg m^2]
+    real(dp), intent(in) :: proximal(3)                   !< joint with body k-1, body axes [m]
+    real(dp), intent(in) :: distal(3)                     !< joint with body k+1, body axes [m]
+    type(error_type), allocatable, intent(inout) :: error !< set on invalid input
+    call self%chain%set_link(k, name, mass, inertia, proximal, distal, error)
+    if (.not. allocated(error)) call self%chain%name_bodies(self%bodies(1:))
+  end subroutine sep_set_link
+
   !> Update the virtual rigid body of the line (chain body k, normally 2) from the
   !> line state between steps (§2.4 Steps 3 and 6): m_rigid, J_rigid, d_rigid.
   subroutine sep_set_line_body(self, k, mass, inertia_xyz, length, error)
@@ -187,6 +200,7 @@ contains
     real(dp), intent(in) :: length                        !< d_rigid [m]
     type(error_type), allocatable, intent(inout) :: error !< set on invalid input
     call self%chain%set_line_link(k, mass, inertia_xyz, length, error)
+    if (.not. allocated(error)) call self%chain%name_bodies(self%bodies(1:))
   end subroutine sep_set_line_body
 
   !> Size of the state vector: 13 + 6 + 7n.

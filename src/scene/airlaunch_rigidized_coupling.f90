@@ -732,7 +732,7 @@ contains
       r3 = 0.35_dp*parachute_nominal_diameter(self%line%chute)
       j3 = 0.4_dp*self%chute_link_mass*r3**2
       self%chute_link_inertia = j3
-      call s%chain%set_link(3, "parachute", self%chute_link_mass, reshape([j3, 0.0_dp, 0.0_dp, 0.0_dp, j3, &
+      call s%set_link(3, "parachute", self%chute_link_mass, reshape([j3, 0.0_dp, 0.0_dp, 0.0_dp, j3, &
         0.0_dp, 0.0_dp, 0.0_dp, j3], [3, 3]), [0.0_dp, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], error)
       if (allocated(error)) return
       if (self%chain%iline > 0) then

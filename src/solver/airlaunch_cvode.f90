@@ -56,6 +56,7 @@ module airlaunch_cvode
   type :: callback_data
     class(ode_system), pointer :: sys => null()
     integer :: nroots = 0
+    integer(c_int), allocatable :: root_info(:)   !< (max(1, nroots)) CVodeGetRootInfo, sized by set_roots
     character(len=:), allocatable :: last_message
   end type callback_data
 
@@ -216,6 +217,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer(c_int) :: ierr
     self%cb%nroots = n
+    if (allocated(self%cb%root_info)) deallocate(self%cb%root_info)
+    allocate(self%cb%root_info(max(1, n)))
     if (n > 0) then
       ierr = FCVodeRootInit(self%mem, int(n, c_int), c_funloc(root_callback))
       if (ierr == 0) ierr = FCVodeSetNoInactiveRootWarn(self%mem)
@@ -234,7 +237,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     logical, intent(out), optional :: event               !< an event stopped the step
     integer, intent(out), optional :: which(:)            !< CVodeGetRootInfo
-    integer(c_int) :: ierr, info(max(1, self%cb%nroots))
+    integer(c_int) :: ierr
     real(c_double) :: tret(1)
     if (present(event)) event = .false.
     ierr = FCVode(self%mem, real(tout, c_double), self%nv_y, tret, CV_NORMAL)
@@ -246,9 +249,9 @@ contains
     if (ierr == CV_ROOT_RETURN) then
       if (present(event)) event = .true.
       if (present(which)) then
-        ierr = FCVodeGetRootInfo(self%mem, info)
+        ierr = FCVodeGetRootInfo(self%mem, self%cb%root_info)
         which = 0
-        which(1:min(size(which), self%cb%nroots)) = info(1:min(size(which), self%cb%nroots))
+        which(1:min(size(which), self%cb%nroots)) = self%cb%root_info(1:min(size(which), self%cb%nroots))
       end if
     end if
   end subroutine solver_advance
@@ -392,9 +395,11 @@ contains
     call c_f_pointer(user_data, cb)
     y => FN_VGetArrayPointer(nv_y)
     corr => FN_VGetArrayPointer(nv_corr)
-    corr = y
+    ! copies by N_Vector operations: an array assignment between two pointers
+    ! that may alias would go through a heap temporary (once per step)
+    call FN_VScale(1.0_c_double, nv_y, nv_corr)
     call cb%sys%project(t, corr, status)
-    corr = corr - y
+    call FN_VLinearSum(1.0_c_double, nv_corr, -1.0_c_double, nv_y, nv_corr)
     ierr = 0
     if (status /= rhs_ok) ierr = -1
     if (.false.) ierr = int(merge(1, 0, c_associated(err) .and. eps > 0), c_int)

@@ -121,13 +121,14 @@ contains
     type(N_Vector) :: x, b
     real(c_double), value :: tol
     type(band_content), pointer :: c
-    real(c_double), pointer :: ab(:), xd(:), bd(:)
+    real(c_double), pointer :: ab(:), xd(:)
     integer :: info
     call c_f_pointer(s%content, c)
     ab => FSUNBandMatrix_Data(a)
     xd => FN_VGetArrayPointer(x)
-    bd => FN_VGetArrayPointer(b)
-    xd = bd
+    ! x = b by an N_Vector copy: xd = bd between two pointers that may alias
+    ! would go through a heap temporary (once per Newton iteration)
+    call FN_VScale(1.0_c_double, b, x)
     call dgbtrs('N', c%n, c%ml, c%mu, 1, ab, c%ldab, c%ipiv, xd, c%n, info)
     c%last_flag = int(info, c_long)
     ierr = SUNLS_SUCCESS

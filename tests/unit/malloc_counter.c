@@ -1,0 +1,41 @@
+/* Heap-allocation counter for test_rhs_allocations.
+ *
+ * malloc, calloc and realloc are defined here, in the test executable, and
+ * forward to glibc's allocator (__libc_malloc, ...), so every allocation of the
+ * process goes through them: the library's own code (airlaunch_lib is static)
+ * and the shared libraries it calls, libgfortran included (a matmul result or
+ * an array pack made inside libgfortran calls malloc there, which a
+ * -Wl,--wrap=malloc of our objects alone would not see).  free stays glibc's:
+ * the blocks come from the same allocator.  glibc only. */
+#include <stddef.h>
+#include <stdint.h>
+
+void *__libc_malloc(size_t size);
+void *__libc_calloc(size_t n, size_t size);
+void *__libc_realloc(void *p, size_t size);
+
+static int64_t allocations = 0;
+
+void *malloc(size_t size)
+{
+    __atomic_fetch_add(&allocations, 1, __ATOMIC_RELAXED);
+    return __libc_malloc(size);
+}
+
+void *calloc(size_t n, size_t size)
+{
+    __atomic_fetch_add(&allocations, 1, __ATOMIC_RELAXED);
+    return __libc_calloc(n, size);
+}
+
+void *realloc(void *p, size_t size)
+{
+    __atomic_fetch_add(&allocations, 1, __ATOMIC_RELAXED);
+    return __libc_realloc(p, size);
+}
+
+/* Number of malloc, calloc and realloc calls so far (Fortran: bind(C)). */
+int64_t airlaunch_test_heap_allocations(void)
+{
+    return __atomic_load_n(&allocations, __ATOMIC_RELAXED);
+}
