@@ -401,7 +401,8 @@ contains
     n_events = 0
     t_last = r%cpl%t
     do while (run%t_end - r%cpl%t > eps)
-      t_target = min(r%cpl%t + h, run%t_end)
+      ! outer steps end on the grid k*h (an event's short step realigns the next)
+      t_target = min(next_grid_time(r%cpl%t, h), run%t_end)
       if (run%t_end - t_target < 1.0e-6_dp*h) t_target = run%t_end
       ! end on an output time when the step reaches it (no round-off slivers)
       if (r%iout <= r%nout) then
@@ -435,7 +436,7 @@ contains
       call skip_recorded(r, run)
       if (stop_now(r, run, res, r%cpl%chain%sep%phase, r%cpl%t)) exit
       switch = leave
-      if (r%plan%mode == "auto") call auto_check(r, r%cpl%t, switch)
+      if (r%plan%mode == "auto" .and. r%cpl%t >= r%next_check - 1.0e-6_dp*h) call auto_check(r, r%cpl%t, switch)
       if (switch) return
     end do
     r%done = .true.
@@ -531,14 +532,15 @@ contains
     call set_next_check(r, t)
   end subroutine auto_check
 
-  !> The next check of the indicator one outer step after t, on an output
-  !> time if it falls within round-off of one (no slivers of a step).
+  !> The next check of the indicator: the next time k*interval after t (checks
+  !> keep to one grid, so with interval = output_dt every record is a check),
+  !> on an output time if it falls within round-off of one (no slivers of a step).
   subroutine set_next_check(r, t)
     type(coupled_run), intent(inout) :: r
     real(dp), intent(in) :: t
     real(dp) :: tol
     integer :: j
-    r%next_check = t + r%plan%auto%interval
+    r%next_check = next_grid_time(t, r%plan%auto%interval)
     tol = 1.0e-6_dp*r%plan%auto%interval
     do j = r%iout, r%nout
       if (r%t_out(j) > r%next_check + tol) exit
@@ -572,9 +574,25 @@ contains
     type(coupled_run), intent(in) :: r
     real(dp), intent(in) :: n0, t0, t
     real(dp) :: rate
+    real(dp) :: outer
     rate = 0.0_dp
-    if (t > t0) rate = (line_steps(r) - n0)*r%plan%auto%interval/(t - t0)
+    if (t <= t0) return
+    ! over a whole number of outer steps (within round-off) the rate is exact:
+    ! a check and a record of the same interval then agree (not 4 - 1e-15
+    ! against 4 + 1e-15 on either side of a threshold)
+    outer = (t - t0)/r%plan%auto%interval
+    if (anint(outer) >= 1.0_dp .and. abs(outer - anint(outer)) <= 1.0e-6_dp*outer) outer = anint(outer)
+    rate = (line_steps(r) - n0)/outer
   end function steps_per_outer_step
+
+  !> The first time k*h (k integer) after t, more than 1e-6 h after it.
+  pure function next_grid_time(t, h) result(tn)
+    real(dp), intent(in) :: t   !< time [s]
+    real(dp), intent(in) :: h   !< grid step [s]
+    real(dp) :: tn
+    tn = (real(floor(t/h), dp) + 1.0_dp)*h
+    if (tn - t <= 1.0e-6_dp*h) tn = tn + h
+  end function next_grid_time
 
   !> The indicator of the active engine's line at its present time t.
   function current_indicator(r, t) result(ind)
