@@ -436,7 +436,8 @@ contains
       trim(cfg%integration%scheme) // nl // &
       "end of run at t = " // str(scene%time(m)) // " s (" // merge("completed", "failed   ", scene%completed) // &
       "), " // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
-      " force evaluations, wall " // str(scene%wall_time) // " s" // nl // &
+      " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
+      str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
       merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s" // nl // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
@@ -527,4 +528,17 @@ contains
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     call w%finish(error)
   end subroutine write_output
+  !> The scheme's own work counters for the summary, each followed by ", ".
+  function scheme_work(scheme, stats) result(text)
+    character(len=*), intent(in) :: scheme       !< "cvode" or "marching"
+    type(line_scheme_stats), intent(in) :: stats !< counters of the run
+    character(len=:), allocatable :: text
+    if (scheme == "marching") then
+      text = str(int(stats%iterations)) // " far-end iterations, "
+    else
+      text = str(int(stats%jac_evals)) // " Jacobians, " // str(int(stats%failures)) // &
+        " failed steps (error test or Newton), "
+    end if
+  end function scheme_work
+
 end module airlaunch_line_scene
