@@ -79,12 +79,7 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    type(c_funptr) :: setup, solve
-    ! Through variables: a c_funloc constant as an actual argument lands in .rodata
-    ! with a run-time relocation (DT_TEXTREL in the PIE executable).
-    setup = c_funloc(band_setup)
-    solve = c_funloc(band_solve)
-    ls => new_solver(ctx, setup, solve, c)
+    ls => new_solver(ctx, .false., c)
     c%n = int(FSUNBandMatrix_Columns(a))
     c%ml = int(FSUNBandMatrix_LowerBandwidth(a))
     c%mu = int(FSUNBandMatrix_UpperBandwidth(a))
@@ -150,30 +145,33 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    type(c_funptr) :: setup, solve
-    ! Through variables: a c_funloc constant as an actual argument lands in .rodata
-    ! with a run-time relocation (DT_TEXTREL in the PIE executable).
-    setup = c_funloc(reduced_setup)
-    solve = c_funloc(reduced_solve)
-    ls => new_solver(ctx, setup, solve, c)
+    ls => new_solver(ctx, .true., c)
     c%nodes = int(FSUNBandMatrix_Columns(a))/6
     c%ldab = 3*kr + 1
     allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
   end function new_second_order_band_solver
 
-  !> An empty SUNDIALS linear solver with the given setup and solve, the shared
-  !> type, last-flag and free callbacks, and a new content `c` attached.
-  function new_solver(ctx, setup, solve, c) result(ls)
+  !> An empty SUNDIALS linear solver with the setup and solve of the full band LU
+  !> or of the velocity-reduced system, the shared type, last-flag and free
+  !> callbacks, and a new content `c` attached.  (The callbacks are chosen here:
+  !> a c_funloc constant passed as an actual argument lands in .rodata with a
+  !> run-time relocation, DT_TEXTREL in the PIE executable.)
+  function new_solver(ctx, velocity_reduced, c) result(ls)
     type(c_ptr), intent(in) :: ctx                  !< SUNDIALS context
-    type(c_funptr), intent(in) :: setup, solve      !< the solver's setup and solve callbacks
+    logical, intent(in) :: velocity_reduced         !< the reduced solver's callbacks, else the full LU's
     type(band_content), pointer, intent(out) :: c   !< its content (to be filled by the caller)
     type(SUNLinearSolver), pointer :: ls
     type(SUNLinearSolver_Ops), pointer :: ops
     ls => FSUNLinSolNewEmpty(ctx)
     call c_f_pointer(ls%ops, ops)
     ops%gettype = c_funloc(band_gettype)
-    ops%setup = setup
-    ops%solve = solve
+    if (velocity_reduced) then
+      ops%setup = c_funloc(reduced_setup)
+      ops%solve = c_funloc(reduced_solve)
+    else
+      ops%setup = c_funloc(band_setup)
+      ops%solve = c_funloc(band_solve)
+    end if
     ops%lastflag = c_funloc(band_lastflag)
     ops%free = c_funloc(band_free)
     allocate(c)
