@@ -299,9 +299,8 @@ contains
     integer, intent(in) :: phase           !< 0..3
     type(rigid_body), intent(in) :: b0, b1 !< aircraft and rocket (loaded)
     type(joint_state), intent(inout) :: js !< result
-    real(dp) :: p(3), dv(3), wd(3), bw(3), om(3), bom(3), phi(3), rerr(3, 3), kp, kd
-    real(dp) :: dz(3), epsd(3), beps(3), rh1(3), g(3), m(3), pos(3)
-    real(dp) :: wp(3), wwp(3), u(3)   ! cross products, kept out of matmul (no heap temporaries)
+    real(dp) :: p(3), wd(3), bw(3), om(3), bom(3), phi(3), rerr(3, 3), kp, kd
+    real(dp) :: epsd(3), beps(3), rh1(3), g(3), m(3), pos(3)
     integer :: i, k
     js%phase = phase
     js%ncomp = joint_components(phase)
@@ -321,13 +320,7 @@ contains
     select case (phase)
     case (phase_preparation, phase_extraction)
       p = self%geo%contact_point
-      js%w = matmul(transpose(b0%c), b1%r + matmul(b1%c, p) - b0%r)
-      wp = cross(b1%w, p)
-      wwp = cross(b1%w, wp)
-      dv = b1%v + matmul(b1%c, wp) - b0%v
-      u = matmul(transpose(b0%c), dv)
-      wd = u - cross(b0%w, js%w)
-      bw = matmul(transpose(b0%c), matmul(b1%c, wwp)) - cross(b0%w, u) - cross(b0%w, wd)
+      call point_seen_from(b0, b1, p, js%w, wd, bw)
       ! small-angle attitude error vee(Rerr - Rerr^T)/2 of Rerr = R R_ref^T
       rerr = matmul(js%rel, transpose(self%rel_ref))
       phi = 0.5_dp*[rerr(3, 2) - rerr(2, 3), rerr(1, 3) - rerr(3, 1), rerr(2, 1) - rerr(1, 2)]
@@ -367,13 +360,7 @@ contains
       end if
     case (phase_rotation)
       p = self%geo%edge_point
-      js%eps = matmul(transpose(b1%c), b0%r + matmul(b0%c, p) - b1%r)
-      wp = cross(b0%w, p)
-      wwp = cross(b0%w, wp)
-      dz = b0%v + matmul(b0%c, wp) - b1%v
-      u = matmul(transpose(b1%c), dz)
-      epsd = u - cross(b1%w, js%eps)
-      beps = matmul(transpose(b1%c), matmul(b0%c, wwp)) - cross(b1%w, u) - cross(b1%w, epsd)
+      call point_seen_from(b1, b0, p, js%eps, epsd, beps)
       ! row 1: slide along the exit direction -x_r; rows 2-3: contact and lateral
       js%bias(1) = beps(1) + self%opt%stick_rate*epsd(1)
       js%bias(2) = beps(2) + kd*epsd(2) + kp*(js%eps(2) - self%geo%contact_point(2))
@@ -405,6 +392,27 @@ contains
       js%res_rate = hypot(dot_product(om, js%mdir(:, 1)), dot_product(om, js%mdir(:, 2)))
     end select
   end subroutine joint_evaluate
+
+  !> The point p fixed in body b seen from body a, in a's axes (the constraint
+  !> vector of Eq. (66) and its derivatives): position pos = Ca^T (r_b + Cb p - r_a),
+  !> its rate vel, and the velocity-product part `bias` of its second derivative
+  !> (the part free of the accelerations).  Cross products are kept out of
+  !> matmul (a function result there is a heap temporary).
+  pure subroutine point_seen_from(a, b, p, pos, vel, bias)
+    type(rigid_body), intent(in) :: a, b   !< observing body, carrying body
+    real(dp), intent(in) :: p(3)           !< the point in b's axes [m]
+    real(dp), intent(out) :: pos(3)        !< [m]
+    real(dp), intent(out) :: vel(3)        !< [m/s]
+    real(dp), intent(out) :: bias(3)       !< [m/s^2]
+    real(dp) :: wp(3), wwp(3), dv(3), u(3)
+    pos = matmul(transpose(a%c), b%r + matmul(b%c, p) - a%r)
+    wp = cross(b%w, p)
+    wwp = cross(b%w, wp)
+    dv = b%v + matmul(b%c, wp) - a%v
+    u = matmul(transpose(a%c), dv)
+    vel = u - cross(a%w, pos)
+    bias = matmul(transpose(a%c), matmul(b%c, wwp)) - cross(a%w, u) - cross(a%w, vel)
+  end subroutine point_seen_from
 
   !> Linear part of the constraint rows for given body accelerations (one CFA
   !> column): c = Jac [a0, wdot0, a1, wdot1] (bias excluded).
