@@ -16,6 +16,7 @@ program airlaunch
   use airlaunch_launch_scene, only: launch_result, run_launch
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
   use airlaunch_strings, only: str
+  use airlaunch_blas_threads, only: use_one_blas_thread
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
@@ -24,6 +25,7 @@ program airlaunch
   character(len=1024) :: arg
   integer :: i, nargs
 
+  call use_one_blas_thread()   ! before any LAPACK call: small systems only
   nargs = command_argument_count()
   path = ""
   output_override = ""

@@ -28,6 +28,7 @@ program airlaunch_sweep
   use airlaunch_sweep_summary, only: write_summary
   use airlaunch_sweep_scheduler, only: sweep_scheduler
   use airlaunch_sweep_plan, only: sweep_setup, load_sweep, fingerprint_text, trajectory_ids
+  use airlaunch_blas_threads, only: use_one_blas_thread
   implicit none
 
   interface
@@ -47,6 +48,7 @@ program airlaunch_sweep
   type(sweep_row), allocatable :: rows(:)
   real(dp) :: t_start, t_run
 
+  call use_one_blas_thread()   ! before any LAPACK call: small systems only
   call MPI_Init()
   call MPI_Comm_rank(MPI_COMM_WORLD, rank)
   call MPI_Comm_size(MPI_COMM_WORLD, nranks)

@@ -32,6 +32,7 @@ program bench_line
   use airlaunch_strings, only: str
   use airlaunch_line
   use airlaunch_line_scene
+  use airlaunch_blas_threads, only: use_one_blas_thread
   implicit none
   integer, parameter :: ns(3) = [20, 60, 200], n_ref = 400
   !> further segment counts for the default scheme only (comparison B: the
@@ -59,6 +60,7 @@ program bench_line
   c_d = 1000.0_dp
   ea = 1.0e6_dp
   rho = 0.3_dp
+  call use_one_blas_thread()   ! before any LAPACK call: small systems only
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg)
     if (arg == "single") then
