@@ -261,10 +261,14 @@ contains
       end do
     end do
     call dgbtrs('N', 3*c%nodes, kr, kr, 1, c%s, c%ldab, c%ipiv, c%rv, 3*c%nodes, info)
+    ! element by element: x and b are pointers that may alias (a section
+    ! expression would go through a heap temporary, two per node and solve)
     do j = 1, c%nodes
       i0 = 6*(j - 1)
-      xd(i0+4:i0+6) = c%rv(3*j-2:3*j)
-      xd(i0+1:i0+3) = bd(i0+1:i0+3) + c%gamma*c%rv(3*j-2:3*j)
+      do q = 1, 3
+        xd(i0 + 3 + q) = c%rv(3*(j - 1) + q)
+        xd(i0 + q) = bd(i0 + q) + c%gamma*c%rv(3*(j - 1) + q)
+      end do
     end do
     c%last_flag = int(info, c_long)
     ierr = SUNLS_SUCCESS

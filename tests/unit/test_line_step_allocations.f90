@@ -1,0 +1,91 @@
+!> The specification: a time step allocates nothing (issue 7: no allocation in
+!> right-hand sides; the same holds for what CVODE calls every step: the line's
+!> forces, the difference-quotient Jacobian, the velocity-reduced band solver's
+!> setup and solve).
+!>
+!> Issue 7's cable pendulum (60 m, EA 2 MN, 0.5 kg/m, 50 kg end mass, released
+!> horizontal; N = 20, with and without air) is advanced
+!> by the default scheme to t = 0.5 s (set-up and first Jacobians), the process's
+!> heap allocations are counted (tests/unit/malloc_counter.c replaces malloc,
+!> calloc and realloc), the line advanced to t = 2 s (hundreds of steps, each
+!> with force evaluations and linear solves, several Jacobians and
+!> factorizations; the line goes slack and taut), and the count must not have
+!> changed.  A positive control first shows that the counter sees an allocation.
+program test_line_step_allocations
+  use, intrinsic :: iso_c_binding, only: c_int64_t
+  use airlaunch_kinds, only: dp
+  use airlaunch_error, only: error_type
+  use airlaunch_strings, only: str
+  use airlaunch_line
+  use testing
+  implicit none
+
+  interface
+    !> malloc + calloc + realloc calls of the process so far (malloc_counter.c).
+    integer(c_int64_t) function heap_allocations() bind(C, name="airlaunch_test_heap_allocations")
+      import :: c_int64_t
+    end function heap_allocations
+  end interface
+
+  integer(c_int64_t) :: before
+  real(dp), allocatable :: probe(:)
+
+  call section("the counter sees an allocation (positive control)")
+  before = heap_allocations()
+  allocate(probe(command_argument_count() + 1000))
+  probe = 1.0_dp
+  call check(heap_allocations() > before, "allocate(probe(1000)) counted: " // str(int(heap_allocations() - before)) &
+    // " (sum " // str(sum(probe)) // ")")
+
+  call steps_allocate_nothing(.false.)
+  call steps_allocate_nothing(.true.)
+  call finish()
+
+contains
+
+  subroutine steps_allocate_nothing(air)
+    logical, intent(in) :: air                      !< drag on (wind 30 m/s across the line)
+    integer, parameter :: n = 20
+    real(dp), parameter :: length = 60.0_dp
+    type(line_model) :: model
+    class(line_scheme), allocatable :: scheme
+    type(line_scheme_options) :: opts
+    type(line_scheme_stats) :: s1, s2
+    type(error_type), allocatable :: error
+    real(dp) :: x(3, 0:n), v(3, 0:n)
+    integer(c_int64_t) :: count0, count1
+    integer :: k
+
+    call section("pendulum N = " // str(n) // merge(", air   ", ", no air", air))
+    call model%init(line_params(length=length, n_seg=n, ea=2.0e6_dp, mass_per_length=0.5_dp, damping=0.0_dp, &
+      gravity=.true., air=air, air_density=merge(1.2_dp, 0.0_dp, air), wind=[0.0_dp, 0.0_dp, 30.0_dp]), error)
+    call check(.not. allocated(error), "line model")
+    if (allocated(error)) return
+    do k = 0, n
+      x(:, k) = [length*k/n, 0.0_dp, 0.0_dp]
+    end do
+    v = 0.0_dp
+    opts%scheme = "cvode"
+    opts%rtol = 1.0e-5_dp
+    opts%atol = 1.0e-5_dp
+    call new_line_scheme(scheme, model, line_end(kind=end_fixed, position=x(:, 0)), &
+      line_end(kind=end_point_mass, mass=50.0_dp, position=x(:, n)), x, v, 0.0_dp, opts, error)
+    call check(.not. allocated(error), "scheme created")
+    if (allocated(error)) return
+    call scheme%advance(0.5_dp, error)
+    call check(.not. allocated(error), "warm-up to t = 0.5 s")
+    s1 = scheme%stats()
+    count0 = heap_allocations()
+    call scheme%advance(2.0_dp, error)
+    count1 = heap_allocations()   ! before any message is built
+    s2 = scheme%stats()
+    call check(.not. allocated(error), "advanced to t = 2 s")
+    call check(s2%steps - s1%steps >= 100 .and. s2%jac_evals > s1%jac_evals, "work done: " // &
+      str(int(s2%steps - s1%steps)) // " steps, " // str(int(s2%rhs_evals - s1%rhs_evals)) // &
+      " force evaluations, " // str(int(s2%jac_evals - s1%jac_evals)) // " Jacobians")
+    call check(count1 == count0, "no heap allocation in those steps: " // str(int(count1 - count0)))
+    call scheme%get_state(x, v)
+    call check(all(abs(x) <= 1.0e3_dp), "state finite and bounded")
+    call scheme%free()
+  end subroutine steps_allocate_nothing
+end program test_line_step_allocations
