@@ -312,6 +312,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     type(air_state) :: air
     real(dp) :: e(3), ds, s, p(3), vp(3), u(3), ut(3), un(3), drag(3), qn, qt, rho, rho0, slope, y0, y1
+    real(dp) :: wp(3), dl(3), mp(3)
     integer :: j
     if (ubound(bodies, 1) < 3) then
       call fatal_error(error, "rigidized loads need the chain rocket - line - parachute (bodies 0..3)")
@@ -350,7 +351,8 @@ contains
       do j = 1, self%drag_strips
         s = 0.5_dp*self%length - (j - 0.5_dp)*ds
         p = [0.0_dp, 0.0_dp, s]
-        vp = b2%v + matmul(b2%c, cross(b2%w, p)) + (0.5_dp - s/self%length)*self%v_eps
+        wp = cross(b2%w, p)   ! a function result inside matmul: heap temporary
+        vp = b2%v + matmul(b2%c, wp) + (0.5_dp - s/self%length)*self%v_eps
         u = -vp
         ut = dot_product(u, e)*e
         un = u - ut
@@ -358,7 +360,9 @@ contains
         drag = rho*ds*(qn*norm2(un)*un + qt*norm2(ut)*ut)
         self%line_drag = self%line_drag + drag
         force(:, 2) = force(:, 2) + drag
-        moment(:, 2) = moment(:, 2) + cross(p, matmul(transpose(b2%c), drag))
+        dl = matmul(transpose(b2%c), drag)
+        mp = cross(p, dl)     ! a function result added to a dummy's section: heap temporary
+        moment(:, 2) = moment(:, 2) + mp
       end do
       air = isa(b3%r(2))
       if (.not. air%in_range) then

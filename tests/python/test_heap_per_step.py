@@ -1,0 +1,94 @@
+"""No heap allocation per time step, end to end (issue 7: no allocation in
+right-hand sides).
+
+The programs run with a counting allocator preloaded (tests/unit/malloc_counter.c
+built as libairlaunch_heap_counter.so: every malloc, calloc and realloc of the
+process, libgfortran's, HDF5's and SUNDIALS' included; the count is written at
+exit).  Each scene runs twice, to two end times, without trajectory output; the
+set-up (input, echo, solver creation) is the same in both, so the difference of
+the two counts is what the extra steps allocated.  Reference: zero per step.
+Tolerance: 100 allocations in all, for what depends on the run but not on its
+steps (the summary's numbers, the phase events); the extra steps number 229 to
+2 536 here.  Before the third session's fixes the rigidized coupling allocated
+28 per step (70 806 in its extra steps: this test then fails), the paper's direct
+coupling 47 and the line's band solve 2 per node and solve."""
+import os
+import re
+import subprocess
+
+import pytest
+
+from conftest import BIN, PAPER, ROOT, nml_variant
+
+COUNTER = BIN.parent / "tests" / "libairlaunch_heap_counter.so"
+SLACK = 100
+
+
+def allocations(exe, nml, tmp_path, tag):
+    report = tmp_path / f"{tag}.heap"
+    env = dict(os.environ, LD_PRELOAD=str(COUNTER), AIRLAUNCH_HEAP_REPORT=str(report))
+    res = subprocess.run([str(exe), str(nml)], capture_output=True, text=True, env=env, timeout=300)
+    assert res.returncode == 0, res.stderr
+    # the integrator's line: "integration: N steps" (launch scenes) or "... (completed), N steps" (line)
+    steps = re.search(r"(?:integration: |\(completed\), )(\d+) steps", res.stdout)
+    assert steps, res.stdout
+    return int(report.read_text()), int(steps.group(1))
+
+
+def check_two_lengths(exe, tmp_path, name, short, long, **variant):
+    n_short, s_short = allocations(exe, nml_variant(tmp_path, f"{name}_short", **short(variant)), tmp_path, "s")
+    n_long, s_long = allocations(exe, nml_variant(tmp_path, f"{name}_long", **long(variant)), tmp_path, "l")
+    print(f"{name}: {s_short} steps {n_short} allocations, {s_long} steps {n_long} allocations")
+    assert s_long - s_short >= 100, "the longer run must take many more steps"
+    assert abs(n_long - n_short) <= SLACK, \
+        f"{n_long - n_short} allocations in {s_long - s_short} extra steps ({name})"
+
+
+@pytest.fixture(scope="module")
+def exe(airlaunch_exe):
+    if not COUNTER.exists():
+        pytest.fail(f"{COUNTER} is missing: build the project (scripts/setup release)")
+    return airlaunch_exe
+
+
+NO_OUTPUT = (r"^\s*output\s*=.*$", "  trajectory = .false.")
+
+
+@pytest.mark.parametrize("coupling", ["direct", "rigidized"])
+def test_paper_scenario_allocates_nothing_per_step(exe, tmp_path, coupling):
+    """The launch system's right-hand sides, events, Jacobians and band solves
+    (direct), and the rigidized coupling's chain and sub-stepped line."""
+    line = () if coupling == "direct" else (f"  coupling = '{coupling}'",)
+
+    def run(t_end):
+        return lambda v: dict(edits=(NO_OUTPUT, (r"^\s*t_end\s*=.*$", f"  t_end = {t_end}")), line=line)
+    check_two_lengths(exe, tmp_path, f"paper_{coupling}", run(2.0), run(15.0))
+
+
+def test_scene_without_line_allocates_nothing_per_step(exe, tmp_path):
+    base = ROOT / "input" / "airlaunch_gravity_drop.nml"
+
+    def run(t_end):
+        return lambda v: dict(base=base, edits=(NO_OUTPUT, (r"^\s*t_end\s*=.*$", f"  t_end = {t_end}")))
+    check_two_lengths(exe, tmp_path, "gravity_drop", run(2.0), run(12.0))
+
+
+@pytest.mark.parametrize("scheme", ["cvode", "marching"])
+def test_line_scene_allocates_nothing_per_step(exe, tmp_path, scheme):
+    """Issue 7's cable pendulum (N = 20) with either scheme."""
+    def text(t_end):
+        return f"""&run scene = 'line', t_end = {t_end}, output_dt = 0.05, trajectory = .false.,
+  rtol = 1e-5, atol = 1e-5 /
+&line length = 60.0, n_seg = 20, ea = 2.0e6, mass_per_length = 0.5, gravity = .true., air = .false. /
+&line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0, b_kind = 'point_mass', b_mass = 50.0,
+  b_position = 60.0, 0.0, 0.0, scheme = '{scheme}', dt = 1.0e-3 /
+"""
+    counts = []
+    for tag, t_end in (("short", 2.0), ("long", 4.0)):
+        nml = tmp_path / f"line_{tag}.nml"
+        nml.write_text(text(t_end))
+        counts.append(allocations(exe, nml, tmp_path, tag))
+    (n_short, s_short), (n_long, s_long) = counts
+    print(f"line {scheme}: {s_short} steps {n_short} allocations, {s_long} steps {n_long} allocations")
+    assert s_long - s_short >= 100
+    assert abs(n_long - n_short) <= SLACK, f"{n_long - n_short} allocations in {s_long - s_short} extra steps"
