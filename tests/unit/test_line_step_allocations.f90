@@ -18,24 +18,10 @@ program test_line_step_allocations
   use airlaunch_strings, only: str
   use airlaunch_line
   use testing
+  use heap_counter, only: heap_allocations, check_counter_sees_allocation
   implicit none
 
-  interface
-    !> malloc + calloc + realloc calls of the process so far (malloc_counter.c).
-    integer(c_int64_t) function heap_allocations() bind(C, name="airlaunch_test_heap_allocations")
-      import :: c_int64_t
-    end function heap_allocations
-  end interface
-
-  integer(c_int64_t) :: before
-  real(dp), allocatable :: probe(:)
-
-  call section("the counter sees an allocation (positive control)")
-  before = heap_allocations()
-  allocate(probe(command_argument_count() + 1000))
-  probe = 1.0_dp
-  call check(heap_allocations() > before, "allocate(probe(1000)) counted: " // str(int(heap_allocations() - before)) &
-    // " (sum " // str(sum(probe)) // ")")
+  call check_counter_sees_allocation()
 
   call steps_allocate_nothing(.false.)
   call steps_allocate_nothing(.true.)
