@@ -585,12 +585,13 @@ contains
     rate = (line_steps(r) - n0)/outer
   end function steps_per_outer_step
 
-  !> The first time k*h (k integer) after t, more than 1e-6 h after it.
+  !> The first time k*h (k integer) after t >= 0, more than 1e-6 h after it
+  !> (real arithmetic: t/h may exceed the default integer range).
   pure function next_grid_time(t, h) result(tn)
-    real(dp), intent(in) :: t   !< time [s]
+    real(dp), intent(in) :: t   !< time [s], >= 0
     real(dp), intent(in) :: h   !< grid step [s]
     real(dp) :: tn
-    tn = (real(floor(t/h), dp) + 1.0_dp)*h
+    tn = (aint(t/h) + 1.0_dp)*h
     if (tn - t <= 1.0e-6_dp*h) tn = tn + h
   end function next_grid_time
 
