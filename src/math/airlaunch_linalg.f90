@@ -131,11 +131,7 @@ contains
       else
         rc = pivot_ratio(a)
       end if
-      if (present(rcond)) rcond = rc
-      if (rc < rcond_limit) then
-        call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
-        return
-      end if
+      if (.not. well_conditioned(rc, what, error, rcond)) return
       call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
       if (info /= 0) call fatal_error(error, what // ": dgetrs illegal argument " // str(-info))
     end subroutine general_lu
@@ -197,11 +193,7 @@ contains
       else
         rc = pivot_ratio(a)**2
       end if
-      if (present(rcond)) rcond = rc
-      if (rc < rcond_limit) then
-        call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
-        return
-      end if
+      if (.not. well_conditioned(rc, what, error, rcond)) return
       call dpotrs('U', n, size(b, 2), a, n, b, n, info)
       if (info /= 0) call fatal_error(error, what // ": dpotrs illegal argument " // str(-info))
     end subroutine cholesky
@@ -217,6 +209,18 @@ contains
     if (.not. ok) call fatal_error(error, what // ": matrix is " // str(size(a, 1)) // "x" // &
       str(size(a, 2)) // " and right-hand side has " // str(size(b, 1)) // " rows")
   end function shapes_fit
+
+  !> rc at or above rcond_limit; else false and an error naming `what`.  rc is
+  !> also returned in `rcond` when the caller asked for it.
+  logical function well_conditioned(rc, what, error, rcond) result(ok)
+    real(dp), intent(in) :: rc                            !< reciprocal condition number (or pivot ratio)
+    character(len=*), intent(in) :: what                  !< name of the system
+    type(error_type), allocatable, intent(inout) :: error !< set if ill-conditioned
+    real(dp), intent(out), optional :: rcond              !< the caller's copy of rc
+    if (present(rcond)) rcond = rc
+    ok = .not. (rc < rcond_limit)
+    if (.not. ok) call fatal_error(error, what // ": matrix is ill-conditioned (rcond = " // str(rc) // ")")
+  end function well_conditioned
 
   !> True unless the caller asked for the cheap conditioning check.
   pure logical function wants_estimate(estimate_condition)
