@@ -35,9 +35,10 @@ def allocations(exe, nml, tmp_path, tag):
     return int(report.read_text()), int(steps.group(1))
 
 
-def check_two_lengths(exe, tmp_path, name, short, long, **variant):
-    n_short, s_short = allocations(exe, nml_variant(tmp_path, f"{name}_short", **short(variant)), tmp_path, "s")
-    n_long, s_long = allocations(exe, nml_variant(tmp_path, f"{name}_long", **long(variant)), tmp_path, "l")
+def check_two_lengths(exe, tmp_path, name, short_nml, long_nml):
+    """The longer run's extra steps allocate nothing (within SLACK)."""
+    n_short, s_short = allocations(exe, short_nml, tmp_path, "short")
+    n_long, s_long = allocations(exe, long_nml, tmp_path, "long")
     print(f"{name}: {s_short} steps {n_short} allocations, {s_long} steps {n_long} allocations")
     assert s_long - s_short >= 100, "the longer run must take many more steps"
     assert abs(n_long - n_short) <= SLACK, \
@@ -51,7 +52,11 @@ def exe(airlaunch_exe):
     return airlaunch_exe
 
 
-NO_OUTPUT = (r"^\s*output\s*=.*$", "  trajectory = .false.")
+def launch_variant(tmp_path, name, t_end, base=PAPER, line=()):
+    """An air-launch input without trajectory output, ending at t_end."""
+    return nml_variant(tmp_path, name, base=base, line=line,
+                       edits=((r"^\s*output\s*=.*$", "  trajectory = .false."),
+                              (r"^\s*t_end\s*=.*$", f"  t_end = {t_end}")))
 
 
 @pytest.mark.parametrize("coupling", ["direct", "rigidized"])
@@ -59,36 +64,26 @@ def test_paper_scenario_allocates_nothing_per_step(exe, tmp_path, coupling):
     """The launch system's right-hand sides, events, Jacobians and band solves
     (direct), and the rigidized coupling's chain and sub-stepped line."""
     line = () if coupling == "direct" else (f"  coupling = '{coupling}'",)
-
-    def run(t_end):
-        return lambda v: dict(edits=(NO_OUTPUT, (r"^\s*t_end\s*=.*$", f"  t_end = {t_end}")), line=line)
-    check_two_lengths(exe, tmp_path, f"paper_{coupling}", run(2.0), run(15.0))
+    check_two_lengths(exe, tmp_path, f"paper_{coupling}", launch_variant(tmp_path, "short", 2.0, line=line),
+                      launch_variant(tmp_path, "long", 15.0, line=line))
 
 
 def test_scene_without_line_allocates_nothing_per_step(exe, tmp_path):
     base = ROOT / "input" / "airlaunch_gravity_drop.nml"
-
-    def run(t_end):
-        return lambda v: dict(base=base, edits=(NO_OUTPUT, (r"^\s*t_end\s*=.*$", f"  t_end = {t_end}")))
-    check_two_lengths(exe, tmp_path, "gravity_drop", run(2.0), run(12.0))
+    check_two_lengths(exe, tmp_path, "gravity_drop", launch_variant(tmp_path, "short", 2.0, base=base),
+                      launch_variant(tmp_path, "long", 12.0, base=base))
 
 
 @pytest.mark.parametrize("scheme", ["cvode", "marching"])
 def test_line_scene_allocates_nothing_per_step(exe, tmp_path, scheme):
     """Issue 7's cable pendulum (N = 20) with either scheme."""
-    def text(t_end):
-        return f"""&run scene = 'line', t_end = {t_end}, output_dt = 0.05, trajectory = .false.,
+    def pendulum(name, t_end):
+        nml = tmp_path / f"{name}.nml"
+        nml.write_text(f"""&run scene = 'line', t_end = {t_end}, output_dt = 0.05, trajectory = .false.,
   rtol = 1e-5, atol = 1e-5 /
 &line length = 60.0, n_seg = 20, ea = 2.0e6, mass_per_length = 0.5, gravity = .true., air = .false. /
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0, b_kind = 'point_mass', b_mass = 50.0,
   b_position = 60.0, 0.0, 0.0, scheme = '{scheme}', dt = 1.0e-3 /
-"""
-    counts = []
-    for tag, t_end in (("short", 2.0), ("long", 4.0)):
-        nml = tmp_path / f"line_{tag}.nml"
-        nml.write_text(text(t_end))
-        counts.append(allocations(exe, nml, tmp_path, tag))
-    (n_short, s_short), (n_long, s_long) = counts
-    print(f"line {scheme}: {s_short} steps {n_short} allocations, {s_long} steps {n_long} allocations")
-    assert s_long - s_short >= 100
-    assert abs(n_long - n_short) <= SLACK, f"{n_long - n_short} allocations in {s_long - s_short} extra steps"
+""")
+        return nml
+    check_two_lengths(exe, tmp_path, f"line_{scheme}", pendulum("short", 2.0), pendulum("long", 4.0))
