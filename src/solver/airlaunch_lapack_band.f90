@@ -289,22 +289,23 @@ contains
     type(band_content), pointer :: c
     real(c_double), pointer :: xd(:), bd(:)
     integer :: j, k, p, q, i0, info
-    real(c_double) :: r
+    real(c_double) :: r(3)
     call c_f_pointer(s%content, c)
     xd => FN_VGetArrayPointer(x)
     bd => FN_VGetArrayPointer(b)
-    ! r = r_v - M_vx r_x (explicit loops: no temporaries in the solve)
+    ! r = r_v - M_vx r_x (explicit loops: no temporaries in the solve; the three
+    ! rows of a node together, p innermost along the contiguous M_vx columns)
     do j = 1, c%nodes
       i0 = 6*(j - 1)
-      do p = 1, 3
-        r = bd(i0 + 3 + p)
-        do k = max(1, j - 1), min(c%nodes, j + 1)
-          do q = 1, 3
-            r = r - c%mvx(p, q, k - j, j)*bd(6*(k - 1) + q)
+      r = bd(i0 + 4:i0 + 6)
+      do k = max(1, j - 1), min(c%nodes, j + 1)
+        do q = 1, 3
+          do p = 1, 3
+            r(p) = r(p) - c%mvx(p, q, k - j, j)*bd(6*(k - 1) + q)
           end do
         end do
-        c%rv(3*(j - 1) + p) = r
       end do
+      c%rv(3*(j - 1) + 1:3*j) = r
     end do
     call band_lu_solve(3*c%nodes, kr, kr, c%s, c%ldab, c%ipiv, c%no_interchange, c%rv, info)
     ! element by element: x and b are pointers that may alias (a section
