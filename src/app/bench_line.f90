@@ -13,7 +13,7 @@
 !>  C. at the same N, reaching 1 mm.
 !> Ends with one line `RESULT {json}`.  Run through `scripts/bench line`
 !> (optional arguments: axial damping c_d [N s] (1000), EA [N] (1e6), mass per
-!> length [kg/m] (0.3)); `bench-line single SCHEME N RTOL|DT [MAX_ORDER]` runs
+!> length [kg/m] (0.3)); `bench-line single SCHEME N RTOL|DT [MAX_ORDER [dq]]` runs
 !> one setting and prints its work counters.
 !>
 !> Scenario ("paper line", documented in docs/line.md): the 60 m line of the
@@ -224,7 +224,8 @@ contains
       e_paper, ns(k), rtols(j), wall_c(j, k)/t_end, e_cvode, speedup, "x"
   end subroutine compare
 
-  !> One run from the command line: bench-line single <scheme> <N> <rtol|dt> [max_order]
+  !> One run from the command line: bench-line single <scheme> <N> <rtol|dt> [max_order [dq]]
+  !> (dq: CVODE's difference-quotient Jacobian instead of the analytic one)
   !> (a diagnostic to study one setting; prints the work counters).
   subroutine single()
     type(line_scene_config) :: cfg
@@ -254,6 +255,10 @@ contains
     cfg%integration%atol = x
     cfg%integration%dt = x
     cfg%integration%max_order = mo
+    if (command_argument_count() >= 6) then
+      call get_command_argument(6, a)
+      cfg%integration%analytic_jacobian = a /= "dq"
+    end if
     call scene%init(cfg, error)
     if (.not. allocated(error)) call scene%run(error)
     if (allocated(error)) then

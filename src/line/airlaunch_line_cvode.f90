@@ -16,11 +16,17 @@
 !> A point-mass end adds its mass to the end node and its weight and drag to
 !> the node's load (the end body is lumped with the node: the limit the paper's
 !> far-end iteration converges to).
+!>
+!> Jacobian.  The system gives CVODE its analytic Jacobian (x' = v: the identity
+!> block; v' = f/m: the blocks of line_model%force_jacobian and of the point
+!> masses' drag, divided by the node masses), so a Jacobian costs about one
+!> force evaluation instead of mu + ml + 1 = 20; `analytic_jacobian = .false.`
+!> in the options falls back to CVODE's difference quotients.
 module airlaunch_line_cvode
   use airlaunch_kinds, only: dp, i8, g0
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use airlaunch_ode, only: ode_system, band_view, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
   use airlaunch_line_model, only: line_model, line_energy
   use airlaunch_line_ends, only: line_end, end_point_mass
@@ -44,7 +50,10 @@ module airlaunch_line_cvode
     real(dp), allocatable :: f(:, :)           !< work: node forces (3, 0:N)
     real(dp), allocatable :: tension(:)        !< work: segment tensions (N)
     real(dp), allocatable :: inv_mass(:)       !< 1/(node mass + end point mass), (0:N)
+    real(dp), allocatable :: dfdx(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
+    real(dp), allocatable :: dfdv(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
     integer(i8) :: n_forces = 0                !< force evaluations
+    integer(i8) :: n_jacobians = 0             !< analytic Jacobian evaluations
   contains
     procedure :: rhs => system_rhs
     procedure :: setup => system_setup
@@ -52,6 +61,8 @@ module airlaunch_line_cvode
     procedure :: pack => system_pack
     procedure :: unpack => system_unpack
     procedure :: energy => system_energy
+    procedure :: has_jacobian => system_has_jacobian
+    procedure :: jacobian => system_jacobian
   end type line_system
 
   !> The default scheme: CVODE BDF + band solver on a `line_system`.
@@ -82,8 +93,9 @@ contains
     if (end_a%is_kinematic()) self%first = 1
     self%last = n
     if (end_b%is_kinematic()) self%last = n - 1
-    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass)
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass, self%dfdx, self%dfdv)
     allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n))
+    allocate(self%dfdx(3, 3, -1:1, 0:n), self%dfdv(3, 3, -1:1, 0:n))
     self%x = 0.0_dp; self%v = 0.0_dp
     self%inv_mass = 1.0_dp/model%node_mass
     if (end_a%kind == end_point_mass) self%inv_mass(0) = 1.0_dp/(model%node_mass(0) + end_a%mass)
@@ -158,6 +170,52 @@ contains
     status = rhs_ok
   end subroutine system_rhs
 
+  !> The line has an analytic Jacobian (system_jacobian).
+  logical function system_has_jacobian(self)
+    class(line_system), intent(in) :: self   !< system
+    system_has_jacobian = allocated(self%dfdx)
+  end function system_has_jacobian
+
+  !> df/dy at (t, y) into CVODE's zeroed band matrix (mu = 8, ml = 11, see the
+  !> module header): rows of x_k: dx_k'/dv_k = I; rows of v_k: the force blocks
+  !> of node k with respect to the state nodes k-1, k, k+1, divided by the
+  !> node's mass.  Kinematic ends are not states: their columns are left out.
+  !> No allocation.
+  subroutine system_jacobian(self, t, y, jac, status)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    type(band_view), intent(inout) :: jac       !< band matrix, zeroed by CVODE
+    integer, intent(out) :: status              !< rhs_ok
+    integer :: k, d, j, jj, p, q, i
+    call self%unpack(t, y)
+    call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
+    self%n_jacobians = self%n_jacobians + 1
+    do i = 1, 2
+      k = merge(0, self%model%n, i == 1)
+      if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
+      self%dfdv(:, :, 0, k) = self%dfdv(:, :, 0, k) + self%ends(i)%external_load_dv(self%x(:, k), &
+        self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
+    end do
+    do k = self%first, self%last
+      j = 6*(k - self%first)
+      do p = 1, 3
+        call jac%set(j + p, j + 3 + p, 1.0_dp)
+      end do
+      do d = -1, 1
+        if (k + d < self%first .or. k + d > self%last) cycle
+        jj = 6*(k + d - self%first)
+        do q = 1, 3
+          do p = 1, 3
+            call jac%set(j + 3 + p, jj + q, self%inv_mass(k)*self%dfdx(p, q, d, k))
+            call jac%set(j + 3 + p, jj + 3 + q, self%inv_mass(k)*self%dfdv(p, q, d, k))
+          end do
+        end do
+      end do
+    end do
+    status = rhs_ok
+  end subroutine system_jacobian
+
   !> Mechanical energy of line and point-mass ends at time t, state y [J]:
   !> kinetic + elastic + gravitational (the work of kinematic ends is not in it).
   function system_energy(self, t, y) result(e)
@@ -194,7 +252,7 @@ contains
     scheme%sys%v = v0
     scheme%opts = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%rtol, atol=opts%atol, max_step=opts%max_step, &
-      max_order=opts%max_order, max_num_steps=1000000)
+      max_order=opts%max_order, max_num_steps=1000000, analytic_jacobian=opts%analytic_jacobian)
     if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends
     allocate(y0(scheme%sys%n_state()))
     call scheme%sys%pack(x0, v0, y0)

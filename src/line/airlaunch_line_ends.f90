@@ -52,6 +52,7 @@ module airlaunch_line_ends
     procedure :: is_kinematic => end_is_kinematic
     procedure :: motion => end_motion
     procedure :: external_load => end_external_load
+    procedure :: external_load_dv => end_external_load_dv
     procedure :: set_body_motion => end_set_body_motion
     procedure :: check => end_check
   end type line_end
@@ -206,6 +207,41 @@ contains
       f = f + 0.5_dp*rho*self%drag_area*norm2(u)*u
     end if
   end function end_external_load
+
+  !> Derivative of end_external_load with respect to the end velocity [N s/m]:
+  !> the point mass's drag F = rho CdS |u| u / 2, u = wind - v, gives
+  !> dF/dv = -rho CdS (|u| I + u u^T/|u|)/2 (the ISA density's dependence on
+  !> the altitude is left out).  Zero for other kinds or with the air off.
+  pure function end_external_load_dv(self, x, v, air, wind, air_density) result(d)
+    class(line_end), intent(in) :: self    !< end
+    real(dp), intent(in) :: x(3), v(3)     !< end position [m], velocity [m/s]
+    logical, intent(in) :: air             !< drag switched on
+    real(dp), intent(in) :: wind(3)        !< air velocity [m/s]
+    real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
+    real(dp) :: d(3, 3), u(3), un, rho
+    integer :: i, j
+    d = 0.0_dp
+    if (self%kind /= end_point_mass .or. .not. air .or. .not. (self%drag_area > 0.0_dp)) return
+    rho = air_density
+    if (rho <= 0.0_dp) rho = isa_density(x(2))
+    u = wind - v
+    un = sqrt(dot_product(u, u))
+    do j = 1, 3
+      do i = 1, 3
+        if (un > 0.0_dp) d(i, j) = u(i)*u(j)/un
+      end do
+      d(j, j) = d(j, j) + un
+    end do
+    d = -0.5_dp*rho*self%drag_area*d
+  end function end_external_load_dv
+
+  !> ISA density at altitude y [kg/m^3].
+  pure real(dp) function isa_density(y) result(rho)
+    real(dp), intent(in) :: y   !< altitude [m]
+    type(air_state) :: a
+    a = isa(y)
+    rho = a%density
+  end function isa_density
 
   !> Validate an end; `name` ("end_a", "end_b") prefixes the message.
   subroutine end_check(self, name, error)

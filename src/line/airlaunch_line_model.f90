@@ -86,6 +86,7 @@ module airlaunch_line_model
   contains
     procedure :: init => model_init
     procedure :: forces => model_forces
+    procedure :: force_jacobian => model_force_jacobian
     procedure :: energy => model_energy
     procedure :: wave_speed => model_wave_speed
     procedure :: stable_step => model_stable_step
@@ -230,6 +231,146 @@ contains
     status = 0
     if (.not. (abs(sum(tension(1:n))) <= huge(1.0_dp))) status = 1
   end subroutine model_forces
+
+  !> Derivatives of model_forces' nodal forces with respect to the node
+  !> positions and velocities, block tridiagonal: dfdx(:, :, d, j) = df_j/dx_(j+d)
+  !> and dfdv(:, :, d, j) = df_j/dv_(j+d), d = -1, 0, 1 (zero where j + d is
+  !> outside 0..N).  Per taut segment (T = EA eps + c_d epsdot > 0, Eq. (3)) with
+  !> dx = x_k - x_(k-1), t = dx/ell, P = I - t t^T:
+  !>   d(T t)/d(dx) = (EA/l0) t t^T + c_d/(l0 ell) t (P dv)^T + (T/ell) P,
+  !>   d(T t)/d(dv) = (c_d/l0) t t^T;
+  !> slack segments (eps <= 0) contribute nothing.  A stretched segment whose
+  !> tension the dashpot clips to zero (fast shortening, EA eps + c_d epsdot < 0)
+  !> has zero force and zero derivative, but it gets the blocks above with T = 0:
+  !> the taut side of the kink.  This is a deliberate approximation of the
+  !> Newton matrix (the force itself is unchanged): with the exact zero blocks,
+  !> Newton's iterates failed to cross back to taut and CVODE took 10 % more
+  !> steps and 30 % more Jacobians on the heavily damped pendulum (material
+  !> damping, N = 60, rtol 1e-3: 2.21 G instructions against 1.56 G; difference
+  !> quotients 2.10 G; docs/line.md section 7).
+  !> Drag of a segment, D = rho ell (qn |un| un + qt |ut| ut) with
+  !> u = wind - (v_(k-1) + v_k)/2, ut = (u.t) t, un = u - ut, half to each node:
+  !>   dD/du = rho ell (qn A_n P + qt A_t t t^T),  A = |w| I + w w^T/|w|,
+  !>   dD/d(dx) = D t^T/ell + rho (qt A_t - qn A_n) (t u^T + (u.t) I) P,
+  !> and, with the ISA density, its local gradient along y (the density fit's
+  !> dependence on the lowest and highest node is left out: an approximate
+  !> Jacobian there, exact with a fixed `air_density`).  Settling damping:
+  !> -alpha m_k I on the diagonal.  Hot path: no allocation.
+  subroutine model_force_jacobian(self, x, v, dfdx, dfdv)
+    class(line_model), intent(in) :: self        !< line
+    real(dp), intent(in) :: x(:, 0:)             !< node positions (3, 0:N) [m]
+    real(dp), intent(in) :: v(:, 0:)             !< node velocities (3, 0:N) [m/s]
+    real(dp), intent(out) :: dfdx(:, :, -1:, 0:) !< df_j/dx_(j+d) (3, 3, -1:1, 0:N) [N/m]
+    real(dp), intent(out) :: dfdv(:, :, -1:, 0:) !< df_j/dv_(j+d) (3, 3, -1:1, 0:N) [N s/m]
+    integer :: k, i
+    real(dp) :: dx(3), dv(3), t(3), pdv(3), u(3), ut(3), un(3), drag(3)
+    real(dp) :: p(3, 3), tt(3, 3), kb(3, 3), cb(3, 3), an(3, 3), at(3, 3), gu(3, 3), ddx(3, 3), dut(3, 3)
+    real(dp) :: ell, eps, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope, qn, qt, un_n, ut_n, ud
+
+    ea = self%p%ea
+    cd = self%p%damping
+    tiny_len = tiny_fraction*self%l0
+    dfdx = 0.0_dp
+    dfdv = 0.0_dp
+    if (self%p%settling_damping > 0.0_dp) then
+      do k = 0, self%n
+        do i = 1, 3
+          dfdv(i, i, 0, k) = -self%p%settling_damping*self%node_mass(k)
+        end do
+      end do
+    end if
+    if (self%p%air) call air_density_fit(self, x, y_lo, rho_lo, log_slope)
+    qn = 0.5_dp*self%p%cd_normal*self%p%diameter
+    qt = 0.5_dp*self%p%cd_tangential*pi*self%p%diameter
+
+    do k = 1, self%n
+      dx = x(:, k) - x(:, k-1)
+      ell = length3(dx)
+      if (.not. (ell > tiny_len)) cycle
+      t = dx/ell
+      tt = outer3(t, t)
+      p = identity3() - tt
+      eps = ell/self%l0 - 1.0_dp
+      if (eps > 0.0_dp) then
+        dv = v(:, k) - v(:, k-1)
+        ! the tension clipped at zero by a fast shortening keeps the law's
+        ! derivative (the taut side of the kink; see the header)
+        tk = max(0.0_dp, ea*eps + cd*dot_product(t, dv)/self%l0)
+        pdv = matmul(p, dv)
+        kb = (ea/self%l0)*tt + (cd/(self%l0*ell))*outer3(t, pdv) + (tk/ell)*p
+        cb = (cd/self%l0)*tt
+        ! f_(k-1) += T t and f_k -= T t, T t a function of x_k - x_(k-1)
+        call add_segment_blocks(dfdx, k, kb, -kb)
+        call add_segment_blocks(dfdv, k, cb, -cb)
+      end if
+      if (self%p%air) then
+        u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
+        ud = dot_product(u, t)
+        ut = ud*t
+        un = u - ut
+        rho_a = rho_lo
+        if (log_slope /= 0.0_dp) rho_a = rho_lo*exp(log_slope*(0.5_dp*(x(2, k-1) + x(2, k)) - y_lo))
+        un_n = length3(un)
+        ut_n = length3(ut)
+        drag = rho_a*ell*(qn*un_n*un + qt*ut_n*ut)
+        an = un_n*identity3()
+        if (un_n > 0.0_dp) an = an + outer3(un, un)/un_n
+        at = ut_n*identity3()
+        if (ut_n > 0.0_dp) at = at + outer3(ut, ut)/ut_n
+        gu = rho_a*ell*(qn*matmul(an, p) + qt*matmul(at, tt))
+        ! du/dv_(k-1) = du/dv_k = -I/2, half of the drag to each node
+        call add_segment_blocks(dfdv, k, 0.5_dp*(-0.5_dp*gu), 0.5_dp*(-0.5_dp*gu), same_sign=.true.)
+        dut = outer3(t, u) + ud*identity3()
+        ddx = outer3(drag, t)/ell + rho_a*matmul(qt*at - qn*an, matmul(dut, p))
+        call add_segment_blocks(dfdx, k, 0.5_dp*ddx, 0.5_dp*ddx)
+        if (log_slope /= 0.0_dp) then
+          ! d rho/d y_(k-1) = d rho/d y_k = rho s/2: a column along y in both blocks
+          ddx = 0.0_dp
+          ddx(:, 2) = 0.25_dp*log_slope*drag
+          call add_segment_blocks(dfdx, k, ddx, ddx, same_sign=.true.)
+        end if
+      end if
+    end do
+  end subroutine model_force_jacobian
+
+  !> Add the blocks of a segment force that depends on its two nodes k-1, k:
+  !> node k-1 gets `a` (a function of x_k - x_(k-1): +a for x_k, -a for x_(k-1)),
+  !> node k gets `b` likewise; with same_sign the force depends on the sum
+  !> (x_(k-1) + x_k), +a and +b for both nodes.
+  pure subroutine add_segment_blocks(d, k, a, b, same_sign)
+    real(dp), intent(inout) :: d(:, :, -1:, 0:)   !< block tridiagonal derivative
+    integer, intent(in) :: k                      !< segment (nodes k-1, k)
+    real(dp), intent(in) :: a(3, 3), b(3, 3)      !< the two nodes' blocks
+    logical, intent(in), optional :: same_sign    !< depends on the sum, not the difference
+    real(dp) :: s
+    s = -1.0_dp
+    if (present(same_sign)) then
+      if (same_sign) s = 1.0_dp
+    end if
+    d(:, :, 1, k-1) = d(:, :, 1, k-1) + a
+    d(:, :, 0, k-1) = d(:, :, 0, k-1) + s*a
+    d(:, :, 0, k) = d(:, :, 0, k) + b
+    d(:, :, -1, k) = d(:, :, -1, k) + s*b
+  end subroutine add_segment_blocks
+
+  !> a b^T of two 3-vectors.
+  pure function outer3(a, b) result(m)
+    real(dp), intent(in) :: a(3), b(3)
+    real(dp) :: m(3, 3)
+    integer :: j
+    do j = 1, 3
+      m(:, j) = a*b(j)
+    end do
+  end function outer3
+
+  !> The 3x3 identity.
+  pure function identity3() result(m)
+    real(dp) :: m(3, 3)
+    m = 0.0_dp
+    m(1, 1) = 1.0_dp
+    m(2, 2) = 1.0_dp
+    m(3, 3) = 1.0_dp
+  end function identity3
 
   !> Length of a 3-vector, sqrt(a.a).  The NORM2 intrinsic guards against
   !> overflow by rescaling element by element (a division per element, three

@@ -22,6 +22,10 @@ module airlaunch_line_scheme
     !> line's lightly damped transverse and axial modes make orders 3-5 step-size
     !> limited by their stability (measured 2.4x more steps, see docs/line.md).
     integer :: max_order = 2
+    !> cvode: the line's analytic Jacobian (default) or CVODE's difference
+    !> quotients (.false.; for comparison: same answers, 20 force evaluations
+    !> per Jacobian)
+    logical :: analytic_jacobian = .true.
     ! marching
     real(dp) :: dt = 1.0e-4_dp              !< marching: fixed time step [s]
     real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]
@@ -32,7 +36,7 @@ module airlaunch_line_scheme
   type :: line_scheme_stats
     integer(i8) :: steps = 0        !< time steps taken
     integer(i8) :: rhs_evals = 0    !< force evaluations of the whole line
-    integer(i8) :: jac_evals = 0    !< cvode: Jacobian evaluations (difference quotients)
+    integer(i8) :: jac_evals = 0    !< cvode: Jacobian evaluations
     integer(i8) :: iterations = 0   !< marching: far-end force iterations (all steps)
     integer(i8) :: failures = 0     !< cvode: error-test and convergence failures
   end type line_scheme_stats

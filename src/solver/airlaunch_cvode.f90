@@ -10,7 +10,7 @@ module airlaunch_cvode
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use airlaunch_ode, only: ode_system, band_view, rhs_ok, rhs_fatal
   use fsundials_context_mod
   use fsundials_nvector_mod
   use fsundials_matrix_mod
@@ -23,7 +23,8 @@ module airlaunch_cvode
   use fsunlinsol_band_mod
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
-  use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok
+  use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, &
+    band_data
   implicit none
   private
   public :: cvode_options, cvode_solver, cvode_stats, add_stats
@@ -44,6 +45,9 @@ module airlaunch_cvode
     integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
     integer :: max_num_steps = 200000            !< steps allowed between two outputs
     logical :: stability_limit_detection = .false. !< BDF order reduction near the imaginary axis
+    !> with a band solver, use the system's analytic Jacobian if it has one
+    !> (`ode_system%has_jacobian`); otherwise CVODE's difference quotients
+    logical :: analytic_jacobian = .true.
   end type cvode_options
 
   !> Counters of the integration.
@@ -197,6 +201,16 @@ contains
     if (ierr /= 0) then
       call fatal_error(error, "CVODE: cannot attach the " // trim(opts%linear_solver) // " solver")
       return
+    end if
+    if (opts%analytic_jacobian .and. sys%has_jacobian()) then
+      select case (opts%linear_solver)
+      case ("band", "second_order_band", "sundials_band")
+        ierr = FCVodeSetJacFn(self%mem, c_funloc(jac_callback))
+        if (ierr /= 0) then
+          call fatal_error(error, "CVODE: cannot install the analytic Jacobian (flag " // str(int(ierr)) // ")")
+          return
+        end if
+      end select
     end if
     ierr = FCVodeSetMaxNumSteps(self%mem, int(opts%max_num_steps, c_long))
     if (opts%max_step > 0.0_dp) ierr = FCVodeSetMaxStep(self%mem, real(opts%max_step, c_double))
@@ -387,6 +401,28 @@ contains
     call cb%sys%rhs(t, y, ydot, status)
     ierr = int(status, c_int)
   end function rhs_callback
+
+  !> CVODE Jacobian callback (band matrices): the system's analytic df/dy into
+  !> the band matrix, which CVODE has zeroed.
+  integer(c_int) function jac_callback(t, nv_y, nv_fy, mat, user_data, tmp1, tmp2, tmp3) result(ierr) bind(C)
+    real(c_double), value :: t
+    type(N_Vector) :: nv_y, nv_fy, tmp1, tmp2, tmp3
+    type(SUNMatrix) :: mat
+    type(c_ptr), value :: user_data
+    type(callback_data), pointer :: cb
+    real(c_double), pointer :: y(:)
+    type(band_view) :: jac
+    integer :: status
+    call c_f_pointer(user_data, cb)
+    y => FN_VGetArrayPointer(nv_y)
+    jac%ldim = int(FSUNBandMatrix_LDim(mat))
+    jac%smu = int(FSUNBandMatrix_StoredUpperBandwidth(mat))
+    jac%ab => band_data(mat, jac%ldim)
+    call cb%sys%jacobian(t, y, jac, status)
+    ierr = int(status, c_int)
+    if (.false.) ierr = int(FN_VGetLength(nv_fy) + FN_VGetLength(tmp1) + FN_VGetLength(tmp2) + &
+      FN_VGetLength(tmp3), c_int)
+  end function jac_callback
 
   !> CVODE projection callback: corr = P(y) - y.
   integer(c_int) function proj_callback(t, nv_y, nv_corr, eps, err, user_data) result(ierr) bind(C)

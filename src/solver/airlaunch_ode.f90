@@ -4,12 +4,23 @@ module airlaunch_ode
   use airlaunch_kinds, only: dp
   implicit none
   private
-  public :: ode_system, rhs_ok, rhs_recoverable, rhs_fatal
+  public :: ode_system, band_view, rhs_ok, rhs_recoverable, rhs_fatal
 
   !> Status codes of a right-hand side, as SUNDIALS reads them.
   integer, parameter :: rhs_ok = 0           !< derivative computed
   integer, parameter :: rhs_recoverable = 1  !< retry with a smaller step
   integer, parameter :: rhs_fatal = -1       !< stop: `failure` says why
+
+  !> Write access to a band matrix in SUNDIALS' (= LAPACK's) column storage:
+  !> A(i, j) at ab((j - 1) ldim + smu + i - j + 1), smu rows above the diagonal.
+  !> Filled by a system's analytic Jacobian (the solver zeroes it first).
+  type :: band_view
+    real(dp), pointer :: ab(:) => null()   !< the storage, column by column
+    integer :: ldim = 0                    !< leading dimension (rows stored per column)
+    integer :: smu = 0                     !< stored upper bandwidth
+  contains
+    procedure :: set => band_view_set
+  end type band_view
 
   !> A first-order system y' = f(t, y) with optional event functions g(t, y).
   type, abstract :: ode_system
@@ -21,6 +32,8 @@ module airlaunch_ode
     procedure :: roots => ode_roots
     procedure :: has_projection => ode_has_projection
     procedure :: project => ode_project
+    procedure :: has_jacobian => ode_has_jacobian
+    procedure :: jacobian => ode_jacobian
   end type ode_system
 
   abstract interface
@@ -74,4 +87,32 @@ contains
     status = rhs_ok
     if (.false.) y(1) = t + len(self%failure)
   end subroutine ode_project
+
+  !> A(i, j) = value (i - j within the stored band: the caller's structure).
+  pure subroutine band_view_set(self, i, j, value)
+    class(band_view), intent(inout) :: self   !< the matrix
+    integer, intent(in) :: i, j               !< row, column (1-based)
+    real(dp), intent(in) :: value             !< entry
+    self%ab((j - 1)*self%ldim + self%smu + i - j + 1) = value
+  end subroutine band_view_set
+
+  !> True if the system provides an analytic band Jacobian (`jacobian`); the
+  !> solver then uses it instead of difference quotients.
+  logical function ode_has_jacobian(self)
+    class(ode_system), intent(in) :: self   !< the system
+    ode_has_jacobian = .false.
+    if (.false.) ode_has_jacobian = allocated(self%failure)
+  end function ode_has_jacobian
+
+  !> The Jacobian df/dy at (t, y) into the zeroed band matrix `jac` (default: none).
+  subroutine ode_jacobian(self, t, y, jac, status)
+    class(ode_system), intent(inout) :: self  !< the system
+    real(dp), intent(in) :: t                 !< time [s]
+    real(dp), intent(in) :: y(:)              !< state
+    type(band_view), intent(inout) :: jac     !< the matrix, zeroed by the solver
+    integer, intent(out) :: status            !< rhs_ok, rhs_recoverable or rhs_fatal
+    status = rhs_fatal
+    self%failure = "the system has no analytic Jacobian"
+    if (.false.) jac%ldim = int(t + y(1))
+  end subroutine ode_jacobian
 end module airlaunch_ode
