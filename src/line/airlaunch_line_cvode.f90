@@ -53,7 +53,6 @@ module airlaunch_line_cvode
     real(dp), allocatable :: dfdx(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
     real(dp), allocatable :: dfdv(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
     integer(i8) :: n_forces = 0                !< force evaluations
-    integer(i8) :: n_jacobians = 0             !< analytic Jacobian evaluations
   contains
     procedure :: rhs => system_rhs
     procedure :: setup => system_setup
@@ -190,7 +189,6 @@ contains
     integer :: k, d, j, jj, p, q, i
     call self%unpack(t, y)
     call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
-    self%n_jacobians = self%n_jacobians + 1
     do i = 1, 2
       k = merge(0, self%model%n, i == 1)
       if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
