@@ -66,11 +66,10 @@ contains
 
   subroutine model_blocks()
     type(line_model) :: model
-    real(dp) :: x(3, 0:n), v(3, 0:n), xp(3, 0:n), vp(3, 0:n)
-    real(dp) :: fp(3, 0:n), fm(3, 0:n), tp(n), tm(n), col(3, 0:n)
+    real(dp) :: x(3, 0:n), v(3, 0:n)
     real(dp) :: dfdx(3, 3, -1:1, 0:n), dfdv(3, 3, -1:1, 0:n)
     real(dp) :: err_x, err_v, big_x, big_v, outside, ell, tk
-    integer :: j, q, i, st, k, n_taut, n_slack
+    integer :: j, q, k, n_taut, n_slack
     call section("force blocks against central differences (taut and slack segments, drag, damping)")
     call test_line(model, x, v)
     n_taut = 0; n_slack = 0
@@ -92,32 +91,8 @@ contains
     big_x = maxval(abs(dfdx)); big_v = maxval(abs(dfdv))
     do j = 0, n
       do q = 1, 3
-        ! column of x(q, j)
-        xp = x; xp(q, j) = x(q, j) + h
-        call model%forces(xp, v, fp, tp, st)
-        xp(q, j) = x(q, j) - h
-        call model%forces(xp, v, fm, tm, st)
-        col = (fp - fm)/(2.0_dp*h)
-        do i = 0, n
-          if (abs(i - j) <= 1) then
-            err_x = max(err_x, maxval(abs(col(:, i) - dfdx(:, q, j - i, i))))
-          else
-            outside = max(outside, maxval(abs(col(:, i))))
-          end if
-        end do
-        ! column of v(q, j)
-        vp = v; vp(q, j) = v(q, j) + h
-        call model%forces(x, vp, fp, tp, st)
-        vp(q, j) = v(q, j) - h
-        call model%forces(x, vp, fm, tm, st)
-        col = (fp - fm)/(2.0_dp*h)
-        do i = 0, n
-          if (abs(i - j) <= 1) then
-            err_v = max(err_v, maxval(abs(col(:, i) - dfdv(:, q, j - i, i))))
-          else
-            outside = max(outside, maxval(abs(col(:, i))))
-          end if
-        end do
+        call compare_column(model, x, v, .false., q, j, dfdx, err_x, outside)
+        call compare_column(model, x, v, .true., q, j, dfdv, err_v, outside)
       end do
     end do
     print '(a, 2es10.2, a, 2es10.2)', "  largest entries df/dx, df/dv:", big_x, big_v, "; errors:", err_x, err_v
@@ -126,6 +101,41 @@ contains
     call check_close(err_v, 0.0_dp, "df/dv blocks", abs=1.0e-8_dp*big_v)
     call check_close(outside, 0.0_dp, "no coupling beyond the neighbours", abs=1.0e-8_dp*big_x)
   end subroutine model_blocks
+
+  !> Central difference of the forces along x(q, j) (or v(q, j)) against the
+  !> blocks' column: largest difference into err, largest force change beyond
+  !> the neighbours into outside.
+  subroutine compare_column(model, x, v, along_v, q, j, blocks, err, outside)
+    type(line_model), intent(in) :: model
+    real(dp), intent(in) :: x(3, 0:n), v(3, 0:n)
+    logical, intent(in) :: along_v
+    integer, intent(in) :: q, j
+    real(dp), intent(in) :: blocks(3, 3, -1:1, 0:n)
+    real(dp), intent(inout) :: err, outside
+    real(dp) :: xp(3, 0:n), vp(3, 0:n), fp(3, 0:n), fm(3, 0:n), tp(n), col(3, 0:n)
+    integer :: i, st, sgn
+    do sgn = 1, -1, -2
+      xp = x; vp = v
+      if (along_v) then
+        vp(q, j) = v(q, j) + sgn*h
+      else
+        xp(q, j) = x(q, j) + sgn*h
+      end if
+      if (sgn == 1) then
+        call model%forces(xp, vp, fp, tp, st)
+      else
+        call model%forces(xp, vp, fm, tp, st)
+      end if
+    end do
+    col = (fp - fm)/(2.0_dp*h)
+    do i = 0, n
+      if (abs(i - j) <= 1) then
+        err = max(err, maxval(abs(col(:, i) - blocks(:, q, j - i, i))))
+      else
+        outside = max(outside, maxval(abs(col(:, i))))
+      end if
+    end do
+  end subroutine compare_column
 
   subroutine system_band()
     type(line_model) :: model
