@@ -8,7 +8,7 @@
 program airlaunch
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use airlaunch_error, only: error_type
-  use airlaunch_version, only: code_version
+  use airlaunch_version, only: code_version, sundials_build
   use airlaunch_namelist, only: nml_file
   use airlaunch_run_config, only: run_config, read_run_config, require_output_directory
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
@@ -38,6 +38,7 @@ program airlaunch
       stop
     case ("-V", "--version")
       write(output_unit, '(a)') "airlaunch " // code_version
+      write(output_unit, '(a)') "SUNDIALS: " // sundials_build
       stop
     case ("-o", "--output")
       i = i + 1

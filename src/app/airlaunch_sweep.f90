@@ -19,7 +19,7 @@ program airlaunch_sweep
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_version, only: code_version
+  use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: make_dir, file_exists, delete_file
   use airlaunch_sweep_case, only: run_case, case_namelist
@@ -295,6 +295,7 @@ contains
         call finish(exit_ok)
       case ("-V", "--version")
         if (rank == 0) write(output_unit, '(a)') "airlaunch-sweep " // code_version
+        if (rank == 0) write(output_unit, '(a)') "SUNDIALS: " // sundials_build
         call finish(exit_ok)
       case ("--check")
         check_only = .true.
