@@ -108,14 +108,9 @@ contains
     type(SUNMatrix) :: a
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:)
-    integer :: info
     call c_f_pointer(s%content, c)
     ab => FSUNBandMatrix_Data(a)
-    call dgbtrf(c%n, c%n, c%ml, c%mu, ab, c%ldab, c%ipiv, info)
-    c%no_interchange = no_row_interchange(c%ipiv)
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+    ierr = band_lu_factor(c, c%n, c%ml, c%mu, ab)
   end function band_setup
 
   !> x = A^-1 b from the factors (dgbtrs).
@@ -139,6 +134,22 @@ contains
     if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
     if (.false.) xd(1) = tol
   end function band_solve
+
+  !> LU factorisation in place (dgbtrf) of the n x n band matrix ab (kl, ku;
+  !> leading dimension and pivots from the content c, which also records
+  !> LAPACK's flag and whether rows were swapped); a zero pivot is a recoverable
+  !> failure (CVODE retries with a smaller step).
+  integer(c_int) function band_lu_factor(c, n, kl, ku, ab) result(ierr)
+    type(band_content), intent(inout) :: c          !< ldab, ipiv in; last_flag, no_interchange out
+    integer, intent(in) :: n, kl, ku                !< order and half-bandwidths
+    real(c_double), intent(inout) :: ab(c%ldab, *)  !< the matrix in, its factors out
+    integer :: info
+    call dgbtrf(n, n, kl, ku, ab, c%ldab, c%ipiv, info)
+    c%no_interchange = no_row_interchange(c%ipiv(1:n))
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+  end function band_lu_factor
 
   !> True if the pivots of a factorisation (dgbtrf's ipiv) swapped no rows.
   pure logical function no_row_interchange(ipiv) result(none)
@@ -248,7 +259,7 @@ contains
     type(SUNMatrix) :: a
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:)
-    integer :: ldim, smu, j, k, p, q, row, col, info, n3
+    integer :: ldim, smu, j, k, p, q, row, col, n3
     real(c_double) :: g
     call c_f_pointer(s%content, c)
     ldim = int(FSUNBandMatrix_LDim(a))
@@ -273,11 +284,7 @@ contains
         end do
       end do
     end do
-    call dgbtrf(n3, n3, kr, kr, c%s, c%ldab, c%ipiv, info)
-    c%no_interchange = no_row_interchange(c%ipiv)
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+    ierr = band_lu_factor(c, n3, kr, kr, c%s)
   end function reduced_setup
 
   !> x = M^-1 b through the velocity system.
