@@ -245,9 +245,9 @@ contains
   !> the taut side of the kink.  This is a deliberate approximation of the
   !> Newton matrix (the force itself is unchanged): with the exact zero blocks,
   !> Newton's iterates failed to cross back to taut and CVODE took 10 % more
-  !> steps and 30 % more Jacobians on the heavily damped pendulum (material
+  !> steps and 45 % more Jacobians on the heavily damped pendulum (material
   !> damping, N = 60, rtol 1e-3: 2.21 G instructions against 1.56 G; difference
-  !> quotients 2.10 G; docs/line.md section 7).
+  !> quotients 2.10 G; docs/line.md section 2).
   !> Drag of a segment, D = rho ell (qn |un| un + qt |ut| ut) with
   !> u = wind - (v_(k-1) + v_k)/2, ut = (u.t) t, un = u - ut, half to each node:
   !>   dD/du = rho ell (qn A_n P + qt A_t t t^T),  A = |w| I + w w^T/|w|,
@@ -318,8 +318,8 @@ contains
         at = ut_n*identity3()
         if (ut_n > 0.0_dp) at = at + outer3(ut, ut)/ut_n
         gu = rho_a*ell*(qn*matmul(an, p) + qt*matmul(at, tt))
-        ! du/dv_(k-1) = du/dv_k = -I/2, half of the drag to each node
-        call add_segment_blocks(dfdv, k, 0.5_dp*(-0.5_dp*gu), 0.5_dp*(-0.5_dp*gu), same_sign=.true.)
+        ! du/dv_(k-1) = du/dv_k = -I/2, half of the drag to each node: -gu/4
+        call add_segment_blocks(dfdv, k, -0.25_dp*gu, -0.25_dp*gu, same_sign=.true.)
         dut = outer3(t, u) + ud*identity3()
         ddx = outer3(drag, t)/ell + rho_a*matmul(qt*at - qn*an, matmul(dut, p))
         call add_segment_blocks(dfdx, k, 0.5_dp*ddx, 0.5_dp*ddx)
