@@ -193,16 +193,12 @@ contains
     real(dp), intent(in) :: wind(3)        !< air velocity [m/s]
     real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
     real(dp) :: f(3), u(3), rho
-    type(air_state) :: air_here
     f = 0.0_dp
     if (self%kind /= end_point_mass) return
     if (gravity) f(2) = -self%mass*g0
     if (air .and. self%drag_area > 0.0_dp) then
       rho = air_density
-      if (rho <= 0.0_dp) then
-        air_here = isa(x(2))
-        rho = air_here%density
-      end if
+      if (rho <= 0.0_dp) rho = isa_density(x(2))
       u = wind - v
       f = f + 0.5_dp*rho*self%drag_area*norm2(u)*u
     end if
