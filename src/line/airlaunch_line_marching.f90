@@ -232,7 +232,7 @@ contains
         jac(:, j) = (e1 - e)/delta
       end do
       rhs(:, 1) = -e
-      call solve_general(jac, rhs, error, "line (marching): far-end force Jacobian")
+      call solve_general(jac, rhs, error, "line (marching): far-end force Jacobian", estimate_condition=.false.)
       if (allocated(error)) return
       force = force + rhs(:, 1)
       call far_residual(self, h, force, e, x_far, v_far)
