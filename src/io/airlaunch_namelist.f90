@@ -15,7 +15,7 @@ module airlaunch_namelist
   use airlaunch_strings, only: str, lower
   implicit none
   private
-  public :: nml_file, nml_var, unset_real, unset_int
+  public :: nml_file, nml_var, nml_assignment, unset_real, unset_int
   public :: require_positive, require_nonnegative, require_range, require_choice, require_set
   public :: require_int_range, edit_distance
 
@@ -27,8 +27,13 @@ module airlaunch_namelist
   type :: nml_assignment
     character(len=:), allocatable :: group   !< lower-case group name
     character(len=:), allocatable :: name    !< lower-case variable name (without index)
+    character(len=:), allocatable :: index   !< lower-case index without blanks, "(2)", or ""
     character(len=:), allocatable :: value   !< value text as written
     integer :: line = 0                      !< line of the file
+    integer :: group_number = 0              !< which group of the file (1, 2, ...) holds it
+    !> where it is written: line and column of the name's first character and of
+    !> the value's last (its trailing comma included)
+    integer :: first_line = 0, first_col = 0, last_line = 0, last_col = 0
   end type nml_assignment
 
   !> Expected name and type of a variable, for diagnosis: kind is one of
@@ -63,10 +68,10 @@ contains
     class(nml_file), intent(inout) :: self
     character(len=*), intent(in) :: path                  !< file to read
     type(error_type), allocatable, intent(inout) :: error !< set on failure
-    integer :: unit, ios, lineno
+    integer :: unit, ios, lineno, k
     character(len=4096) :: buf
     character(len=:), allocatable :: text, group
-    integer, allocatable :: line_of(:)
+    integer, allocatable :: line_of(:), col_of(:)
     logical :: exists
 
     self%path = path
@@ -86,7 +91,7 @@ contains
     end if
     ! The whole file as one string (comments removed), with the line of each character.
     text = ""
-    allocate(line_of(0))
+    allocate(line_of(0), col_of(0))
     lineno = 0
     do
       read(unit, '(a)', iostat=ios) buf
@@ -95,20 +100,21 @@ contains
       buf = strip_comment(buf)
       text = text // trim(buf) // " "
       line_of = [line_of, spread(lineno, 1, len_trim(buf) + 1)]
+      col_of = [col_of, [(k, k = 1, len_trim(buf) + 1)]]
     end do
     close(unit)
     group = ""
-    call scan_text(self, text, line_of, error)
+    call scan_text(self, text, line_of, col_of, error)
   end subroutine nml_load
 
   !> Scan the comment-free text into groups and assignments.
-  subroutine scan_text(self, text, line_of, error)
+  subroutine scan_text(self, text, line_of, col_of, error)
     type(nml_file), intent(inout) :: self
     character(len=*), intent(in) :: text
-    integer, intent(in) :: line_of(:)
+    integer, intent(in) :: line_of(:), col_of(:)
     type(error_type), allocatable, intent(inout) :: error
     integer :: i, n, j, k, vstart, gline
-    character(len=:), allocatable :: group, name
+    character(len=:), allocatable :: group, name, idx
     logical :: in_group
     character :: quote
     type(nml_assignment) :: item
@@ -180,9 +186,11 @@ contains
               j = j + 1
             end do
             k = j
+            idx = ""
             if (k <= n) then
               if (text(k:k) == "(") then
                 k = index(text(k:), ")") + k
+                idx = lower(without_blanks(text(j:k-1)))
               end if
             end if
             do while (k <= n)
@@ -195,7 +203,13 @@ contains
                 name = lower(text(i:j-1))
                 item%group = group
                 item%name = name
+                item%index = idx
                 item%line = line_of(i)
+                item%group_number = size(self%groups)
+                item%first_line = line_of(i)
+                item%first_col = col_of(i)
+                item%last_line = line_of(k)
+                item%last_col = col_of(k)
                 vstart = k + 1
                 i = k + 1
                 cycle
@@ -216,6 +230,12 @@ contains
     subroutine close_item(last)
       integer, intent(in) :: last
       character(len=:), allocatable :: v
+      integer :: p
+      p = len_trim(text(vstart:last))
+      if (p > 0) then
+        item%last_line = line_of(vstart + p - 1)
+        item%last_col = col_of(vstart + p - 1)
+      end if
       v = trim(adjustl(text(vstart:last)))
       if (len(v) > 0) then
         if (v(len(v):len(v)) == ",") v = trim(v(:len(v)-1))
@@ -268,6 +288,18 @@ contains
           " (allowed: " // join(vars%name) // ")")
         return
       end if
+      ! Fortran's namelist read keeps the last of two assignments without a word:
+      ! a value written twice is an error, not a silent choice.
+      do j = 1, i - 1
+        associate(a => self%items(j), b => self%items(i))
+          if (a%group_number == b%group_number .and. a%name == b%name .and. a%index == b%index) then
+            call fatal_error(error, self%where(b) // "'" // b%name // b%index // "' = " // b%value // &
+              " is assigned a second time (first at line " // str(a%line) // ": " // a%value // &
+              "); a namelist would keep the last value silently, so give it once")
+            return
+          end if
+        end associate
+      end do
     end do
   end subroutine nml_check_group
 
@@ -472,6 +504,16 @@ contains
       end if
     end do
   end function strip_comment
+
+  pure function without_blanks(s) result(t)
+    character(len=*), intent(in) :: s
+    character(len=:), allocatable :: t
+    integer :: i
+    t = ""
+    do i = 1, len(s)
+      if (s(i:i) /= " ") t = t // s(i:i)
+    end do
+  end function without_blanks
 
   pure logical function is_name_start(c)
     character, intent(in) :: c

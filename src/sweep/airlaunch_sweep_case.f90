@@ -5,15 +5,16 @@
 !>
 !> How a case is applied: each varied `group%variable = value` is inserted just
 !> before the `/` that closes `&group` in the base text (or a new group is
-!> appended); a namelist read takes the last assignment of a variable, so the
-!> case's value wins over the base's.  Values are written with 17 significant
-!> digits (integers as integers), so they read back bit for bit.
+!> appended), and the base's own assignment of that variable is taken out (its
+!> lines commented out, or the assignment cut from a line it shares): the
+!> readers reject a variable assigned twice.  Values are written with 17
+!> significant digits (integers as integers), so they read back bit for bit.
 module airlaunch_sweep_case
   use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
-  use airlaunch_namelist, only: nml_file, edit_distance
+  use airlaunch_namelist, only: nml_file, nml_assignment, edit_distance
   use airlaunch_run_config, only: run_config, read_run_config
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
@@ -23,7 +24,7 @@ module airlaunch_sweep_case
   implicit none
   private
   public :: base_scenario, known_variable, load_base_scenario, check_varied_inputs, case_namelist
-  public :: run_case, inject_assignments, value_text, check_common_settings
+  public :: run_case, inject_assignments, strike_assignments, value_text, check_common_settings
 
   !> A variable the scenario readers know (from the resolved input they echo).
   type :: known_variable
@@ -38,6 +39,7 @@ module airlaunch_sweep_case
     character(len=:), allocatable :: text       !< its text, as written
     character(len=:), allocatable :: echo       !< its fully resolved input
     type(known_variable), allocatable :: known(:)  !< variables a case may set
+    type(nml_assignment), allocatable :: assigned(:)  !< the assignments written in `text`
     real(dp) :: t_end = 0.0_dp                  !< its &run t_end [s]
   end type base_scenario
 
@@ -70,6 +72,7 @@ contains
       return
     end if
     base%t_end = run%t_end
+    base%assigned = f%items
     call read_text_file(path, base%text, error)
     if (allocated(error)) return
     base%known = echo_variables(base%echo)
@@ -216,29 +219,100 @@ contains
     logical, intent(in) :: varied
     character(len=:), allocatable :: text
     character(len=32) :: groups(size(def%inputs) + size(def%fixed) + 1)
+    character(len=32) :: names(size(def%inputs) + size(def%fixed) + 1)
     character(len=1200) :: lines(size(def%inputs) + size(def%fixed) + 1)
-    integer :: k, m
+    logical :: replaced(size(base%assigned))
+    integer :: k, m, j
     m = 0
     if (def%t_end > 0.0_dp) then
       m = m + 1
       groups(m) = "run"
+      names(m) = "t_end"
       lines(m) = "t_end = " // value_text(def%t_end) // "   ! sweep " // def%name
     end if
     do k = 1, size(def%fixed)
       m = m + 1
       groups(m) = def%fixed(k)%group
+      names(m) = def%fixed(k)%variable
       lines(m) = def%fixed(k)%variable // " = " // def%fixed(k)%value // "   ! sweep " // def%name // ", fixed"
     end do
     if (varied) then
       do k = 1, size(def%inputs)
         m = m + 1
         groups(m) = def%inputs(k)%group
+        names(m) = def%inputs(k)%variable
         lines(m) = def%inputs(k)%variable // " = " // value_text(values(k)) // "   ! sweep " // def%name // &
           ", case " // str(id)
       end do
     end if
-    text = inject_assignments(base%text, groups(1:m), lines(1:m))
+    do k = 1, size(base%assigned)
+      replaced(k) = .false.
+      do j = 1, m
+        if (lower(trim(groups(j))) == base%assigned(k)%group .and. lower(trim(names(j))) == base%assigned(k)%name) &
+          replaced(k) = .true.
+      end do
+    end do
+    text = inject_assignments(strike_assignments(base%text, pack(base%assigned, replaced)), &
+      groups(1:m), lines(1:m))
   end function sweep_namelist
+
+  !> `text` without the assignments `items` (as located by nml_file%load in
+  !> that text): an assignment alone on its lines is commented out there (so
+  !> the case's namelist still shows the base's value), one that shares a line
+  !> with other input is cut out of it.
+  function strike_assignments(text, items) result(out)
+    character(len=*), intent(in) :: text                !< namelist text
+    type(nml_assignment), intent(in) :: items(:)        !< assignments to remove (not overlapping)
+    character(len=:), allocatable :: out
+    integer, allocatable :: starts(:)
+    integer :: k, m, l, a, b
+    integer, allocatable :: order(:)
+    out = text
+    ! start of each line in `text`
+    allocate(starts(1))
+    starts(1) = 1
+    do k = 1, len(text)
+      if (text(k:k) == new_line("a")) starts = [starts, k + 1]
+    end do
+    starts = [starts, len(text) + 2]
+    ! last assignment first, so that the earlier positions stay valid
+    order = [(k, k = 1, size(items))]
+    do k = 2, size(order)
+      m = k
+      do while (m > 1)
+        if (before(items(order(m-1)), items(order(m)))) exit
+        order([m-1, m]) = order([m, m-1])
+        m = m - 1
+      end do
+    end do
+    do k = 1, size(order)
+      associate(it => items(order(k)))
+        if (it%first_line < 1 .or. it%last_line + 1 > size(starts)) cycle
+        a = starts(it%first_line) + it%first_col - 1
+        b = starts(it%last_line) + it%last_col - 1
+        if (len_trim(out(starts(it%first_line):a-1)) == 0 .and. &
+            rest_is_comment(out(b+1:starts(it%last_line+1)-2))) then
+          do l = it%last_line, it%first_line, -1
+            out = out(:starts(l)-1) // "! (set by the sweep below) " // out(starts(l):)
+          end do
+        else
+          out = out(:a-1) // out(b+1:)
+        end if
+      end associate
+    end do
+  contains
+    logical function before(p, q)
+      type(nml_assignment), intent(in) :: p, q
+      before = p%first_line > q%first_line .or. (p%first_line == q%first_line .and. p%first_col > q%first_col)
+    end function before
+    logical function rest_is_comment(s)
+      character(len=*), intent(in) :: s
+      character(len=len(s)) :: t
+      t = adjustl(s)
+      rest_is_comment = len_trim(t) == 0
+      if (.not. rest_is_comment) rest_is_comment = t(1:1) == "!"
+    end function rest_is_comment
+  end function strike_assignments
 
   !> Run case `id`: write its namelist to `scratch`, read it, run it.  A
   !> trajectory is written to `trajectory` unless it is "".

@@ -18,10 +18,10 @@ def write(path, text):
     return path
 
 
-def drop_nml(tmp_path, store="mass = 28000.0, drag_area = 10.0", run_extra=""):
+def drop_nml(tmp_path, store="mass = 28000.0, drag_area = 10.0", run_extra="", t_end=30.0):
     out = tmp_path / "drop.nc"
     nml = write(tmp_path / "drop.nml", f"""
-&run scene = 'drop', t_end = 30.0, output_dt = 0.05, output = '{out}' {run_extra} /
+&run scene = 'drop', t_end = {t_end}, output_dt = 0.05, output = '{out}' {run_extra} /
 &store {store} /
 """)
     return nml, out
@@ -66,7 +66,7 @@ def test_drop_without_drag_is_a_parabola(airlaunch_exe, tmp_path):
 def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
     """A light store with a large drag area approaches v_t = sqrt(2 m g / (rho Cd A))."""
     nml, out = drop_nml(tmp_path, store="mass = 10.0, drag_area = 5.0, altitude = 1000.0, "
-                                         "mach = 0.05, fall_height = 900.0", run_extra=", t_end = 400.0")
+                                         "mach = 0.05, fall_height = 900.0", t_end=400.0)
     res = run_airlaunch(airlaunch_exe, nml)
     assert res.returncode == 0, res.stderr
     with xr.open_dataset(out) as ds:
@@ -85,6 +85,9 @@ def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
     ("mass = 'heavy'", "variable 'mass' = 'heavy' is not a real number"),
     ("drag_area = 1.0", "missing required value mass (kg)"),
     ("mass = 100.0, mach = 0.0", "mach = 0.0 is not allowed (must be in [0.001, 5.0] )"),
+    # Fortran's namelist read would keep the second value without a word
+    ("mass = 28000.0, drag_area = 10.0,\n mass = 2800.0",
+     "'mass' = 2800.0 is assigned a second time (first at line 3: 28000.0)"),
 ])
 def test_bad_input_gives_one_clear_line(airlaunch_exe, tmp_path, store, fragment):
     nml, out = drop_nml(tmp_path, store=store)
@@ -95,6 +98,24 @@ def test_bad_input_gives_one_clear_line(airlaunch_exe, tmp_path, store, fragment
     assert str(nml) in lines[0] and "&store" in lines[0]
     assert fragment in lines[0], lines[0]
     assert not out.exists() and not (tmp_path / "drop.nc.part").exists()
+
+
+def test_vector_elements_once_each(airlaunch_exe, tmp_path):
+    # Elements of a vector may be assigned one by one; the same element twice is an error.
+    base = (ROOT / "input" / "line_catenary.nml").read_text()
+    base = base.replace("output = 'output/line_catenary.nc'", f"output = '{tmp_path / 'c.nc'}'")
+    base = base.replace("t_end = 60.0", "t_end = 0.5")
+    ok = write(tmp_path / "ok.nml", base.replace("b_position = 80.0, 0.0, 0.0",
+                                                 "b_position(1) = 80.0\n  b_position(2:3) = 0.0, 0.0"))
+    res = run_airlaunch(airlaunch_exe, ok)
+    assert res.returncode == 0, res.stderr
+    bad = write(tmp_path / "bad.nml", base.replace("b_position = 80.0, 0.0, 0.0",
+                                                   "b_position(1) = 80.0\n  b_position( 1 ) = 70.0"))
+    res = run_airlaunch(airlaunch_exe, bad)
+    assert res.returncode == 2
+    assert len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert f"{bad}:25: &line_scene: 'b_position(1)' = 70.0 is assigned a second time (first at line 24: 80.0)" \
+        in res.stderr, res.stderr
 
 
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):

@@ -1,14 +1,16 @@
 !> How a sweep case is applied to the base scenario: the case's assignment is
-!> inserted into its group (after a '/' inside a string or a comment too) and
-!> wins over the base's value when the standard readers read the text; a group
-!> the base lacks is appended; values round-trip bit for bit through their text.
+!> inserted into its group (after a '/' inside a string or a comment too), the
+!> base's own assignment of the variable is taken out (commented out when alone
+!> on its lines, cut out of a shared line), so that the standard readers (which
+!> reject a variable assigned twice) read the case's value; a group the base
+!> lacks is appended; values round-trip bit for bit through their text.
 program test_sweep_case
   use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type
-  use airlaunch_namelist, only: nml_file
+  use airlaunch_namelist, only: nml_file, nml_assignment
   use airlaunch_run_config, only: run_config, read_run_config
-  use airlaunch_sweep_case, only: inject_assignments, value_text
+  use airlaunch_sweep_case, only: inject_assignments, strike_assignments, value_text
   use airlaunch_sweep_files, only: write_text_file
   use testing
   implicit none
@@ -26,13 +28,13 @@ program test_sweep_case
     "&run" // nl // &
     "  scene = 'airlaunch', output = 'out/dir/run.nc'  ! path a/b" // nl // &
     "  t_end = 15.0, rtol = 1e-6 /" // nl
-  text = inject_assignments(base, [character(len=8) :: "run", "run"], &
+  text = inject_assignments(without(base, ["t_end"]), [character(len=8) :: "run", "run"], &
     [character(len=40) :: "t_end = 2.5", "atol = 3.0000000000000001E-009"])
   call write_text_file("sweep_case_test.nml", text, error)
   call f%load("sweep_case_test.nml", error)
   call check(.not. allocated(error), "the injected text scans as a namelist")
   call read_run_config(f, run, echo, error)
-  call check(.not. allocated(error), "the run reader accepts it")
+  call check(.not. allocated(error), "the run reader accepts it (t_end once)")
   call check(run%t_end == 2.5_dp, "the case's t_end wins over the base's 15")
   call check(run%atol == 3.0e-9_dp, "an assignment the base lacks is added")
   call check(run%rtol == 1.0e-6_dp .and. trim(run%output) == "out/dir/run.nc", &
@@ -46,11 +48,34 @@ program test_sweep_case
 
   call section("&end terminators and upper-case group names")
   base = "&RUN t_end = 15.0 &END" // nl
-  text = inject_assignments(base, [character(len=8) :: "run"], [character(len=40) :: "t_end = 7"])
+  text = without(base, ["t_end"])
+  call check(text == "&RUN  &END" // nl, "t_end cut out of the line it shares with the group's ends")
+  text = inject_assignments(text, [character(len=8) :: "run"], [character(len=40) :: "t_end = 7"])
   call write_text_file("sweep_case_test.nml", text, error)
   call f2%load("sweep_case_test.nml", error)
   call read_run_config(f2, run, echo, error)
   call check(.not. allocated(error) .and. run%t_end == 7.0_dp, "t_end = 7 inserted before &END")
+
+  call section("the base's assignment taken out: alone on its lines, or sharing one")
+  base = "&run" // nl // &
+    "  scene = 'airlaunch', t_end = 15.0,  rtol = 1e-6  ! tolerances" // nl // &
+    "  atol = 1e-8, 1e-9 ,   ! a list over" // nl // &
+    "         1e-10      ! three lines" // nl // &
+    "  output = 'a/b.nc' /" // nl
+  text = without(base, ["t_end", "atol "])
+  call check(index(text, "  scene = 'airlaunch',   rtol = 1e-6  ! tolerances" // nl) > 0, &
+    "t_end and its comma cut from the shared line, the rest kept")
+  call check(index(text, "! (set by the sweep below)   atol = 1e-8, 1e-9 ,   ! a list over" // nl // &
+    "! (set by the sweep below)          1e-10      ! three lines" // nl) > 0, &
+    "an assignment alone on its two lines commented out on both")
+  call check(index(text, "  output = 'a/b.nc' /") > 0, "the next assignment untouched")
+  text = inject_assignments(text, [character(len=8) :: "run", "run"], [character(len=40) :: "t_end = 3", "atol = 2e-9"])
+  call write_text_file("sweep_case_test.nml", text, error)
+  call f2%load("sweep_case_test.nml", error)
+  call read_run_config(f2, run, echo, error)
+  call check(.not. allocated(error), "the readers accept the case's text (each variable once)")
+  call check(run%t_end == 3.0_dp .and. run%atol == 2.0e-9_dp .and. run%rtol == 1.0e-6_dp, &
+    "the case's t_end and atol, the base's rtol")
 
   call section("values read back bit for bit")
   n_bad = 0
@@ -71,4 +96,24 @@ program test_sweep_case
   call check(value_text(60.0_dp) == "60" .and. value_text(-3.0_dp) == "-3", "integral values as integers")
   call check(value_text(0.65_dp) == "6.5000000000000002E-001", "0.65 with 17 significant digits")
   call finish()
+contains
+
+  !> `text` without its assignments of the &run variables `names`, located by
+  !> scanning the text as the sweep does with its base scenario.
+  function without(text, names) result(out)
+    character(len=*), intent(in) :: text, names(:)
+    character(len=:), allocatable :: out
+    type(nml_file) :: g
+    type(error_type), allocatable :: err
+    logical, allocatable :: hit(:)
+    integer :: k
+    call write_text_file("sweep_case_base.nml", text, err)
+    call g%load("sweep_case_base.nml", err)
+    call check(.not. allocated(err), "the base text scans")
+    allocate(hit(size(g%items)))
+    do k = 1, size(g%items)
+      hit(k) = any(names == g%items(k)%name)
+    end do
+    out = strike_assignments(text, pack(g%items, hit))
+  end function without
 end program test_sweep_case
