@@ -45,6 +45,9 @@ module airlaunch_cvode
     integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
     integer :: max_num_steps = 200000            !< steps allowed between two outputs
     logical :: stability_limit_detection = .false. !< BDF order reduction near the imaginary axis
+    !> Newton's convergence test: the iteration stops when its estimated error is
+    !> below this fraction of the error tolerance (CVodeSetNonlinConvCoef); 0 = CVODE's 0.1
+    real(dp) :: newton_coefficient = 0.0_dp
     !> with a band solver, use the system's analytic Jacobian if it has one
     !> (`ode_system%has_jacobian`); otherwise CVODE's difference quotients
     logical :: analytic_jacobian = .true.
@@ -216,6 +219,8 @@ contains
     if (opts%max_step > 0.0_dp) ierr = FCVodeSetMaxStep(self%mem, real(opts%max_step, c_double))
     if (opts%initial_step > 0.0_dp) ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
     if (opts%max_order > 0) ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
+    if (opts%newton_coefficient > 0.0_dp) &
+      ierr = FCVodeSetNonlinConvCoef(self%mem, real(opts%newton_coefficient, c_double))
     ierr = FCVodeSetMaxHnilWarns(self%mem, -1_c_int)
     if (sys%has_projection() .and. lmm == CV_BDF) then
       ierr = FCVodeSetProjFn(self%mem, c_funloc(proj_callback))
