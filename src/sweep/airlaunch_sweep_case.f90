@@ -221,7 +221,7 @@ contains
     character(len=32) :: groups(size(def%inputs) + size(def%fixed) + 1)
     character(len=32) :: names(size(def%inputs) + size(def%fixed) + 1)
     character(len=1200) :: lines(size(def%inputs) + size(def%fixed) + 1)
-    logical :: replaced(size(base%assigned))
+    logical, allocatable :: replaced(:)
     integer :: k, m, j
     m = 0
     if (def%t_end > 0.0_dp) then
@@ -245,6 +245,11 @@ contains
           ", case " // str(id)
       end do
     end if
+    if (.not. allocated(base%assigned)) then   ! not from load_base_scenario: nothing located
+      text = inject_assignments(base%text, groups(1:m), lines(1:m))
+      return
+    end if
+    allocate(replaced(size(base%assigned)))
     do k = 1, size(base%assigned)
       replaced(k) = .false.
       do j = 1, m
