@@ -442,7 +442,7 @@ contains
       merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s" // nl // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg, theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
-      str(scene%rigid(m)%phi*rad2deg) // " deg"
+      str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
     if (allocated(run_error)) then
       if (allocated(error)) deallocate(error)
       call move_alloc(run_error, error)
@@ -526,8 +526,45 @@ contains
     call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
     call w%add_text_att("/", "status", merge("completed", "failed   ", scene%completed), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
+    if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)
     call w%finish(error)
   end subroutine write_output
+
+  !> A line that nothing does work on: no end moved on a path (fixed, free and
+  !> point-mass ends) and no wind (in still air, drag, the dashpot and the
+  !> settling damping only dissipate).  Its total energy can only fall.
+  pure logical function is_passive(cfg)
+    type(line_scene_config), intent(in) :: cfg  !< the scene
+    is_passive = all([cfg%end_a%kind, cfg%end_b%kind] /= end_prescribed) .and. &
+      all([cfg%end_a%kind, cfg%end_b%kind] /= end_body) .and. &
+      .not. (cfg%line%air .and. any(cfg%line%wind /= 0.0_dp))
+  end function is_passive
+
+  !> Largest rise of the total (kinetic + elastic + potential) energy above its
+  !> initial value over the records [J]; the invariant of a passive line is
+  !> that it stays at zero up to the integration error.
+  pure real(dp) function energy_rise(scene)
+    type(line_scene), intent(in) :: scene  !< the run
+    integer :: m
+    m = scene%n_out
+    energy_rise = maxval(sum(scene%energy(:, 1:m), dim=1)) - sum(scene%energy(:, 1))
+  end function energy_rise
+
+  !> The summary's energy line: the passive line's invariant, or why there is none.
+  function energy_summary(scene) result(text)
+    type(line_scene), intent(in) :: scene  !< the run
+    character(len=:), allocatable :: text
+    real(dp) :: kmax
+    if (.not. is_passive(scene%cfg)) then
+      text = "energy: not checked (a moving end or the wind does work on the line)"
+      return
+    end if
+    kmax = maxval(scene%energy(1, 1:scene%n_out))
+    text = "energy (passive line, may only fall): largest rise above the initial total " // &
+      str(energy_rise(scene)) // " J"
+    if (kmax > 0.0_dp) text = text // " (" // str(100.0_dp*energy_rise(scene)/kmax) // &
+      " % of the largest kinetic energy, " // str(kmax) // " J)"
+  end function energy_summary
   !> The scheme's own work counters for the summary, each followed by ", ".
   function scheme_work(scheme, stats) result(text)
     character(len=*), intent(in) :: scheme       !< "cvode" or "marching"
