@@ -244,7 +244,8 @@ contains
   pure function line_newton_coefficient(rtol) result(c)
     real(dp), intent(in) :: rtol   !< relative tolerance
     real(dp) :: c
-    c = 0.1_dp*min(1.0_dp, 1.0e-4_dp/rtol)
+    c = 0.1_dp
+    if (rtol > 1.0e-4_dp) c = 0.1_dp*1.0e-4_dp/rtol
   end function line_newton_coefficient
 
   !> Create the default scheme from the initial node state x0, v0 at time t0.
