@@ -52,6 +52,11 @@ module airlaunch_line_cvode
     real(dp), allocatable :: inv_mass(:)       !< 1/(node mass + end point mass), (0:N)
     real(dp), allocatable :: dfdx(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
     real(dp), allocatable :: dfdv(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
+    !> which segments were taut (tension > 0) when the last Jacobian was formed
+    logical, allocatable :: taut_at_jacobian(:)
+    !> a right-hand side has seen another slack/taut pattern than the last Jacobian's
+    logical :: pattern_changed = .false.
+    logical :: have_jacobian = .false.          !< a Jacobian has been formed (taut_at_jacobian is set)
     integer(i8) :: n_forces = 0                !< force evaluations
   contains
     procedure :: rhs => system_rhs
@@ -92,9 +97,14 @@ contains
     if (end_a%is_kinematic()) self%first = 1
     self%last = n
     if (end_b%is_kinematic()) self%last = n - 1
-    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass, self%dfdx, self%dfdv)
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass, self%dfdx, self%dfdv, &
+      self%taut_at_jacobian)
     allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n))
-    allocate(self%dfdx(3, 3, -1:1, 0:n), self%dfdv(3, 3, -1:1, 0:n))
+    allocate(self%dfdx(3, 3, -1:1, 0:n), self%dfdv(3, 3, -1:1, 0:n), self%taut_at_jacobian(n))
+    self%tension = 0.0_dp
+    self%taut_at_jacobian = .false.
+    self%pattern_changed = .false.
+    self%have_jacobian = .false.
     self%x = 0.0_dp; self%v = 0.0_dp
     self%inv_mass = 1.0_dp/model%node_mass
     if (end_a%kind == end_point_mass) self%inv_mass(0) = 1.0_dp/(model%node_mass(0) + end_a%mass)
@@ -155,6 +165,8 @@ contains
       status = rhs_fatal
       return
     end if
+    if (self%have_jacobian .and. .not. self%pattern_changed) &
+      self%pattern_changed = any((self%tension > 0.0_dp) .neqv. self%taut_at_jacobian)
     if (self%first == 0 .and. self%ends(1)%kind == end_point_mass) self%f(:, 0) = self%f(:, 0) + &
       self%ends(1)%external_load(self%x(:, 0), self%v(:, 0), self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
@@ -189,6 +201,10 @@ contains
     integer :: k, d, j, jj, p, q, i
     call self%unpack(t, y)
     call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
+    ! CVODE forms the Jacobian right after a right-hand side at the same state,
+    ! whose tensions are at hand
+    self%taut_at_jacobian = self%tension > 0.0_dp
+    self%have_jacobian = .true.
     do i = 1, 2
       k = merge(0, self%model%n, i == 1)
       if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
@@ -282,6 +298,15 @@ contains
     if (self%sys%n_state() == 0) then
       self%t = t_out
       return
+    end if
+    ! A slack/taut switch changes the line's Jacobian discretely; a Newton matrix
+    ! from before the switch fails to converge and costs a step.  The analytic
+    ! Jacobian is cheap, so while segments keep switching (seen in the last
+    ! output interval) it is formed afresh at every Newton-matrix update, else
+    ! at CVODE's default age (docs/line.md section 2, "Jacobian refresh").
+    if (self%opts%analytic_jacobian .and. self%sys%has_jacobian()) then
+      call self%solver%set_jacobian_age(merge(1, 0, self%sys%pattern_changed))
+      self%sys%pattern_changed = .false.
     end if
     call self%solver%advance(t_out, error)
     self%t = self%solver%t

@@ -86,6 +86,7 @@ module airlaunch_cvode
     procedure :: set_roots => solver_set_roots
     procedure :: set_stop_time => solver_set_stop_time
     procedure :: set_max_step => solver_set_max_step
+    procedure :: set_jacobian_age => solver_set_jacobian_age
     procedure :: stats => solver_stats
     procedure :: free => solver_free
   end type cvode_solver
@@ -308,6 +309,16 @@ contains
     integer(c_int) :: ierr
     ierr = FCVodeSetMaxStep(self%mem, real(hmax, c_double))
   end subroutine solver_set_max_step
+
+  !> Largest number of steps between two Jacobian evaluations
+  !> (CVodeSetJacEvalFrequency); 0 = CVODE's default (51).  1: a fresh Jacobian
+  !> at every update of the Newton matrix.
+  subroutine solver_set_jacobian_age(self, steps)
+    class(cvode_solver), intent(inout) :: self  !< solver
+    integer, intent(in) :: steps                !< largest Jacobian age in steps, 0 = default
+    integer(c_int) :: ierr
+    ierr = FCVodeSetJacEvalFrequency(self%mem, int(steps, c_long))
+  end subroutine solver_set_jacobian_age
 
   !> Integration counters so far.
   function solver_stats(self) result(s)

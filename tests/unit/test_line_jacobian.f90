@@ -10,6 +10,8 @@
 !>    force blocks over the node masses, a point-mass end with drag, a fixed
 !>    end left out of the state) against central differences of line_system%rhs,
 !>    every entry of the band and zero outside it.
+!>    The system also flags a right-hand side whose slack/taut pattern differs
+!>    from the one the last Jacobian was formed at (and not one at that state).
 !> 3. The cable pendulum of issue 7 with the analytic Jacobian and with CVODE's
 !>    difference quotients: the same end-mass track (the Newton matrix changes
 !>    the iteration, not the solution) with fewer force evaluations.
@@ -183,6 +185,21 @@ contains
     call check(big > 1.0e4_dp, "band not trivially zero")
     call check_close(err, 0.0_dp, "every band entry", abs=1.0e-8_dp*big)
     call check_close(outside, 0.0_dp, "nothing outside the band (mu = 8, ml = 11)", abs=1.0e-8_dp*big)
+
+    ! The scheme refreshes the Jacobian at every Newton-matrix update while the
+    ! segments' slack/taut pattern keeps changing (line_cvode, "Jacobian refresh"):
+    ! the system must see a change against the last Jacobian's pattern, and only then.
+    call section("slack/taut pattern against the last Jacobian's")
+    call sys%rhs(0.0_dp, y, fp, st)
+    call sys%jacobian(0.0_dp, y, jac, st)
+    sys%pattern_changed = .false.
+    call sys%rhs(0.0_dp, y, fp, st)
+    call check(.not. sys%pattern_changed, "the Jacobian's own state: no change seen")
+    x(:, 1) = x(:, 0) + 0.9_dp*(x(:, 1) - x(:, 0))   ! segment 1 (strain +2 %) now 8 % short
+    call sys%pack(x, v, yp)
+    call sys%rhs(0.0_dp, yp, fp, st)
+    call check(sys%tension(1) == 0.0_dp .and. sys%tension(2) > 0.0_dp, "segment 1 slack, segment 2 taut")
+    call check(sys%pattern_changed, "a taut segment gone slack is seen")
   end subroutine system_band
 
   subroutine pendulum_same_track()
