@@ -198,7 +198,7 @@ contains
     real(dp), intent(in) :: y(:)                !< state
     type(band_view), intent(inout) :: jac       !< band matrix, zeroed by CVODE
     integer, intent(out) :: status              !< rhs_ok
-    integer :: k, d, j, jj, p, q, i
+    integer :: k, d, j, jj, p, i
     call self%unpack(t, y)
     call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
     ! CVODE forms the Jacobian right after a right-hand side at the same state,
@@ -219,12 +219,8 @@ contains
       do d = -1, 1
         if (k + d < self%first .or. k + d > self%last) cycle
         jj = 6*(k + d - self%first)
-        do q = 1, 3
-          do p = 1, 3
-            call jac%set(j + 3 + p, jj + q, self%inv_mass(k)*self%dfdx(p, q, d, k))
-            call jac%set(j + 3 + p, jj + 3 + q, self%inv_mass(k)*self%dfdv(p, q, d, k))
-          end do
-        end do
+        call jac%set_block(j + 3, jj, self%inv_mass(k), self%dfdx(:, :, d, k))
+        call jac%set_block(j + 3, jj + 3, self%inv_mass(k), self%dfdv(:, :, d, k))
       end do
     end do
     status = rhs_ok

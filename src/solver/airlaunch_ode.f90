@@ -20,6 +20,7 @@ module airlaunch_ode
     integer :: smu = 0                     !< stored upper bandwidth
   contains
     procedure :: set => band_view_set
+    procedure :: set_block => band_view_set_block
   end type band_view
 
   !> A first-order system y' = f(t, y) with optional event functions g(t, y).
@@ -95,6 +96,20 @@ contains
     real(dp), intent(in) :: value             !< entry
     self%ab((j - 1)*self%ldim + self%smu + i - j + 1) = value
   end subroutine band_view_set
+
+  !> A(i0+1:i0+m, j0+1:j0+n) = scale * a, a column slice of the storage per
+  !> column (every entry within the stored band: the caller's structure).
+  pure subroutine band_view_set_block(self, i0, j0, scale, a)
+    class(band_view), intent(inout) :: self   !< the matrix
+    integer, intent(in) :: i0, j0             !< row and column before the block
+    real(dp), intent(in) :: scale             !< factor
+    real(dp), intent(in) :: a(:, :)           !< the block
+    integer :: q, base
+    do q = 1, size(a, 2)
+      base = (j0 + q - 1)*self%ldim + self%smu + i0 - (j0 + q) + 1
+      self%ab(base + 1:base + size(a, 1)) = scale*a(:, q)
+    end do
+  end subroutine band_view_set_block
 
   !> True if the system provides an analytic band Jacobian (`jacobian`); the
   !> solver then uses it instead of difference quotients.
