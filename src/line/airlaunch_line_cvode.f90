@@ -296,10 +296,11 @@ contains
       return
     end if
     ! A slack/taut switch changes the line's Jacobian discretely; a Newton matrix
-    ! from before the switch fails to converge and costs a step.  The analytic
-    ! Jacobian is cheap, so while segments keep switching (seen in the last
-    ! output interval) it is formed afresh at every Newton-matrix update, else
-    ! at CVODE's default age (docs/line.md section 2, "Jacobian refresh").
+    ! from before the switch fails to converge, which costs a step and then a
+    ! fresh Jacobian anyway.  So while segments keep switching (seen in the last
+    ! output interval) the analytic Jacobian (about 20 right-hand sides' work) is
+    ! formed afresh at every Newton-matrix update, else at CVODE's default age
+    ! (docs/line.md section 2, "Jacobian refresh").
     if (self%opts%analytic_jacobian .and. self%sys%has_jacobian()) then
       call self%solver%set_jacobian_age(merge(1, 0, self%sys%pattern_changed))
       self%sys%pattern_changed = .false.
