@@ -554,15 +554,15 @@ contains
   function energy_summary(scene) result(text)
     type(line_scene), intent(in) :: scene  !< the run
     character(len=:), allocatable :: text
-    real(dp) :: kmax
+    real(dp) :: kmax, rise
     if (.not. is_passive(scene%cfg)) then
       text = "energy: not checked (a moving end or the wind does work on the line)"
       return
     end if
     kmax = maxval(scene%energy(1, 1:scene%n_out))
-    text = "energy (passive line, may only fall): largest rise above the initial total " // &
-      str(energy_rise(scene)) // " J"
-    if (kmax > 0.0_dp) text = text // " (" // str(100.0_dp*energy_rise(scene)/kmax) // &
+    rise = energy_rise(scene)
+    text = "energy (passive line, may only fall): largest rise above the initial total " // str(rise) // " J"
+    if (kmax > 0.0_dp) text = text // " (" // str(100.0_dp*rise/kmax) // &
       " % of the largest kinetic energy, " // str(kmax) // " J)"
   end function energy_summary
   !> The scheme's own work counters for the summary, each followed by ", ".

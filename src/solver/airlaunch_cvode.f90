@@ -139,10 +139,7 @@ contains
     end if
     ierr = FCVodeSetErrHandlerFn(self%mem, c_funloc(error_handler), c_loc(self%cb))
     ierr = FCVodeInit(self%mem, c_funloc(rhs_callback), real(t0, c_double), self%nv_y)
-    if (ierr /= 0) then
-      call fatal_error(error, "CVODE: FCVodeInit failed (flag " // str(int(ierr)) // ")")
-      return
-    end if
+    if (failed(ierr, "FCVodeInit failed", error)) return
     ierr = FCVodeSetUserData(self%mem, c_loc(self%cb))
     if (allocated(opts%atol_vector)) then
       if (size(opts%atol_vector) /= neq) then
@@ -210,10 +207,7 @@ contains
       select case (opts%linear_solver)
       case ("band", "second_order_band", "sundials_band")
         ierr = FCVodeSetJacFn(self%mem, c_funloc(jac_callback))
-        if (ierr /= 0) then
-          call fatal_error(error, "CVODE: cannot install the analytic Jacobian (flag " // str(int(ierr)) // ")")
-          return
-        end if
+        if (failed(ierr, "cannot install the analytic Jacobian", error)) return
       end select
     end if
     ierr = FCVodeSetMaxNumSteps(self%mem, int(opts%max_num_steps, c_long))
@@ -225,14 +219,21 @@ contains
     ierr = FCVodeSetMaxHnilWarns(self%mem, -1_c_int)
     if (sys%has_projection() .and. lmm == CV_BDF) then
       ierr = FCVodeSetProjFn(self%mem, c_funloc(proj_callback))
-      if (ierr /= 0) then
-        call fatal_error(error, "CVODE: cannot install the projection (flag " // str(int(ierr)) // ")")
-        return
-      end if
+      if (failed(ierr, "cannot install the projection", error)) return
     end if
     if (opts%stability_limit_detection) ierr = FCVodeSetStabLimDet(self%mem, 1_c_int)
     call self%set_roots(sys%nroots(), error)
   end subroutine solver_init
+
+  !> True (and `error` set to "CVODE: <what> (flag <ierr>)") if a SUNDIALS call
+  !> returned a nonzero flag.
+  logical function failed(ierr, what, error)
+    integer(c_int), intent(in) :: ierr                    !< the call's flag
+    character(len=*), intent(in) :: what                  !< what failed
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    failed = ierr /= 0
+    if (failed) call fatal_error(error, "CVODE: " // what // " (flag " // str(int(ierr)) // ")")
+  end function failed
 
   !> Change the number of event functions (0 switches root finding off).
   subroutine solver_set_roots(self, n, error)
