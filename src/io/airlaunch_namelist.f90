@@ -68,9 +68,9 @@ contains
     class(nml_file), intent(inout) :: self
     character(len=*), intent(in) :: path                  !< file to read
     type(error_type), allocatable, intent(inout) :: error !< set on failure
-    integer :: unit, ios, lineno, k
+    integer :: unit, ios, lineno, k, nchar, pos, lt
     character(len=4096) :: buf
-    character(len=:), allocatable :: text, group
+    character(len=:), allocatable :: text
     integer, allocatable :: line_of(:), col_of(:)
     logical :: exists
 
@@ -89,23 +89,42 @@ contains
       call fatal_error(error, path // ": cannot open the file for reading")
       return
     end if
-    ! The whole file as one string (comments removed), with the line of each character.
-    text = ""
-    allocate(line_of(0), col_of(0))
-    lineno = 0
+    ! The whole file as one string (comments removed, each line followed by one
+    ! blank), with the line and column of each character: a first pass sizes it,
+    ! a second fills it (growing the string line by line was quadratic in the
+    ! file's length: a third of a sweep case's set-up)
+    nchar = 0
     do
       read(unit, '(a)', iostat=ios) buf
       if (ios /= 0) exit
+      nchar = nchar + stripped_length(buf) + 1
+    end do
+    rewind(unit)
+    allocate(character(len=nchar) :: text)
+    allocate(line_of(nchar), col_of(nchar))
+    lineno = 0
+    pos = 0
+    do
+      read(unit, '(a)', iostat=ios) buf
+      if (ios /= 0 .or. pos >= nchar) exit
       lineno = lineno + 1
-      buf = strip_comment(buf)
-      text = text // trim(buf) // " "
-      line_of = [line_of, spread(lineno, 1, len_trim(buf) + 1)]
-      col_of = [col_of, [(k, k = 1, len_trim(buf) + 1)]]
+      lt = stripped_length(buf)
+      text(pos+1:pos+lt+1) = buf(1:lt) // " "
+      line_of(pos+1:pos+lt+1) = lineno
+      col_of(pos+1:pos+lt+1) = [(k, k = 1, lt + 1)]
+      pos = pos + lt + 1
     end do
     close(unit)
-    group = ""
-    call scan_text(self, text, line_of, col_of, error)
+    call scan_text(self, text(1:pos), line_of(1:pos), col_of(1:pos), error)
   end subroutine nml_load
+
+  !> Length of a line without its comment and trailing blanks.
+  pure integer function stripped_length(line) result(n)
+    character(len=*), intent(in) :: line
+    integer :: lt
+    lt = len_trim(line)
+    n = len_trim(strip_comment(line(1:lt)))
+  end function stripped_length
 
   !> Scan the comment-free text into groups and assignments.
   subroutine scan_text(self, text, line_of, col_of, error)
@@ -113,120 +132,131 @@ contains
     character(len=*), intent(in) :: text
     integer, intent(in) :: line_of(:), col_of(:)
     type(error_type), allocatable, intent(inout) :: error
-    integer :: i, n, j, k, vstart, gline
+    integer :: i, n, j, k, vstart, gline, n_items
     character(len=:), allocatable :: group, name, idx
     logical :: in_group
     character :: quote
     type(nml_assignment) :: item
+    type(nml_assignment), allocatable :: items(:)
 
-    n = len(text)
-    i = 1
-    in_group = .false.
-    vstart = 0
-    gline = 0
-    do while (i <= n)
-      if (.not. in_group) then
-        if (text(i:i) == "&" .or. text(i:i) == "$") then
-          j = i + 1
-          do while (j <= n)
-            if (.not. is_name_char(text(j:j))) exit
-            j = j + 1
-          end do
-          group = lower(text(i+1:j-1))
-          if (group == "end") then
+    ! the assignments found, in a buffer that doubles when full (appending to
+    ! self%items one by one copied every earlier assignment each time)
+    allocate(items(16))
+    n_items = 0
+    call scan()
+    self%items = items(1:n_items)
+  contains
+    !> The groups and assignments of the text, in order.
+    subroutine scan()
+      n = len(text)
+      i = 1
+      in_group = .false.
+      vstart = 0
+      gline = 0
+      do while (i <= n)
+        if (.not. in_group) then
+          if (text(i:i) == "&" .or. text(i:i) == "$") then
+            j = i + 1
+            do while (j <= n)
+              if (.not. is_name_char(text(j:j))) exit
+              j = j + 1
+            end do
+            group = lower(text(i+1:j-1))
+            if (group == "end") then
+              i = j
+              cycle
+            end if
+            in_group = .true.
+            gline = line_of(i)
+            self%groups = [character(len=32) :: self%groups, group]
+            self%group_lines = [self%group_lines, gline]
+            vstart = 0
             i = j
             cycle
-          end if
-          in_group = .true.
-          gline = line_of(i)
-          self%groups = [character(len=32) :: self%groups, group]
-          self%group_lines = [self%group_lines, gline]
-          vstart = 0
-          i = j
-          cycle
-        else if (text(i:i) /= " ") then
-          call fatal_error(error, self%path // ":" // str(line_of(i)) // ": text outside a namelist group: '" &
-            // trim(text(i:min(n, i+20))) // "' (groups start with &name and end with /)")
-          return
-        end if
-        i = i + 1
-      else
-        select case (text(i:i))
-        case ("'", '"')
-          quote = text(i:i)
-          j = index(text(i+1:), quote)
-          if (j == 0) then
-            call fatal_error(error, self%path // ":" // str(line_of(i)) // ": &" // group // &
-              ": unterminated string " // text(i:min(n, i+20)))
+          else if (text(i:i) /= " ") then
+            call fatal_error(error, self%path // ":" // str(line_of(i)) // ": text outside a namelist group: '" &
+              // trim(text(i:min(n, i+20))) // "' (groups start with &name and end with /)")
             return
           end if
-          i = i + j + 1
-        case ("/")
-          if (vstart > 0) call close_item(i - 1)
-          in_group = .false.
-          vstart = 0
           i = i + 1
-        case ("&")
-          if (lower(text(i:min(n, i+3))) == "&end") then
+        else
+          select case (text(i:i))
+          case ("'", '"')
+            quote = text(i:i)
+            j = index(text(i+1:), quote)
+            if (j == 0) then
+              call fatal_error(error, self%path // ":" // str(line_of(i)) // ": &" // group // &
+                ": unterminated string " // text(i:min(n, i+20)))
+              return
+            end if
+            i = i + j + 1
+          case ("/")
             if (vstart > 0) call close_item(i - 1)
             in_group = .false.
             vstart = 0
-            i = i + 4
-          else
-            call fatal_error(error, self%path // ":" // str(line_of(i)) // ": group &" // group // &
-              " is not closed with / before the next group")
-            return
-          end if
-        case default
-          if (is_name_start(text(i:i)) .and. (i == 1 .or. is_sep(text(max(1, i-1):max(1, i-1))))) then
-            ! a name followed (after an optional index and blanks) by '=' starts an assignment
-            j = i
-            do while (j <= n)
-              if (.not. (is_name_char(text(j:j)) .or. text(j:j) == "%")) exit
-              j = j + 1
-            end do
-            k = j
-            idx = ""
-            if (k <= n) then
-              if (text(k:k) == "(") then
-                k = index(text(k:), ")") + k
-                idx = lower(without_blanks(text(j:k-1)))
-              end if
-            end if
-            do while (k <= n)
-              if (text(k:k) /= " ") exit
-              k = k + 1
-            end do
-            if (k <= n) then
-              if (text(k:k) == "=") then
-                if (vstart > 0) call close_item(i - 1)
-                name = lower(text(i:j-1))
-                item%group = group
-                item%name = name
-                item%index = idx
-                item%line = line_of(i)
-                item%group_number = size(self%groups)
-                item%first_line = line_of(i)
-                item%first_col = col_of(i)
-                item%last_line = line_of(k)
-                item%last_col = col_of(k)
-                vstart = k + 1
-                i = k + 1
-                cycle
-              end if
-            end if
-            i = j
-          else
             i = i + 1
-          end if
-        end select
+          case ("&")
+            if (lower(text(i:min(n, i+3))) == "&end") then
+              if (vstart > 0) call close_item(i - 1)
+              in_group = .false.
+              vstart = 0
+              i = i + 4
+            else
+              call fatal_error(error, self%path // ":" // str(line_of(i)) // ": group &" // group // &
+                " is not closed with / before the next group")
+              return
+            end if
+          case default
+            if (is_name_start(text(i:i)) .and. (i == 1 .or. is_sep(text(max(1, i-1):max(1, i-1))))) then
+              ! a name followed (after an optional index and blanks) by '=' starts an assignment
+              j = i
+              do while (j <= n)
+                if (.not. (is_name_char(text(j:j)) .or. text(j:j) == "%")) exit
+                j = j + 1
+              end do
+              k = j
+              idx = ""
+              if (k <= n) then
+                if (text(k:k) == "(") then
+                  k = index(text(k:), ")") + k
+                  idx = lower(without_blanks(text(j:k-1)))
+                end if
+              end if
+              do while (k <= n)
+                if (text(k:k) /= " ") exit
+                k = k + 1
+              end do
+              if (k <= n) then
+                if (text(k:k) == "=") then
+                  if (vstart > 0) call close_item(i - 1)
+                  name = lower(text(i:j-1))
+                  item%group = group
+                  item%name = name
+                  item%index = idx
+                  item%line = line_of(i)
+                  item%group_number = size(self%groups)
+                  item%first_line = line_of(i)
+                  item%first_col = col_of(i)
+                  item%last_line = line_of(k)
+                  item%last_col = col_of(k)
+                  vstart = k + 1
+                  i = k + 1
+                  cycle
+                end if
+              end if
+              i = j
+            else
+              i = i + 1
+            end if
+          end select
+        end if
+      end do
+      if (in_group) then
+        call fatal_error(error, self%path // ":" // str(gline) // ": group &" // group // &
+          " is not closed (end it with /)")
       end if
-    end do
-    if (in_group) then
-      call fatal_error(error, self%path // ":" // str(gline) // ": group &" // group // &
-        " is not closed (end it with /)")
-    end if
-  contains
+    end subroutine scan
+
     subroutine close_item(last)
       integer, intent(in) :: last
       character(len=:), allocatable :: v
@@ -241,9 +271,18 @@ contains
         if (v(len(v):len(v)) == ",") v = trim(v(:len(v)-1))
       end if
       item%value = v
-      self%items = [self%items, item]
+      if (n_items == size(items)) call grow()
+      n_items = n_items + 1
+      items(n_items) = item
       vstart = 0
     end subroutine close_item
+
+    subroutine grow()
+      type(nml_assignment), allocatable :: bigger(:)
+      allocate(bigger(2*size(items)))
+      bigger(1:n_items) = items(1:n_items)
+      call move_alloc(bigger, items)
+    end subroutine grow
   end subroutine scan_text
 
   !> Every group in the file must be one of `allowed`.
