@@ -14,6 +14,7 @@ Pareto front, says whether the default settings are on it, and ends with
 `RESULT {json}`."""
 import argparse
 import json
+import math
 import os
 import pathlib
 import re
@@ -89,6 +90,29 @@ def pareto(points):
         if not any((t2 <= t and e2 <= e) and (t2 < t or e2 < e) for j, (t2, e2) in enumerate(points) if j != i):
             front.append(i)
     return front
+
+
+def wall_at_error(points, target):
+    """Wall time at which a scheme reaches the error `target`, read off its work-precision
+    front: the points (wall, error) no other beats in both, joined by straight lines in
+    log-log (each segment a power law between two measured runs).  A target above the
+    cheapest run's error costs that run (no extrapolation to cheaper, less accurate runs);
+    below the most accurate run's error it is out of reach: None.
+
+    This is the companion of the "cheapest run at least as accurate" rule: on a ladder
+    of settings that rule jumps by a whole rung when a run misses the target by a hair
+    (a chaotic track, a 1-2-5 or decade ladder), the interpolated figure does not."""
+    pts = [p for p in points if p[0] > 0 and p[1] > 0]
+    front = sorted((pts[i] for i in pareto(pts)), key=lambda p: p[0])   # wall up, error down
+    if not front or target < front[-1][1]:
+        return None
+    if target >= front[0][1]:
+        return front[0][0]
+    for (w1, e1), (w2, e2) in zip(front, front[1:]):
+        if e2 <= target <= e1:
+            s = math.log(target / e1) / math.log(e2 / e1)
+            return w1 * (w2 / w1) ** s
+    return None
 
 
 def main():

@@ -10,7 +10,11 @@
 !>  B. reaching the paper run's error against the converged answer, each
 !>     scheme at its cheapest N and setting (equal accuracy of the physical
 !>     answer; both schemes also run at further N);
-!>  C. at the same N, reaching 1 mm.
+!>  C. at the same N, reaching 1 mm;
+!>  D. as B, each scheme's wall read off its work-precision front (all N and
+!>     settings; log-log between neighbouring runs) at the paper run's error:
+!>     B on a ladder jumps by a whole rung when a run misses by a hair, D does
+!>     not (B stays the verdict).
 !> Ends with one line `RESULT {json}`.  Run through `scripts/bench line`
 !> (optional arguments: axial damping c_d [N s] (1000), EA [N] (1e6), mass per
 !> length [kg/m] (0.3)); `bench-line single SCHEME N RTOL|DT [MAX_ORDER [dq]]` runs
@@ -58,6 +62,7 @@ program bench_line
   integer :: bj_same(3), bj_acc(3), bj_mm(3), bn_acc(3)
   real(dp) :: bw_acc(3), be_acc(3), pw_acc(3), pe_acc(3), wall_mx(nx), errt_mx(nx), dt_x
   integer :: pn_acc(3)
+  real(dp) :: sp_int(3), cw_int(3), pw_int(3)
   integer(8) :: steps, steps_m(3), steps_c(nr, 3), steps_x(nr, nx)
   character(len=:), allocatable :: json, rows
   character(len=32) :: arg
@@ -189,6 +194,12 @@ program bench_line
     print '(a, i5, es12.4, es11.3, 6x, i5, es10.2, es12.4, es11.3, f10.1, a)', "B equal accuracy, any N      ", &
       pn_acc(i), pw_acc(i)/t_end, pe_acc(i), bn_acc(i), rtols(bj_acc(i)), bw_acc(i)/t_end, be_acc(i), sp_acc(i), "x"
     call compare("C same N, 1 mm               ", i, i, bj_mm(i), err_m(i), err_c(bj_mm(i), i), sp_mm(i))
+    cw_int(i) = wall_at_error([reshape(wall_c, [nr*size(ns)]), reshape(wall_x, [nr*nx])], &
+      [reshape(errt_c, [nr*size(ns)]), reshape(errt_x, [nr*nx])], err_ms(i))
+    pw_int(i) = wall_at_error([wall_m, wall_mx], [err_ms, errt_mx], err_ms(i))
+    sp_int(i) = pw_int(i)/cw_int(i)
+    print '(a, i5, es12.4, es11.3, 6x, a, es12.4, es11.3, f10.1, a)', "D as B, on each front        ", &
+      ns(i), pw_int(i)/t_end, err_ms(i), "    front          ", cw_int(i)/t_end, err_ms(i), sp_int(i), "x"
   end do
 
   rows = ""
@@ -207,6 +218,7 @@ program bench_line
       ', "cvode_N_equal_accuracy": ' // str(bn_acc(i)) // &
       ', "cvode_rtol_equal_accuracy": ' // jnum(rtols(bj_acc(i))) // &
       ', "speedup_same_N_at_1mm": ' // jnum(sp_mm(i)) // &
+      ', "speedup_equal_accuracy_on_fronts": ' // jnum(sp_int(i)) // &
       ', "discretization_error_m": ' // jnum(err_s(i)) // '}'
   end do
   json = '{"bench": "line", "t_sim_s": ' // jnum(t_end) // ', "damping_Ns": ' // jnum(c_d) // &
@@ -214,6 +226,7 @@ program bench_line
     ', "reference_N": ' // str(n_ref) // ', "rows": [' // rows // ']' // &
     ', "min_speedup_same_N_at_paper_error": ' // jnum(minval(sp_same)) // &
     ', "min_speedup_equal_accuracy": ' // jnum(minval(sp_acc)) // &
+    ', "min_speedup_equal_accuracy_on_fronts": ' // jnum(minval(sp_int)) // &
     ', "meets_10x_same_N": ' // merge("true ", "false", minval(sp_same) >= 10.0_dp) // &
     ', "meets_10x_equal_accuracy": ' // merge("true ", "false", minval(sp_acc) >= 10.0_dp) // '}'
   print '(a)', ""
@@ -341,6 +354,40 @@ contains
     end do
     call scene%free()
   end subroutine run
+
+  !> Wall time at which a scheme reaches the error `target`, read off its
+  !> work-precision front: the runs (wall, error) no other beats in both, joined by
+  !> straight lines in log-log.  A target above the cheapest run's error costs that
+  !> run; below the most accurate run's error: huge (out of reach).  The Fortran twin
+  !> of postproc/bench_workprecision.py's wall_at_error (tested there).
+  pure real(dp) function wall_at_error(walls, errs, target) result(w)
+    real(dp), intent(in) :: walls(:), errs(:), target
+    real(dp) :: w1, e1, w2, e2
+    logical :: front(size(walls))
+    integer :: i, j, k
+    do i = 1, size(walls)
+      front(i) = .not. any((walls <= walls(i) .and. errs <= errs(i)) .and. &
+        (walls < walls(i) .or. errs < errs(i)))
+    end do
+    w = huge(1.0_dp)
+    if (.not. any(front)) return
+    ! the cheapest front run; from it along the front towards smaller errors
+    i = minloc(walls, 1, mask=front)
+    if (target >= errs(i)) then
+      w = walls(i)
+      return
+    end if
+    do k = 1, count(front) - 1
+      ! next front run: the cheapest one more accurate than run i
+      j = minloc(walls, 1, mask=front .and. errs < errs(i))
+      w1 = walls(i); e1 = errs(i); w2 = walls(j); e2 = errs(j)
+      if (target >= e2) then
+        w = w1*(w2/w1)**(log(target/e1)/log(e2/e1))
+        return
+      end if
+      i = j
+    end do
+  end function wall_at_error
 
   !> Largest distance between two tip histories (3, n_rec) [m].
   pure real(dp) function max_dist(a, b) result(d)
