@@ -359,7 +359,8 @@ contains
   !> work-precision front: the runs (wall, error) no other beats in both, joined by
   !> straight lines in log-log.  A target above the cheapest run's error costs that
   !> run; below the most accurate run's error: huge (out of reach).  The Fortran twin
-  !> of postproc/bench_workprecision.py's wall_at_error (tested there).
+  !> of postproc/bench_workprecision.py's wall_at_error, which is tested; the Python
+  !> one applied to this benchmark's printed table gives column D to the printed digits.
   pure real(dp) function wall_at_error(walls, errs, target) result(w)
     real(dp), intent(in) :: walls(:), errs(:), target
     real(dp) :: w1, e1, w2, e2
