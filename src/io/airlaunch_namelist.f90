@@ -91,8 +91,9 @@ contains
     end if
     ! The whole file as one string (comments removed, each line followed by one
     ! blank), with the line and column of each character: a first pass sizes it,
-    ! a second fills it (growing the string line by line was quadratic in the
-    ! file's length: a third of a sweep case's set-up)
+    ! a second fills it (growing them line by line was quadratic in the file's
+    ! length; with the buffered assignments below, reading the paper scenario
+    ! went from 12.4 M to 2.8 M instructions)
     nchar = 0
     do
       read(unit, '(a)', iostat=ios) buf
