@@ -21,12 +21,17 @@
 !> block; v' = f/m: the blocks of line_model%force_jacobian and of the point
 !> masses' drag, divided by the node masses), so a Jacobian costs about one
 !> force evaluation instead of mu + ml + 1 = 20; `analytic_jacobian = .false.`
-!> in the options falls back to CVODE's difference quotients.
+!> in the options falls back to CVODE's difference quotients.  The default
+!> scheme hands the blocks straight to the velocity-reduced solver
+!> (`node_jacobian`, through CVODE's linear-system hook: no band matrix to zero,
+!> save, copy back and scale at every setup) and keeps them while CVODE allows
+!> and no segment has switched between slack and taut; a band solver gets them
+!> as a band matrix (`jacobian`).
 module airlaunch_line_cvode
   use airlaunch_kinds, only: dp, i8, g0
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_ode, only: ode_system, band_view, rhs_ok, rhs_fatal
+  use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
   use airlaunch_line_model, only: line_model, line_energy
   use airlaunch_line_ends, only: line_end, end_point_mass
@@ -54,8 +59,6 @@ module airlaunch_line_cvode
     real(dp), allocatable :: dfdv(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
     !> which segments were taut (tension > 0) when the last Jacobian was formed
     logical, allocatable :: taut_at_jacobian(:)
-    !> a right-hand side has seen another slack/taut pattern than the last Jacobian's
-    logical :: pattern_changed = .false.
     logical :: have_jacobian = .false.          !< a Jacobian has been formed (taut_at_jacobian is set)
     integer(i8) :: n_forces = 0                !< force evaluations
   contains
@@ -67,6 +70,9 @@ module airlaunch_line_cvode
     procedure :: energy => system_energy
     procedure :: has_jacobian => system_has_jacobian
     procedure :: jacobian => system_jacobian
+    procedure :: has_node_jacobian => system_has_jacobian
+    procedure :: node_jacobian => system_node_jacobian
+    procedure, private :: force_blocks => system_force_blocks
   end type line_system
 
   !> The default scheme: CVODE BDF + band solver on a `line_system`.
@@ -103,7 +109,6 @@ contains
     allocate(self%dfdx(3, 3, -1:1, 0:n), self%dfdv(3, 3, -1:1, 0:n), self%taut_at_jacobian(n))
     self%tension = 0.0_dp
     self%taut_at_jacobian = .false.
-    self%pattern_changed = .false.
     self%have_jacobian = .false.
     self%x = 0.0_dp; self%v = 0.0_dp
     self%inv_mass = 1.0_dp/model%node_mass
@@ -165,8 +170,6 @@ contains
       status = rhs_fatal
       return
     end if
-    if (self%have_jacobian .and. .not. self%pattern_changed) &
-      self%pattern_changed = any((self%tension > 0.0_dp) .neqv. self%taut_at_jacobian)
     if (self%first == 0 .and. self%ends(1)%kind == end_point_mass) self%f(:, 0) = self%f(:, 0) + &
       self%ends(1)%external_load(self%x(:, 0), self%v(:, 0), self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
@@ -198,19 +201,8 @@ contains
     real(dp), intent(in) :: y(:)                !< state
     type(band_view), intent(inout) :: jac       !< band matrix, zeroed by CVODE
     integer, intent(out) :: status              !< rhs_ok
-    integer :: k, d, j, jj, p, i
-    call self%unpack(t, y)
-    call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
-    ! CVODE forms the Jacobian right after a right-hand side at the same state,
-    ! whose tensions are at hand
-    self%taut_at_jacobian = self%tension > 0.0_dp
-    self%have_jacobian = .true.
-    do i = 1, 2
-      k = merge(0, self%model%n, i == 1)
-      if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
-      self%dfdv(:, :, 0, k) = self%dfdv(:, :, 0, k) + self%ends(i)%external_load_dv(self%x(:, k), &
-        self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
-    end do
+    integer :: k, d, j, jj, p
+    call self%force_blocks(t, y)
     do k = self%first, self%last
       j = 6*(k - self%first)
       do p = 1, 3
@@ -225,6 +217,61 @@ contains
     end do
     status = rhs_ok
   end subroutine system_jacobian
+
+  !> The force Jacobian's blocks (dfdx, dfdv, with the point masses' drag) at
+  !> (t, y), and the slack/taut pattern they hold for.  CVODE forms a Jacobian
+  !> right after a right-hand side at the same state, whose tensions are at hand.
+  subroutine system_force_blocks(self, t, y)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    integer :: i, k
+    call self%unpack(t, y)
+    call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
+    self%taut_at_jacobian = self%tension > 0.0_dp
+    self%have_jacobian = .true.
+    do i = 1, 2
+      k = merge(0, self%model%n, i == 1)
+      if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
+      self%dfdv(:, :, 0, k) = self%dfdv(:, :, 0, k) + self%ends(i)%external_load_dv(self%x(:, k), &
+        self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
+    end do
+  end subroutine system_force_blocks
+
+  !> The Jacobian as node blocks for the velocity-reduced solver: d a_k / d x and
+  !> d a_k / d v of the state nodes k-1, k, k+1 (the force blocks over the node's
+  !> mass; kinematic ends are not states: zero).  Kept when CVODE allows it
+  !> (`reuse_ok`) and every segment is still as slack or taut as when they were
+  !> formed (the tensions of the right-hand side CVODE has just evaluated at y);
+  !> a switch changes the Jacobian discretely and old blocks would make Newton
+  !> fail (docs/line.md section 2, "Jacobian refresh").  No allocation.
+  subroutine system_node_jacobian(self, t, y, reuse_ok, blk, fresh, status)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    logical, intent(in) :: reuse_ok             !< CVODE allows the last blocks
+    type(node_blocks), intent(inout) :: blk     !< the blocks (nodes = last - first + 1)
+    logical, intent(out) :: fresh               !< evaluated now
+    integer, intent(out) :: status              !< rhs_ok
+    integer :: k, d, j
+    status = rhs_ok
+    fresh = .not. (reuse_ok .and. self%have_jacobian)
+    if (.not. fresh) fresh = any((self%tension > 0.0_dp) .neqv. self%taut_at_jacobian)
+    if (.not. fresh) return
+    call self%force_blocks(t, y)
+    do k = self%first, self%last
+      j = k - self%first + 1
+      do d = -1, 1
+        if (k + d < self%first .or. k + d > self%last) then
+          blk%ax(:, :, d, j) = 0.0_dp
+          blk%av(:, :, d, j) = 0.0_dp
+        else
+          blk%ax(:, :, d, j) = self%inv_mass(k)*self%dfdx(:, :, d, k)
+          blk%av(:, :, d, j) = self%inv_mass(k)*self%dfdv(:, :, d, k)
+        end if
+      end do
+    end do
+  end subroutine system_node_jacobian
 
   !> Mechanical energy of line and point-mass ends at time t, state y [J]:
   !> kinetic + elastic + gravitational (the work of kinematic ends is not in it).
@@ -294,16 +341,6 @@ contains
     if (self%sys%n_state() == 0) then
       self%t = t_out
       return
-    end if
-    ! A slack/taut switch changes the line's Jacobian discretely; a Newton matrix
-    ! from before the switch fails to converge, which costs a step and then a
-    ! fresh Jacobian anyway.  So while segments keep switching (seen in the last
-    ! output interval) the analytic Jacobian (about 20 right-hand sides' work) is
-    ! formed afresh at every Newton-matrix update, else at CVODE's default age
-    ! (docs/line.md section 2, "Jacobian refresh").
-    if (self%opts%analytic_jacobian .and. self%sys%has_jacobian()) then
-      call self%solver%set_jacobian_age(merge(1, 0, self%sys%pattern_changed))
-      self%sys%pattern_changed = .false.
     end if
     call self%solver%advance(t_out, error)
     self%t = self%solver%t

@@ -10,7 +10,7 @@ module airlaunch_cvode
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_ode, only: ode_system, band_view, rhs_ok, rhs_fatal
+  use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use fsundials_context_mod
   use fsundials_nvector_mod
   use fsundials_matrix_mod
@@ -24,7 +24,7 @@ module airlaunch_cvode
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
   use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, &
-    band_data
+    band_data, use_node_blocks
   implicit none
   private
   public :: cvode_options, cvode_solver, cvode_stats, add_stats
@@ -65,6 +65,9 @@ module airlaunch_cvode
     integer :: nroots = 0
     integer(c_int), allocatable :: root_info(:)   !< (max(1, nroots)) CVodeGetRootInfo, sized by set_roots
     character(len=:), allocatable :: last_message
+    !> the Jacobian as node blocks, shared with the velocity-reduced solver
+    !> (second_order_band with a system that has node_jacobian)
+    type(node_blocks), pointer :: blocks => null()
   end type callback_data
 
   !> A CVODE integrator bound to one system.
@@ -86,7 +89,6 @@ module airlaunch_cvode
     procedure :: set_roots => solver_set_roots
     procedure :: set_stop_time => solver_set_stop_time
     procedure :: set_max_step => solver_set_max_step
-    procedure :: set_jacobian_age => solver_set_jacobian_age
     procedure :: stats => solver_stats
     procedure :: free => solver_free
   end type cvode_solver
@@ -203,7 +205,18 @@ contains
       call fatal_error(error, "CVODE: cannot attach the " // trim(opts%linear_solver) // " solver")
       return
     end if
-    if (opts%analytic_jacobian .and. sys%has_jacobian()) then
+    if (opts%analytic_jacobian .and. opts%linear_solver == "second_order_band" .and. sys%has_node_jacobian()) then
+      ! the Newton matrix straight from the system's node blocks: CVODE's linear-
+      ! system hook replaces its band Jacobian (zeroed, filled, saved, copied back
+      ! and scaled at every setup) and lets the system keep valid blocks
+      allocate(self%cb%blocks)
+      self%cb%blocks%nodes = int(neq)/6
+      allocate(self%cb%blocks%ax(3, 3, -1:1, self%cb%blocks%nodes), &
+        self%cb%blocks%av(3, 3, -1:1, self%cb%blocks%nodes), source=0.0_dp)
+      call use_node_blocks(self%ls, self%cb%blocks)
+      ierr = FCVodeSetLinSysFn(self%mem, c_funloc(linsys_callback))
+      if (failed(ierr, "cannot install the linear-system function", error)) return
+    else if (opts%analytic_jacobian .and. sys%has_jacobian()) then
       select case (opts%linear_solver)
       case ("band", "second_order_band", "sundials_band")
         ierr = FCVodeSetJacFn(self%mem, c_funloc(jac_callback))
@@ -311,16 +324,6 @@ contains
     ierr = FCVodeSetMaxStep(self%mem, real(hmax, c_double))
   end subroutine solver_set_max_step
 
-  !> Largest number of steps between two Jacobian evaluations
-  !> (CVodeSetJacEvalFrequency); 0 = CVODE's default (51).  1: a fresh Jacobian
-  !> at every update of the Newton matrix.
-  subroutine solver_set_jacobian_age(self, steps)
-    class(cvode_solver), intent(inout) :: self  !< solver
-    integer, intent(in) :: steps                !< largest Jacobian age in steps, 0 = default
-    integer(c_int) :: ierr
-    ierr = FCVodeSetJacEvalFrequency(self%mem, int(steps, c_long))
-  end subroutine solver_set_jacobian_age
-
   !> Integration counters so far.
   function solver_stats(self) result(s)
     class(cvode_solver), intent(in) :: self  !< solver
@@ -369,7 +372,10 @@ contains
     if (c_associated(self%ctx)) ierr = FSUNContext_Free(self%ctx)
     self%ctx = c_null_ptr
     if (associated(self%y)) deallocate(self%y)
-    if (associated(self%cb)) deallocate(self%cb)
+    if (associated(self%cb)) then
+      if (associated(self%cb%blocks)) deallocate(self%cb%blocks)
+      deallocate(self%cb)
+    end if
   end subroutine solver_free
 
   !> One line that says when and why CVODE stopped.
@@ -440,6 +446,33 @@ contains
     if (.false.) ierr = int(FN_VGetLength(nv_fy) + FN_VGetLength(tmp1) + FN_VGetLength(tmp2) + &
       FN_VGetLength(tmp3), c_int)
   end function jac_callback
+
+  !> CVODE linear-system callback (second-order systems with node blocks): the
+  !> system's Jacobian blocks at (t, y) - kept if CVODE allows (jok) and the
+  !> system finds them valid - and gamma, for the velocity-reduced solver's setup,
+  !> which follows; CVODE's band matrix `mat` is not used.
+  integer(c_int) function linsys_callback(t, nv_y, nv_fy, mat, jok, jcur, gamma, user_data, tmp1, tmp2, tmp3) &
+      result(ierr) bind(C)
+    real(c_double), value :: t
+    type(N_Vector) :: nv_y, nv_fy, tmp1, tmp2, tmp3
+    type(SUNMatrix) :: mat
+    integer(c_int), value :: jok
+    integer(c_int) :: jcur
+    real(c_double), value :: gamma
+    type(c_ptr), value :: user_data
+    type(callback_data), pointer :: cb
+    real(c_double), pointer :: y(:)
+    logical :: fresh
+    integer :: status
+    call c_f_pointer(user_data, cb)
+    y => FN_VGetArrayPointer(nv_y)
+    call cb%sys%node_jacobian(t, y, jok /= 0, cb%blocks, fresh, status)
+    cb%blocks%gamma = gamma
+    jcur = merge(1_c_int, 0_c_int, fresh)
+    ierr = int(status, c_int)
+    if (.false.) ierr = int(FN_VGetLength(nv_fy) + FN_VGetLength(tmp1) + FN_VGetLength(tmp2) + &
+      FN_VGetLength(tmp3) + FSUNBandMatrix_Columns(mat), c_int)
+  end function linsys_callback
 
   !> CVODE projection callback: corr = P(y) - y.
   integer(c_int) function proj_callback(t, nv_y, nv_corr, eps, err, user_data) result(ierr) bind(C)

@@ -33,9 +33,11 @@ module airlaunch_lapack_band
   use fsundials_nvector_mod
   use fnvector_serial_mod
   use fsunmatrix_band_mod
+  use airlaunch_ode, only: node_blocks
   implicit none
   private
-  public :: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, band_data
+  public :: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, band_data, &
+    use_node_blocks
 
   !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
   integer, parameter :: kr = 5
@@ -53,6 +55,8 @@ module airlaunch_lapack_band
     real(c_double), allocatable :: s(:, :)            !< reduced matrix, LAPACK band storage (ldab, 3 nodes)
     real(c_double), allocatable :: mvx(:, :, :, :)    !< M_vx blocks (3, 3, -1:1, nodes)
     real(c_double), allocatable :: rv(:)              !< work: reduced right-hand side (3 nodes)
+    !> reduced: the Jacobian as node blocks (use_node_blocks), read instead of M
+    type(node_blocks), pointer :: blocks => null()
   end type band_content
 
   interface
@@ -207,6 +211,18 @@ contains
     allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
   end function new_second_order_band_solver
 
+  !> Let the velocity-reduced solver `ls` build its matrix from the node blocks
+  !> `blocks` (filled, with gamma, by CVODE's linear-system callback before every
+  !> setup) instead of from CVODE's band matrix, which then stays unused: CVODE
+  !> neither zeroes, copies nor scales it.
+  subroutine use_node_blocks(ls, blocks)
+    type(SUNLinearSolver), intent(inout) :: ls         !< from new_second_order_band_solver
+    type(node_blocks), pointer, intent(in) :: blocks   !< nodes = the solver's nodes
+    type(band_content), pointer :: c
+    call c_f_pointer(ls%content, c)
+    c%blocks => blocks
+  end subroutine use_node_blocks
+
   !> An empty SUNDIALS linear solver with the setup and solve of the full band LU
   !> or of the velocity-reduced system, the shared type, last-flag and free
   !> callbacks, and a new content `c` attached.  (The callbacks are chosen here:
@@ -262,6 +278,12 @@ contains
     integer :: ldim, smu, j, k, p, q, row, col, n3
     real(c_double) :: g
     call c_f_pointer(s%content, c)
+    n3 = 3*c%nodes
+    if (associated(c%blocks)) then
+      call setup_from_blocks(c, c%blocks)
+      ierr = band_lu_factor(c, n3, kr, kr, c%s)
+      return
+    end if
     ldim = int(FSUNBandMatrix_LDim(a))
     smu = int(FSUNBandMatrix_StoredUpperBandwidth(a))
     ab => band_data(a, ldim)
@@ -269,7 +291,6 @@ contains
     c%gamma = g
     c%s = 0.0_c_double
     c%mvx = 0.0_c_double
-    n3 = 3*c%nodes
     do j = 1, c%nodes
       do k = max(1, j - 1), min(c%nodes, j + 1)
         do q = 1, 3
@@ -286,6 +307,29 @@ contains
     end do
     ierr = band_lu_factor(c, n3, kr, kr, c%s)
   end function reduced_setup
+
+  !> The reduced matrix S = I - gamma av - gamma^2 ax and M_vx = -gamma ax from the
+  !> node blocks (the same matrices reduced_setup reads from M = I - gamma J).
+  subroutine setup_from_blocks(c, b)
+    type(band_content), intent(inout) :: c   !< s, mvx, gamma out
+    type(node_blocks), intent(in) :: b       !< the Jacobian's blocks and gamma
+    integer :: j, k, p, q
+    real(c_double) :: g
+    g = b%gamma
+    c%gamma = g
+    c%s = 0.0_c_double
+    do j = 1, c%nodes
+      do k = max(1, j - 1), min(c%nodes, j + 1)
+        do q = 1, 3
+          do p = 1, 3
+            c%mvx(p, q, k - j, j) = -g*b%ax(p, q, k - j, j)
+            c%s(2*kr + 1 + 3*(j - k) + p - q, 3*(k - 1) + q) = -g*(b%av(p, q, k - j, j) + g*b%ax(p, q, k - j, j))
+          end do
+          c%s(2*kr + 1, 3*(j - 1) + q) = c%s(2*kr + 1, 3*(j - 1) + q) + merge(1.0_c_double, 0.0_c_double, k == j)
+        end do
+      end do
+    end do
+  end subroutine setup_from_blocks
 
   !> x = M^-1 b through the velocity system.
   integer(c_int) function reduced_solve(s, a, x, b, tol) result(ierr) bind(C)

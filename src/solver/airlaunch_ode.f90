@@ -4,7 +4,7 @@ module airlaunch_ode
   use airlaunch_kinds, only: dp
   implicit none
   private
-  public :: ode_system, band_view, rhs_ok, rhs_recoverable, rhs_fatal
+  public :: ode_system, band_view, node_blocks, rhs_ok, rhs_recoverable, rhs_fatal
 
   !> Status codes of a right-hand side, as SUNDIALS reads them.
   integer, parameter :: rhs_ok = 0           !< derivative computed
@@ -23,6 +23,19 @@ module airlaunch_ode
     procedure :: set_block => band_view_set_block
   end type band_view
 
+  !> The Jacobian of a second-order system stored node by node (three positions,
+  !> then three velocities per node, x' = v): for node j and neighbour d = -1, 0, 1
+  !> the 3x3 blocks d a_j / d x_(j+d) and d a_j / d v_(j+d) of the accelerations,
+  !> and CVODE's gamma of the Newton matrix I - gamma J they stand for.  Filled by
+  !> the system (`node_jacobian`), read by the velocity-reduced band solver
+  !> (airlaunch_lapack_band) without a band matrix in between.
+  type :: node_blocks
+    integer :: nodes = 0
+    real(dp), allocatable :: ax(:, :, :, :)   !< (3, 3, -1:1, nodes) d a_j / d x_(j+d) [1/s^2]
+    real(dp), allocatable :: av(:, :, :, :)   !< (3, 3, -1:1, nodes) d a_j / d v_(j+d) [1/s]
+    real(dp) :: gamma = 0.0_dp                !< of the Newton matrix I - gamma J [s]
+  end type node_blocks
+
   !> A first-order system y' = f(t, y) with optional event functions g(t, y).
   type, abstract :: ode_system
     !> Set by rhs/roots before returning rhs_fatal: the quantity that failed.
@@ -35,6 +48,8 @@ module airlaunch_ode
     procedure :: project => ode_project
     procedure :: has_jacobian => ode_has_jacobian
     procedure :: jacobian => ode_jacobian
+    procedure :: has_node_jacobian => ode_has_node_jacobian
+    procedure :: node_jacobian => ode_node_jacobian
   end type ode_system
 
   abstract interface
@@ -130,4 +145,31 @@ contains
     self%failure = "the system has no analytic Jacobian"
     if (.false.) jac%ldim = int(t + y(1))
   end subroutine ode_jacobian
+
+  !> True if the system is second order, stored node by node, and provides its
+  !> Jacobian as node blocks (`node_jacobian`); the velocity-reduced band solver
+  !> then reads them directly.
+  logical function ode_has_node_jacobian(self)
+    class(ode_system), intent(in) :: self   !< the system
+    ode_has_node_jacobian = .false.
+    if (.false.) ode_has_node_jacobian = allocated(self%failure)
+  end function ode_has_node_jacobian
+
+  !> The Jacobian's node blocks at (t, y) into `blk` (its ax and av; the solver
+  !> sets gamma).  With `reuse_ok` (CVODE judges the last Jacobian young enough)
+  !> the system may keep the blocks of its last evaluation if it knows them to be
+  !> still valid; `fresh` says whether it evaluated them.  Default: none.
+  subroutine ode_node_jacobian(self, t, y, reuse_ok, blk, fresh, status)
+    class(ode_system), intent(inout) :: self  !< the system
+    real(dp), intent(in) :: t                 !< time [s]
+    real(dp), intent(in) :: y(:)              !< state
+    logical, intent(in) :: reuse_ok           !< the last blocks may be kept
+    type(node_blocks), intent(inout) :: blk   !< the blocks
+    logical, intent(out) :: fresh             !< evaluated now
+    integer, intent(out) :: status            !< rhs_ok, rhs_recoverable or rhs_fatal
+    fresh = .false.
+    status = rhs_fatal
+    self%failure = "the system has no node-block Jacobian"
+    if (.false.) blk%nodes = int(t + y(1)) + merge(1, 0, reuse_ok)
+  end subroutine ode_node_jacobian
 end module airlaunch_ode

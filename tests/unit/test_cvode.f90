@@ -107,7 +107,9 @@ program test_cvode
   use fsundials_nvector_mod
   use fnvector_serial_mod
   use fsunmatrix_band_mod
-  use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, band_data
+  use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, band_data, &
+    use_node_blocks
+  use airlaunch_ode, only: node_blocks
   use testing
   implicit none
   type(oscillator), target :: osc
@@ -201,6 +203,46 @@ program test_cvode
       abs=1e-12_dp*maxval(abs(x1)))
     call check_close(maxval(abs(matmul(dense, x2) - bd)), 0.0_dp, "residual of the reduced solve", &
       abs=1e-12_dp*maxval(abs(bd)))
+    ! the same solver fed the Jacobian's node blocks and gamma instead of M
+    ! (CVODE's linear-system hook): ax = -M_vx/gamma, av = (I - M_vv)/gamma
+    blocks_path: block
+      type(node_blocks), pointer :: blk
+      type(SUNMatrix), pointer :: m_unused
+      type(SUNLinearSolver), pointer :: ls_blk
+      type(N_Vector), pointer :: nx3
+      real(c_double), pointer :: x3(:)
+      integer :: d
+      allocate(blk)
+      blk%nodes = nn
+      allocate(blk%ax(3, 3, -1:1, nn), blk%av(3, 3, -1:1, nn), source=0.0_dp)
+      blk%gamma = g
+      do j = 1, nn
+        do d = -1, 1
+          k = j + d
+          if (k < 1 .or. k > nn) cycle
+          do q = 1, 3
+            do p = 1, 3
+              blk%ax(p, q, d, j) = -dense(6*j-3+p, 6*k-6+q)/g
+              blk%av(p, q, d, j) = (merge(1.0_dp, 0.0_dp, j == k .and. p == q) - dense(6*j-3+p, 6*k-3+q))/g
+            end do
+          end do
+        end do
+      end do
+      m_unused => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)   ! never filled
+      ls_blk => new_second_order_band_solver(m_unused, ctx)
+      call use_node_blocks(ls_blk, blk)
+      nx3 => FN_VNew_Serial(int(n, c_long), ctx)
+      x3 => FN_VGetArrayPointer(nx3)
+      ierr = FSUNLinSolSetup(ls_blk, m_unused)
+      ierr = ierr + FSUNLinSolSolve(ls_blk, m_unused, nx3, nb, 0.0_c_double)
+      call check(ierr == 0, "node blocks: setup and solve succeed")
+      call check_close(maxval(abs(x1 - x3)), 0.0_dp, "node blocks: the full band LU's solution", &
+        abs=1e-12_dp*maxval(abs(x1)))
+      ierr = FSUNLinSolFree(ls_blk)
+      call FSUNMatDestroy(m_unused)
+      call FN_VDestroy(nx3)
+      deallocate(blk)
+    end block blocks_path
     ierr = FSUNLinSolFree(ls_full)
     ierr = FSUNLinSolFree(ls_red)
     call FSUNMatDestroy(m_full)

@@ -27,7 +27,7 @@ program test_line_jacobian
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type
   use airlaunch_strings, only: str
-  use airlaunch_ode, only: band_view
+  use airlaunch_ode, only: band_view, node_blocks
   use airlaunch_line
   use airlaunch_line_cvode, only: line_system, line_band_upper, line_band_lower
   use testing
@@ -186,20 +186,60 @@ contains
     call check_close(err, 0.0_dp, "every band entry", abs=1.0e-8_dp*big)
     call check_close(outside, 0.0_dp, "nothing outside the band (mu = 8, ml = 11)", abs=1.0e-8_dp*big)
 
-    ! The scheme refreshes the Jacobian at every Newton-matrix update while the
-    ! segments' slack/taut pattern keeps changing (line_cvode, "Jacobian refresh"):
-    ! the system must see a change against the last Jacobian's pattern, and only then.
-    call section("slack/taut pattern against the last Jacobian's")
-    call sys%rhs(0.0_dp, y, fp, st)
-    call sys%jacobian(0.0_dp, y, jac, st)
-    sys%pattern_changed = .false.
-    call sys%rhs(0.0_dp, y, fp, st)
-    call check(.not. sys%pattern_changed, "the Jacobian's own state: no change seen")
-    x(:, 1) = x(:, 0) + 0.9_dp*(x(:, 1) - x(:, 0))   ! segment 1 (strain +2 %) now 8 % short
-    call sys%pack(x, v, yp)
-    call sys%rhs(0.0_dp, yp, fp, st)
-    call check(sys%tension(1) == 0.0_dp .and. sys%tension(2) > 0.0_dp, "segment 1 slack, segment 2 taut")
-    call check(sys%pattern_changed, "a taut segment gone slack is seen")
+    ! The default scheme hands the Jacobian to the velocity-reduced solver as node
+    ! blocks (d a / d x, d a / d v of the neighbours): they must be the band's
+    ! velocity rows, entry for entry (the band was checked against differences above).
+    call section("node blocks of the Jacobian: the band's velocity rows")
+    block
+      type(node_blocks) :: blk
+      logical :: fresh
+      integer :: k, d, p, q, row, col
+      real(dp) :: diff, big_b
+      blk%nodes = n
+      allocate(blk%ax(3, 3, -1:1, n), blk%av(3, 3, -1:1, n))
+      call sys%rhs(0.0_dp, y, fp, st)
+      call sys%node_jacobian(0.0_dp, y, .false., blk, fresh, st)
+      call check(st == 0 .and. fresh, "evaluated when the solver does not allow reuse")
+      diff = 0.0_dp; big_b = 0.0_dp
+      do k = 1, n                       ! state node k is line node k (node 0 is fixed)
+        do d = -1, 1
+          do q = 1, 3
+            do p = 1, 3
+              row = 6*(k - 1) + 3 + p
+              col = 6*(k + d - 1) + q
+              if (k + d < 1 .or. k + d > n) then
+                diff = max(diff, abs(blk%ax(p, q, d, k)), abs(blk%av(p, q, d, k)))
+                cycle
+              end if
+              diff = max(diff, abs(blk%ax(p, q, d, k) - ab((col - 1)*ldim + line_band_upper + row - col + 1)), &
+                abs(blk%av(p, q, d, k) - ab((col + 2)*ldim + line_band_upper + row - col - 2)))
+              big_b = max(big_b, abs(blk%ax(p, q, d, k)))
+            end do
+          end do
+        end do
+      end do
+      call check(big_b > 1.0e3_dp, "blocks not trivially zero")
+      call check(diff == 0.0_dp, "the same numbers as the band (and zero towards the fixed end)")
+
+      ! Kept while CVODE allows it and every segment is as slack or taut as at the
+      ! last evaluation; a segment that switched (the Jacobian changes discretely)
+      ! or CVODE's refusal forces a new one.
+      call section("node blocks kept or renewed by the slack/taut pattern")
+      call sys%rhs(0.0_dp, y, fp, st)
+      call sys%node_jacobian(0.0_dp, y, .true., blk, fresh, st)
+      call check(.not. fresh, "same state, reuse allowed: kept")
+      call sys%node_jacobian(0.0_dp, y, .false., blk, fresh, st)
+      call check(fresh, "same state, reuse refused by CVODE: renewed")
+      x(:, 1) = x(:, 0) + 0.9_dp*(x(:, 1) - x(:, 0))   ! segment 1 (strain +2 %) now 8 % short
+      call sys%pack(x, v, yp)
+      call sys%rhs(0.0_dp, yp, fp, st)
+      call check(sys%tension(1) == 0.0_dp .and. sys%tension(2) > 0.0_dp, "segment 1 slack, segment 2 taut")
+      call sys%node_jacobian(0.0_dp, yp, .true., blk, fresh, st)
+      call check(fresh, "a taut segment gone slack: renewed although reuse is allowed")
+      call sys%rhs(0.0_dp, yp, fp, st)
+      call sys%node_jacobian(0.0_dp, yp, .true., blk, fresh, st)
+      call check(.not. fresh, "and kept again at that pattern")
+    end block
   end subroutine system_band
 
   subroutine pendulum_same_track()
