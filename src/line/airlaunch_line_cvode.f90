@@ -250,7 +250,7 @@ contains
     real(dp), intent(in) :: t                   !< time [s]
     real(dp), intent(in) :: y(:)                !< state
     logical, intent(in) :: reuse_ok             !< CVODE allows the last blocks
-    type(node_blocks), intent(inout) :: blk     !< the blocks (nodes = last - first + 1)
+    type(node_blocks), intent(inout) :: blk     !< the blocks, for nodes first..last (1..last - first + 1)
     logical, intent(out) :: fresh               !< evaluated now
     integer, intent(out) :: status              !< rhs_ok
     integer :: k, d, j

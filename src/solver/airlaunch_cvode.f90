@@ -210,9 +210,8 @@ contains
       ! system hook replaces its band Jacobian (zeroed, filled, saved, copied back
       ! and scaled at every setup) and lets the system keep valid blocks
       allocate(self%cb%blocks)
-      self%cb%blocks%nodes = int(neq)/6
-      allocate(self%cb%blocks%ax(3, 3, -1:1, self%cb%blocks%nodes), &
-        self%cb%blocks%av(3, 3, -1:1, self%cb%blocks%nodes), source=0.0_dp)
+      allocate(self%cb%blocks%ax(3, 3, -1:1, int(neq)/6), self%cb%blocks%av(3, 3, -1:1, int(neq)/6), &
+        source=0.0_dp)
       call use_node_blocks(self%ls, self%cb%blocks)
       ierr = FCVodeSetLinSysFn(self%mem, c_funloc(linsys_callback))
       if (failed(ierr, "cannot install the linear-system function", error)) return

@@ -217,7 +217,7 @@ contains
   !> neither zeroes, copies nor scales it.
   subroutine use_node_blocks(ls, blocks)
     type(SUNLinearSolver), intent(inout) :: ls         !< from new_second_order_band_solver
-    type(node_blocks), pointer, intent(in) :: blocks   !< nodes = the solver's nodes
+    type(node_blocks), pointer, intent(in) :: blocks   !< for as many nodes as the solver
     type(band_content), pointer :: c
     call c_f_pointer(ls%content, c)
     c%blocks => blocks
@@ -325,10 +325,10 @@ contains
             c%mvx(p, q, k - j, j) = -g*b%ax(p, q, k - j, j)
             c%s(2*kr + 1 + 3*(j - k) + p - q, 3*(k - 1) + q) = -g*(b%av(p, q, k - j, j) + g*b%ax(p, q, k - j, j))
           end do
-          c%s(2*kr + 1, 3*(j - 1) + q) = c%s(2*kr + 1, 3*(j - 1) + q) + merge(1.0_c_double, 0.0_c_double, k == j)
         end do
       end do
     end do
+    c%s(2*kr + 1, 1:3*c%nodes) = c%s(2*kr + 1, 1:3*c%nodes) + 1.0_c_double   ! the identity: the diagonal row
   end subroutine setup_from_blocks
 
   !> x = M^-1 b through the velocity system.

@@ -30,7 +30,6 @@ module airlaunch_ode
   !> the system (`node_jacobian`), read by the velocity-reduced band solver
   !> (airlaunch_lapack_band) without a band matrix in between.
   type :: node_blocks
-    integer :: nodes = 0
     real(dp), allocatable :: ax(:, :, :, :)   !< (3, 3, -1:1, nodes) d a_j / d x_(j+d) [1/s^2]
     real(dp), allocatable :: av(:, :, :, :)   !< (3, 3, -1:1, nodes) d a_j / d v_(j+d) [1/s]
     real(dp) :: gamma = 0.0_dp                !< of the Newton matrix I - gamma J [s]
@@ -170,6 +169,6 @@ contains
     fresh = .false.
     status = rhs_fatal
     self%failure = "the system has no node-block Jacobian"
-    if (.false.) blk%nodes = int(t + y(1)) + merge(1, 0, reuse_ok)
+    if (.false.) blk%gamma = t + y(1) + merge(1, 0, reuse_ok)
   end subroutine ode_node_jacobian
 end module airlaunch_ode

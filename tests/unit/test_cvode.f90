@@ -213,7 +213,6 @@ program test_cvode
       real(c_double), pointer :: x3(:)
       integer :: d
       allocate(blk)
-      blk%nodes = nn
       allocate(blk%ax(3, 3, -1:1, nn), blk%av(3, 3, -1:1, nn), source=0.0_dp)
       blk%gamma = g
       do j = 1, nn

@@ -195,7 +195,6 @@ contains
       logical :: fresh
       integer :: k, d, p, q, row, col
       real(dp) :: diff, big_b
-      blk%nodes = n
       allocate(blk%ax(3, 3, -1:1, n), blk%av(3, 3, -1:1, n))
       call sys%rhs(0.0_dp, y, fp, st)
       call sys%node_jacobian(0.0_dp, y, .false., blk, fresh, st)
