@@ -16,7 +16,7 @@ module airlaunch_parachute
   implicit none
   private
   public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter, &
-    canopy_node_acceleration
+    canopy_node_acceleration, canopy_node_jacobian
 
   !> Canopy data.
   type :: parachute
@@ -94,6 +94,50 @@ contains
     if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(v)*v
     w = 0.0_dp
     if (with_weight) w(2) = -g0*p%mass
-    acc = (line_force + drag + w)/(node_mass + p%mass + parachute_added_mass(p, air%density, t))
+    acc = (line_force + drag + w)/canopy_node_mass(p, t, air%density, node_mass)
   end subroutine canopy_node_acceleration
+
+  !> What the Jacobian of canopy_node_acceleration needs at (t, x, v): the
+  !> node's whole mass (its share of the line + canopy + apparent mass) and the
+  !> velocity derivative of the canopy's drag, d/dv (-1/2 rho CdS |v| v) =
+  !> -1/2 rho CdS (|v| I + v v^T/|v|) (zero without drag).  The altitude
+  !> dependence of the density (in drag and apparent mass) is left out: an
+  !> approximate Newton matrix, off by (d rho/dh)/rho ~ 1e-4 per metre.
+  !> `ok` is false if the node left the atmosphere model.
+  pure subroutine canopy_node_jacobian(p, t, x, v, node_mass, with_drag, mass, drag_dv, ok)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: t                 !< time [s]
+    real(dp), intent(in) :: x(3), v(3)        !< node position (y = altitude) [m], velocity [m/s]
+    real(dp), intent(in) :: node_mass         !< the line's mass lumped at the node [kg]
+    logical, intent(in) :: with_drag
+    real(dp), intent(out) :: mass             !< the node's whole mass [kg]
+    real(dp), intent(out) :: drag_dv(3, 3)    !< d drag / d v [N s/m]
+    logical, intent(out) :: ok
+    type(air_state) :: air
+    real(dp) :: speed, c
+    integer :: i, j
+    drag_dv = 0.0_dp
+    mass = 0.0_dp
+    air = isa(x(2))
+    ok = air%in_range
+    if (.not. ok) return
+    mass = canopy_node_mass(p, t, air%density, node_mass)
+    speed = norm2(v)
+    if (.not. with_drag .or. speed <= 0.0_dp) return
+    c = -0.5_dp*air%density*parachute_drag_area(p, t)
+    do j = 1, 3
+      do i = 1, 3
+        drag_dv(i, j) = c*v(i)*v(j)/speed
+      end do
+      drag_dv(j, j) = drag_dv(j, j) + c*speed
+    end do
+  end subroutine canopy_node_jacobian
+
+  !> The canopy node's whole mass: its share of the line, the canopy and the
+  !> apparent mass at time t in air of density rho [kg].
+  pure real(dp) function canopy_node_mass(p, t, rho, node_mass) result(m)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: t, rho, node_mass
+    m = node_mass + p%mass + parachute_added_mass(p, rho, t)
+  end function canopy_node_mass
 end module airlaunch_parachute

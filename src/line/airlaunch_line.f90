@@ -9,7 +9,8 @@ module airlaunch_line
     end_free, end_point_mass, end_body
   use airlaunch_line_shape, only: straight_shape, sagged_shape
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
-  use airlaunch_line_cvode, only: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower
+  use airlaunch_line_cvode, only: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, &
+    line_force_jacobian
   use airlaunch_line_marching, only: line_marching, new_line_marching
   use airlaunch_rigidization, only: rigid_equivalent, rigidize
   implicit none
@@ -18,7 +19,7 @@ module airlaunch_line
   public :: line_end, end_kind_code, end_kind_name, end_fixed, end_prescribed, end_free, end_point_mass, end_body
   public :: straight_shape, sagged_shape
   public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
-  public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower
+  public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, line_force_jacobian
   public :: line_marching, new_line_marching
   public :: rigid_equivalent, rigidize
   public :: new_line_scheme

@@ -38,11 +38,28 @@ module airlaunch_line_cvode
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
   implicit none
   private
-  public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower
+  public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, line_force_jacobian
 
   !> Upper and lower half-bandwidths of the line Jacobian (see the header).
   integer, parameter :: line_band_upper = 8
   integer, parameter :: line_band_lower = 11
+
+  !> A line's force Jacobian (the blocks of line_model%force_jacobian, plus what
+  !> the owner adds for its ends) and the slack/taut pattern it was formed at;
+  !> turned into the velocity-reduced solver's node blocks by `to_node_blocks`.
+  !> Shared by the default line scheme (line_system) and the rigidized
+  !> coupling's line, which differ only in their ends.
+  type :: line_force_jacobian
+    real(dp), allocatable :: dfdx(:, :, :, :)  !< df_j/dx_(j+d) (3, 3, -1:1, 0:N) [N/m]
+    real(dp), allocatable :: dfdv(:, :, :, :)  !< df_j/dv_(j+d) (3, 3, -1:1, 0:N) [N s/m]
+    logical, allocatable :: taut(:)            !< which segments were taut (tension > 0) when formed (N)
+    logical :: formed = .false.                !< formed at least once since `allocate`
+  contains
+    procedure :: allocate => force_jacobian_allocate
+    procedure :: form => force_jacobian_form
+    procedure :: still_valid => force_jacobian_still_valid
+    procedure :: to_node_blocks => force_jacobian_to_node_blocks
+  end type line_force_jacobian
 
   !> The discretized line with its two ends as an ODE system y' = f(t, y).
   type, extends(ode_system) :: line_system
@@ -55,11 +72,7 @@ module airlaunch_line_cvode
     real(dp), allocatable :: f(:, :)           !< work: node forces (3, 0:N)
     real(dp), allocatable :: tension(:)        !< work: segment tensions (N)
     real(dp), allocatable :: inv_mass(:)       !< 1/(node mass + end point mass), (0:N)
-    real(dp), allocatable :: dfdx(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
-    real(dp), allocatable :: dfdv(:, :, :, :)  !< work: force Jacobian blocks (3, 3, -1:1, 0:N)
-    !> which segments were taut (tension > 0) when the last Jacobian was formed
-    logical, allocatable :: taut_at_jacobian(:)
-    logical :: have_jacobian = .false.          !< a Jacobian has been formed (taut_at_jacobian is set)
+    type(line_force_jacobian) :: jac_blocks    !< work: the force Jacobian of the last evaluation
     integer(i8) :: n_forces = 0                !< force evaluations
   contains
     procedure :: rhs => system_rhs
@@ -103,13 +116,10 @@ contains
     if (end_a%is_kinematic()) self%first = 1
     self%last = n
     if (end_b%is_kinematic()) self%last = n - 1
-    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass, self%dfdx, self%dfdv, &
-      self%taut_at_jacobian)
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass)
     allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n))
-    allocate(self%dfdx(3, 3, -1:1, 0:n), self%dfdv(3, 3, -1:1, 0:n), self%taut_at_jacobian(n))
+    call self%jac_blocks%allocate(n)
     self%tension = 0.0_dp
-    self%taut_at_jacobian = .false.
-    self%have_jacobian = .false.
     self%x = 0.0_dp; self%v = 0.0_dp
     self%inv_mass = 1.0_dp/model%node_mass
     if (end_a%kind == end_point_mass) self%inv_mass(0) = 1.0_dp/(model%node_mass(0) + end_a%mass)
@@ -187,7 +197,7 @@ contains
   !> The line has an analytic Jacobian (system_jacobian).
   logical function system_has_jacobian(self)
     class(line_system), intent(in) :: self   !< system
-    system_has_jacobian = allocated(self%dfdx)
+    system_has_jacobian = allocated(self%jac_blocks%dfdx)
   end function system_has_jacobian
 
   !> df/dy at (t, y) into CVODE's zeroed band matrix (mu = 8, ml = 11, see the
@@ -211,30 +221,28 @@ contains
       do d = -1, 1
         if (k + d < self%first .or. k + d > self%last) cycle
         jj = 6*(k + d - self%first)
-        call jac%set_block(j + 3, jj, self%inv_mass(k), self%dfdx(:, :, d, k))
-        call jac%set_block(j + 3, jj + 3, self%inv_mass(k), self%dfdv(:, :, d, k))
+        call jac%set_block(j + 3, jj, self%inv_mass(k), self%jac_blocks%dfdx(:, :, d, k))
+        call jac%set_block(j + 3, jj + 3, self%inv_mass(k), self%jac_blocks%dfdv(:, :, d, k))
       end do
     end do
     status = rhs_ok
   end subroutine system_jacobian
 
-  !> The force Jacobian's blocks (dfdx, dfdv, with the point masses' drag) at
-  !> (t, y), and the slack/taut pattern they hold for.  CVODE forms a Jacobian
-  !> right after a right-hand side at the same state, whose tensions are at hand.
+  !> The force Jacobian's blocks (with the point masses' drag) at (t, y), and the
+  !> slack/taut pattern they hold for.  CVODE forms a Jacobian right after a
+  !> right-hand side at the same state, whose tensions are at hand.
   subroutine system_force_blocks(self, t, y)
     class(line_system), intent(inout) :: self   !< system
     real(dp), intent(in) :: t                   !< time [s]
     real(dp), intent(in) :: y(:)                !< state
     integer :: i, k
     call self%unpack(t, y)
-    call self%model%force_jacobian(self%x, self%v, self%dfdx, self%dfdv)
-    self%taut_at_jacobian = self%tension > 0.0_dp
-    self%have_jacobian = .true.
+    call self%jac_blocks%form(self%model, self%x, self%v, self%tension)
     do i = 1, 2
       k = merge(0, self%model%n, i == 1)
       if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
-      self%dfdv(:, :, 0, k) = self%dfdv(:, :, 0, k) + self%ends(i)%external_load_dv(self%x(:, k), &
-        self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
+      self%jac_blocks%dfdv(:, :, 0, k) = self%jac_blocks%dfdv(:, :, 0, k) + self%ends(i)%external_load_dv( &
+        self%x(:, k), self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
     end do
   end subroutine system_force_blocks
 
@@ -253,25 +261,69 @@ contains
     type(node_blocks), intent(inout) :: blk     !< the blocks, for nodes first..last (1..last - first + 1)
     logical, intent(out) :: fresh               !< evaluated now
     integer, intent(out) :: status              !< rhs_ok
-    integer :: k, d, j
     status = rhs_ok
-    fresh = .not. (reuse_ok .and. self%have_jacobian)
-    if (.not. fresh) fresh = any((self%tension > 0.0_dp) .neqv. self%taut_at_jacobian)
+    fresh = .not. self%jac_blocks%still_valid(reuse_ok, self%tension)
     if (.not. fresh) return
     call self%force_blocks(t, y)
-    do k = self%first, self%last
-      j = k - self%first + 1
+    call self%jac_blocks%to_node_blocks(self%inv_mass, self%first, self%last, blk)
+  end subroutine system_node_jacobian
+
+  !> Room for the blocks of a line of n segments; nothing formed yet.
+  subroutine force_jacobian_allocate(self, n)
+    class(line_force_jacobian), intent(inout) :: self   !< the Jacobian
+    integer, intent(in) :: n                            !< segments
+    if (allocated(self%dfdx)) deallocate(self%dfdx, self%dfdv, self%taut)
+    allocate(self%dfdx(3, 3, -1:1, 0:n), self%dfdv(3, 3, -1:1, 0:n), self%taut(n))
+    self%taut = .false.
+    self%formed = .false.
+  end subroutine force_jacobian_allocate
+
+  !> The line's force blocks at x, v (line_model%force_jacobian) and the pattern
+  !> of taut segments they hold for (`tension`: the forces' at the same state).
+  !> No allocation.
+  subroutine force_jacobian_form(self, model, x, v, tension)
+    class(line_force_jacobian), intent(inout) :: self   !< the Jacobian
+    type(line_model), intent(in) :: model               !< the line
+    real(dp), intent(in) :: x(:, 0:), v(:, 0:)          !< node positions, velocities (3, 0:N)
+    real(dp), intent(in) :: tension(:)                  !< segment tensions at x, v (N) [N]
+    call model%force_jacobian(x, v, self%dfdx, self%dfdv)
+    self%taut = tension > 0.0_dp
+    self%formed = .true.
+  end subroutine force_jacobian_form
+
+  !> True if the blocks may be kept: the solver allows it (`reuse_ok`), they have
+  !> been formed, and every segment is as slack or taut (`tension`, now) as then.
+  pure logical function force_jacobian_still_valid(self, reuse_ok, tension) result(ok)
+    class(line_force_jacobian), intent(in) :: self   !< the Jacobian
+    logical, intent(in) :: reuse_ok                  !< the solver allows the last blocks
+    real(dp), intent(in) :: tension(:)               !< segment tensions now (N) [N]
+    ok = reuse_ok .and. self%formed
+    if (ok) ok = .not. any((tension > 0.0_dp) .neqv. self%taut)
+  end function force_jacobian_still_valid
+
+  !> Node blocks of the state nodes first..last (blk's nodes 1..last - first + 1):
+  !> d a_k / d x = dfdx / m_k and d a_k / d v = dfdv / m_k, with inv_mass(k) =
+  !> 1/m_k the node's whole mass (end bodies lumped); neighbours outside
+  !> first..last are not states: zero blocks.  No allocation.
+  pure subroutine force_jacobian_to_node_blocks(self, inv_mass, first, last, blk)
+    class(line_force_jacobian), intent(in) :: self   !< the Jacobian
+    real(dp), intent(in) :: inv_mass(0:)             !< 1/(node mass) (0:N) [1/kg]
+    integer, intent(in) :: first, last               !< state nodes
+    type(node_blocks), intent(inout) :: blk          !< the blocks
+    integer :: k, d, j
+    do k = first, last
+      j = k - first + 1
       do d = -1, 1
-        if (k + d < self%first .or. k + d > self%last) then
+        if (k + d < first .or. k + d > last) then
           blk%ax(:, :, d, j) = 0.0_dp
           blk%av(:, :, d, j) = 0.0_dp
         else
-          blk%ax(:, :, d, j) = self%inv_mass(k)*self%dfdx(:, :, d, k)
-          blk%av(:, :, d, j) = self%inv_mass(k)*self%dfdv(:, :, d, k)
+          blk%ax(:, :, d, j) = inv_mass(k)*self%dfdx(:, :, d, k)
+          blk%av(:, :, d, j) = inv_mass(k)*self%dfdv(:, :, d, k)
         end if
       end do
     end do
-  end subroutine system_node_jacobian
+  end subroutine force_jacobian_to_node_blocks
 
   !> Mechanical energy of line and point-mass ends at time t, state y [J]:
   !> kinetic + elastic + gravitational (the work of kinematic ends is not in it).

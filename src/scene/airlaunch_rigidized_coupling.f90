@@ -59,12 +59,13 @@ module airlaunch_rigidized_coupling
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: dcm_to_euler, dcm_to_quat, cross
-  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use airlaunch_ode, only: ode_system, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free
-  use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize
+  use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
+    line_force_jacobian
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, canopy_node_acceleration, &
-    parachute_nominal_diameter
+    canopy_node_jacobian, parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
@@ -169,12 +170,17 @@ module airlaunch_rigidized_coupling
     type(line_end) :: far                   !< node N: B3's samples (relative), far_kinematic only
     integer :: last = 0                     !< last state node (N or N-1)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)   !< absolute work arrays (0:N)
+    real(dp), allocatable :: inv_mass(:)    !< work: 1/(whole node mass) at the last Jacobian (0:N)
+    type(line_force_jacobian) :: jac_blocks !< work: the force Jacobian of the last evaluation
     real(dp) :: chute_drag(3) = 0.0_dp      !< canopy drag of the last evaluation [N]
   contains
     procedure :: rhs => line_rhs
+    procedure :: has_node_jacobian => line_has_node_jacobian
+    procedure :: node_jacobian => line_node_jacobian
     procedure :: unpack => line_unpack
     procedure :: pack => line_pack
     procedure :: n_state => line_n_state
+    procedure :: setup => line_setup
   end type rigidized_line
 
   !> Both subsystems, their integrators and the outer loop.
@@ -481,6 +487,32 @@ contains
 
   ! ------------------------------------------------------------------ line
 
+  !> Build the line subsystem of `model` with the canopy `chute` at node N (or
+  !> node N on B3's path: far_kinematic) in the frame translating at v_ref along
+  !> x at altitude h_ref; the end motions are set later (set_body_motion).
+  subroutine line_setup(self, model, chute, far_kinematic, v_ref, h_ref)
+    class(rigidized_line), intent(inout) :: self   !< the line (re-initialised)
+    type(line_model), intent(in) :: model          !< the line
+    type(parachute), intent(in) :: chute           !< the canopy (fill_time set)
+    logical, intent(in) :: far_kinematic           !< node N follows B3
+    real(dp), intent(in) :: v_ref, h_ref           !< reference frame [m/s, m]
+    integer :: n
+    n = model%n
+    self%model = model
+    self%chute = chute
+    self%far_kinematic = far_kinematic
+    self%v_ref = v_ref
+    self%h_ref = h_ref
+    self%last = merge(n - 1, n, far_kinematic)
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass)
+    allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n))
+    self%x = 0.0_dp
+    self%v = 0.0_dp
+    self%tension = 0.0_dp
+    self%inv_mass = 1.0_dp/model%node_mass
+    call self%jac_blocks%allocate(n)
+  end subroutine line_setup
+
   !> Number of line states.
   pure integer function line_n_state(self) result(m)
     class(rigidized_line), intent(in) :: self
@@ -563,6 +595,50 @@ contains
     status = rhs_ok
   end subroutine line_rhs
 
+  !> The line has its Jacobian as node blocks (line_node_jacobian).
+  logical function line_has_node_jacobian(self)
+    class(rigidized_line), intent(in) :: self
+    line_has_node_jacobian = allocated(self%jac_blocks%dfdx)
+  end function line_has_node_jacobian
+
+  !> The Jacobian of line_rhs as node blocks for the velocity-reduced solver
+  !> (nodes 1..last): the line's force blocks over the node masses; at the
+  !> parachute node (far_end 'parachute') over its whole mass (line share +
+  !> canopy + apparent mass), with the canopy drag's velocity derivative
+  !> (canopy_node_jacobian).  Kept, as the default line scheme's, while CVODE
+  !> allows and no segment switched between slack and taut (the tensions of the
+  !> right-hand side CVODE has just evaluated at y).  No allocation.
+  subroutine line_node_jacobian(self, t, y, reuse_ok, blk, fresh, status)
+    class(rigidized_line), intent(inout) :: self   !< the line
+    real(dp), intent(in) :: t                      !< time [s]
+    real(dp), intent(in) :: y(:)                   !< state
+    logical, intent(in) :: reuse_ok                !< CVODE allows the last blocks
+    type(node_blocks), intent(inout) :: blk        !< the blocks (nodes 1..last)
+    logical, intent(out) :: fresh                  !< evaluated now
+    integer, intent(out) :: status                 !< rhs_ok or rhs_fatal
+    real(dp) :: mass, drag_dv(3, 3)
+    integer :: n
+    logical :: ok
+    status = rhs_ok
+    fresh = .not. self%jac_blocks%still_valid(reuse_ok, self%tension)
+    if (.not. fresh) return
+    n = self%model%n
+    call self%unpack(t, y)
+    call self%jac_blocks%form(self%model, self%x, self%v, self%tension)
+    if (.not. self%far_kinematic) then
+      call canopy_node_jacobian(self%chute, t, self%x(:, n), self%v(:, n), self%model%node_mass(n), &
+        self%model%p%air, mass, drag_dv, ok)
+      if (.not. ok) then
+        self%failure = "parachute altitude " // str(self%x(2, n)) // " m is outside the atmosphere model"
+        status = rhs_fatal
+        return
+      end if
+      self%inv_mass(n) = 1.0_dp/mass
+      self%jac_blocks%dfdv(:, :, 0, n) = self%jac_blocks%dfdv(:, :, 0, n) + drag_dv
+    end if
+    call self%jac_blocks%to_node_blocks(self%inv_mass, 1, self%last, blk)
+  end subroutine line_node_jacobian
+
   ! ------------------------------------------------------------------ coupling
 
   !> Build both subsystems and their integrators at time t0.
@@ -633,13 +709,7 @@ contains
     self%chain%v_ref = v_ref
     self%chain%h_ref = h_ref
     ! --- the line subsystem
-    self%line%model = model
-    self%line%chute = chute
-    self%line%far_kinematic = opts%far_end == "chain"
-    self%line%v_ref = v_ref
-    self%line%h_ref = h_ref
-    self%line%last = merge(n - 1, n, self%line%far_kinematic)
-    allocate(self%line%x(3, 0:n), self%line%v(3, 0:n), self%line%f(3, 0:n), self%line%tension(n))
+    call self%line%setup(model, chute, opts%far_end == "chain", v_ref, h_ref)
     self%line%x = x0
     self%line%v = v0
     ! --- Step 1: the virtual body from the line; B2 along the chord, B3 at node N
@@ -684,7 +754,7 @@ contains
     allocate(yl(self%line%n_state()), atol_l(self%line%n_state()))
     call self%line%pack(t0, x0, v0, yl)
     atol_l = opts%inner_atol
-    lopt = cvode_options(method="bdf", linear_solver="band", upper_bandwidth=line_band_upper, &
+    lopt = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%inner_rtol, atol_vector=atol_l, &
       max_order=opts%inner_max_order, max_num_steps=1000000)
     self%t = t0

@@ -30,6 +30,18 @@
 !>  4. far_end = 'chain' (both end motions from the chain) keeps d_rigid
 !>     exactly constant (to 1e-12): why the default puts the parachute on the
 !>     line's node N (the far-end force condition of §2.3).
+!>  5. The line subsystem's Jacobian as node blocks (what its velocity-reduced
+!>     solver is given) against central differences of its right-hand side, on
+!>     a line with taut and slack segments, drag, damping and weight, its
+!>     node N carrying an open canopy (drag, apparent mass) at 200 m/s: every
+!>     block, and zero beyond the neighbours, to 1e-8 of the largest entry
+!>     (central differences, h = 1e-6: truncation and round-off both far below;
+!>     without the canopy drag's derivative the largest difference is 56, 6e-4).  The one term
+!>     the blocks leave out by design - the air density's change with the
+!>     canopy's altitude - is taken from central differences of the canopy's
+!>     acceleration alone (line force held) and added before comparing.  The
+!>     keep/renew rule: kept at the same state when allowed, renewed when a
+!>     segment goes slack.
 program test_rigidized_coupling
   use airlaunch_kinds, only: dp, g0, pi
   use airlaunch_error, only: error_type
@@ -37,8 +49,9 @@ program test_rigidized_coupling
   use airlaunch_rotation, only: quat_from_euler
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_multibody
-  use airlaunch_line, only: line_model, line_params
-  use airlaunch_parachute, only: parachute
+  use airlaunch_line, only: line_model, line_params, line_end, end_body
+  use airlaunch_parachute, only: parachute, canopy_node_acceleration
+  use airlaunch_ode, only: node_blocks
   use airlaunch_rigidized_coupling
   use testing
   implicit none
@@ -50,6 +63,7 @@ program test_rigidized_coupling
   call test_conservation()
   call test_far_end()
   call test_bad_settings()
+  call test_line_node_blocks()
   call finish()
 
 contains
@@ -424,4 +438,102 @@ contains
     call check(allocated(error), "a chain without rocket - line - parachute rejected")
     if (allocated(error)) print '(a)', "  " // error%message
   end subroutine test_bad_settings
+
+  subroutine test_line_node_blocks()
+    integer, parameter :: m = 8
+    real(dp), parameter :: h = 1.0e-6_dp, t = 0.3_dp
+    type(rigidized_line) :: line
+    type(line_model) :: model
+    type(parachute) :: chute
+    type(node_blocks) :: blk
+    type(error_type), allocatable :: error
+    real(dp) :: x(3, 0:m), v(3, 0:m), r(3), dir(3), y(6*m), yp(6*m), fp(6*m), fm(6*m), col(6*m)
+    real(dp) :: big, err, outside, rho_term(3), ap(3), am(3), drag(3), fn(3)
+    integer :: k, j, q, d, st, n_taut
+    logical :: fresh, ok, along_v
+    call section("5. the line subsystem's node blocks against central differences of its right-hand side")
+    call model%init(line_params(length=2.0_dp*m, n_seg=m, ea=1.0e5_dp, mass_per_length=0.5_dp, damping=200.0_dp, &
+      diameter=0.05_dp, cd_normal=1.2_dp, cd_tangential=0.01_dp, gravity=.true., air=.true., air_density=0.9_dp), &
+      error)
+    call check(.not. allocated(error), "line model")
+    if (allocated(error)) return
+    chute%mass = 40.0_dp
+    chute%drag_area = 20.0_dp
+    chute%added_mass_factor = 1.0_dp
+    call line%setup(model, chute, .false., boost, h_ref)
+    ! node 0 on a body path; nodes 1..m stretched +2 % / -5 % by pairs (taut and
+    ! slack), moving at about the frame's speed (absolute ~200 m/s)
+    call line%near%set_body_motion(0.0_dp, [0.0_dp, 0.0_dp, 0.0_dp], [1.0_dp, -2.0_dp, 0.5_dp], 1.0_dp, &
+      [1.0_dp, -2.0_dp, 0.5_dp], [1.0_dp, -2.0_dp, 0.5_dp])
+    call line%near%motion(t, x(:, 0), v(:, 0))
+    x(:, 0) = x(:, 0) + [boost*t, h_ref, 0.0_dp]
+    do k = 1, m
+      call random_number(r)
+      dir = [-1.0_dp, 0.4_dp*(r(1) - 0.5_dp), 0.4_dp*(r(2) - 0.5_dp)]
+      dir = dir/norm2(dir)
+      x(:, k) = x(:, k - 1) + merge(1.02_dp, 0.95_dp, mod((k - 1)/2, 2) == 0)*model%l0*dir
+    end do
+    call random_number(v)
+    v = 2.0_dp*(v - 0.5_dp)
+    v(1, :) = v(1, :) + boost
+    call line%pack(t, x, v, y)
+    call line%rhs(t, y, fp, st)
+    call check(st == 0, "right-hand side")
+    n_taut = count(line%tension > 0.0_dp)
+    call check(n_taut >= 3 .and. m - n_taut >= 3, "taut and slack segments: " // str(n_taut) // " / " // &
+      str(m - n_taut))
+    call check(line%has_node_jacobian(), "the line has node blocks")
+    allocate(blk%ax(3, 3, -1:1, m), blk%av(3, 3, -1:1, m))
+    call line%node_jacobian(t, y, .false., blk, fresh, st)
+    call check(st == 0 .and. fresh, "blocks evaluated")
+    ! the canopy's acceleration's change with altitude through the air density
+    ! alone (line force held), which the blocks leave out
+    fn = line%f(:, m)
+    block
+      real(dp) :: xs(3)
+      xs = line%x(:, m); xs(2) = xs(2) + h
+      call canopy_node_acceleration(chute, t, xs, line%v(:, m), model%node_mass(m), fn, .true., .true., ap, drag, ok)
+      xs(2) = xs(2) - 2*h
+      call canopy_node_acceleration(chute, t, xs, line%v(:, m), model%node_mass(m), fn, .true., .true., am, drag, ok)
+    end block
+    rho_term = (ap - am)/(2*h)
+    big = max(maxval(abs(blk%ax)), maxval(abs(blk%av)))
+    err = 0.0_dp
+    outside = 0.0_dp
+    do k = 1, m
+      do q = 1, 6
+        along_v = q > 3
+        yp = y
+        yp(6*(k - 1) + q) = y(6*(k - 1) + q) + h
+        call line%rhs(t, yp, fp, st)
+        yp(6*(k - 1) + q) = y(6*(k - 1) + q) - h
+        call line%rhs(t, yp, fm, st)
+        col = (fp - fm)/(2*h)
+        if (k == m .and. q == 2) col(6*(m - 1) + 4:6*m) = col(6*(m - 1) + 4:6*m) - rho_term
+        do j = 1, m
+          d = k - j
+          if (abs(d) > 1) then
+            outside = max(outside, maxval(abs(col(6*(j - 1) + 4:6*j))))
+          else if (along_v) then
+            err = max(err, maxval(abs(col(6*(j - 1) + 4:6*j) - blk%av(:, q - 3, d, j))))
+          else
+            err = max(err, maxval(abs(col(6*(j - 1) + 4:6*j) - blk%ax(:, q, d, j))))
+          end if
+        end do
+      end do
+    end do
+    call check(big > 1.0e4_dp .and. maxval(abs(rho_term)) > 0.0_dp, "blocks and density term not trivially zero")
+    call check_close(err, 0.0_dp, "every node block", abs=1.0e-8_dp*big)
+    call check_close(outside, 0.0_dp, "no coupling beyond the neighbours", abs=1.0e-8_dp*big)
+    ! keep / renew
+    call line%rhs(t, y, fp, st)
+    call line%node_jacobian(t, y, .true., blk, fresh, st)
+    call check(.not. fresh, "same state, reuse allowed: kept")
+    yp = y
+    yp(1:3) = y(1:3) + 0.1_dp*(x(:, 0) - x(:, 1))   ! node 1 towards node 0: segment 1 slack
+    call line%rhs(t, yp, fp, st)
+    call check(line%tension(1) == 0.0_dp, "segment 1 slack")
+    call line%node_jacobian(t, yp, .true., blk, fresh, st)
+    call check(fresh, "a taut segment gone slack: renewed although reuse is allowed")
+  end subroutine test_line_node_blocks
 end program test_rigidized_coupling
