@@ -221,7 +221,11 @@ contains
     type(cvode_options), intent(out) :: opts
     opts%rtol = run%rtol
     opts%atol = run%atol
-    opts%linear_solver = "band"
+    ! Newton's band system with the positions (bodies' and nodes', x' = v)
+    ! eliminated: 65 of the paper scenario's 116 unknowns, and LAPACK's partial
+    ! pivoting no longer swaps the line's rows (airlaunch_lapack_band;
+    ! docs/performance.md, "The position-reduced Newton solve")
+    opts%linear_solver = "position_reduced_band"
     ! The band holds the stiff couplings: the line's node chain and node 1 with
     ! the rocket's position and attitude (offsets up to 18).  The aircraft-rocket
     ! coupling through the CFA (offsets to 25) and aircraft-node 1 (31) are soft

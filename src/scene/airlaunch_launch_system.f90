@@ -65,6 +65,7 @@ module airlaunch_launch_system
     procedure :: prepare => launch_prepare
     procedure :: to_absolute => launch_to_absolute
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
+    procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: project => launch_project
   end type launch_system
@@ -176,6 +177,26 @@ contains
     end if
     if (self%find_pitch_max .and. self%sep%phase == phase_free) g(launch_nroots) = self%euler_pitch_rate()
   end subroutine launch_roots
+
+  !> The positions with x' = v: both bodies' (relative) positions and every
+  !> node's, for the position-reduced Newton solver.
+  subroutine launch_velocity_partners(self, partner)
+    class(launch_system), intent(in) :: self
+    integer, intent(out) :: partner(:)
+    integer :: k, i, p
+    partner = 0
+    do p = 1, 3
+      partner(p) = 3 + p
+      partner(13 + p) = 16 + p
+    end do
+    if (.not. self%has_line) return
+    do k = 1, self%line%n
+      i = rigid_size + 6*(k - 1)
+      do p = 1, 3
+        partner(i + p) = i + 3 + p
+      end do
+    end do
+  end subroutine launch_velocity_partners
 
   !> Unit quaternions after every step (the rigid part's projection).
   logical function launch_has_projection(self)

@@ -24,6 +24,7 @@ module airlaunch_cvode
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
   use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, &
+    new_position_reduced_solver, partners_ok, &
     band_data, use_node_blocks
   implicit none
   private
@@ -187,6 +188,23 @@ contains
         int(opts%lower_bandwidth, c_long), int(opts%upper_bandwidth, c_long), self%ctx)
       self%ls => new_second_order_band_solver(self%mat, self%ctx)
       ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
+    case ("position_reduced_band")
+      ! positions with x' = v eliminated from the band system (airlaunch_lapack_band);
+      ! CVODE's matrix without the LU fill rows, as for second_order_band
+      block
+        integer, allocatable :: partner(:)
+        allocate(partner(neq))
+        call sys%velocity_partners(partner)
+        if (.not. partners_ok(partner)) then
+          call fatal_error(error, "CVODE: position_reduced_band needs positions whose velocities are states " // &
+            "and not positions themselves (" // str(count(partner /= 0)) // " positions declared)")
+          return
+        end if
+        self%mat => FSUNBandMatrixStorage(neq, int(opts%upper_bandwidth, c_long), &
+          int(opts%lower_bandwidth, c_long), int(opts%upper_bandwidth, c_long), self%ctx)
+        self%ls => new_position_reduced_solver(self%mat, self%ctx, partner)
+      end block
+      ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
     case ("sundials_band")
       ! SUNDIALS' own band LU (kept for comparison in the benchmarks)
       self%mat => FSUNBandMatrix(neq, int(opts%upper_bandwidth, c_long), &
@@ -198,7 +216,7 @@ contains
       ierr = FCVodeSetNonlinearSolver(self%mem, self%nls)
     case default
       call fatal_error(error, "CVODE: unknown linear solver '" // trim(opts%linear_solver) // &
-        "' (allowed: dense, band, second_order_band, sundials_band, none)")
+        "' (allowed: dense, band, second_order_band, position_reduced_band, sundials_band, none)")
       return
     end select
     if (ierr /= 0) then
@@ -217,7 +235,7 @@ contains
       if (failed(ierr, "cannot install the linear-system function", error)) return
     else if (opts%analytic_jacobian .and. sys%has_jacobian()) then
       select case (opts%linear_solver)
-      case ("band", "second_order_band", "sundials_band")
+      case ("band", "second_order_band", "position_reduced_band", "sundials_band")
         ierr = FCVodeSetJacFn(self%mem, c_funloc(jac_callback))
         if (failed(ierr, "cannot install the analytic Jacobian", error)) return
       end select

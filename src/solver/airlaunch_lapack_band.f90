@@ -25,6 +25,22 @@
 !>
 !> gamma is read from M itself (M(x, v) of the first node = -gamma), so the
 !> solve is exact for the M that CVODE built, whatever gamma it used.
+!>
+!> The position-reduced solver, for systems in which only some states are
+!> positions with x' = v (another state): the air-launch scene's bodies carry
+!> quaternions and rates besides their positions, its line nodes are pure
+!> positions and velocities.  The rows of such a position in CVODE's M are
+!> exactly dx - g_x dv = r_x (M(x, x) = 1, M(x, v) = -g_x, nothing else: a
+!> difference quotient of x' = v perturbs nothing else), so every position
+!> is eliminated, dx = r_x + g_x dv, and the remaining rows keep their band:
+!>     sum_j R(i, j) d_j = r_i - sum_x M(i, x) r_x,
+!>     R(i, j) = M(i, j) + g_x M(i, x) for j = v(x), M(i, j) otherwise,
+!> over the kept states only, numbered from the last to the first.  That order
+!> eliminates the line's nodes before the bodies they pull on: a node's velocity
+!> column has its large diagonal (1 + gamma^2 k/m) on the row itself, and LAPACK's
+!> partial pivoting, which swapped the rocket's rows for the node rows whose
+!> stiff springs dominate its columns in the full system, finds nothing to swap.
+!> Each g_x is read from M, so the solve is exact for the M that CVODE built.
 module airlaunch_lapack_band
   use, intrinsic :: iso_c_binding
   use fsundials_context_mod
@@ -37,10 +53,12 @@ module airlaunch_lapack_band
   implicit none
   private
   public :: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, band_data, &
-    use_node_blocks
+    use_node_blocks, new_position_reduced_solver, partners_ok
 
   !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
   integer, parameter :: kr = 5
+  !> The solvers (new_solver): full band LU, velocity-reduced, position-reduced.
+  integer, parameter :: kind_full = 1, kind_velocity = 2, kind_position = 3
 
   !> What a solver keeps between setup and solve: the full band LU uses n, ml,
   !> mu, ldab, ipiv; the velocity-reduced solve uses nodes, ldab, ipiv and its
@@ -57,6 +75,16 @@ module airlaunch_lapack_band
     real(c_double), allocatable :: rv(:)              !< work: reduced right-hand side (3 nodes)
     !> reduced: the Jacobian as node blocks (use_node_blocks), read instead of M
     type(node_blocks), pointer :: blocks => null()
+    ! position-reduced: the map of the states and the terms of the eliminated positions
+    integer :: nr = 0, klr = 0, kur = 0               !< kept states, their half-bandwidths
+    integer, allocatable :: partner(:)                !< (n) velocity of an eliminated position, else 0
+    integer, allocatable :: rmap(:)                   !< (n) index of a kept state in R, 0 if eliminated
+    real(c_double), allocatable :: g(:)               !< (n) -M(x, v(x)) of an eliminated position x
+    integer, allocatable :: mx_first(:)               !< (n + 1) kept row i's M(i, x) at mx_first(i) ..
+    integer, allocatable :: mx_col(:)                 !<   .. mx_first(i + 1) - 1: their columns x
+    real(c_double), allocatable :: mx_val(:)          !<   and values
+    real(c_double), allocatable :: rowscale(:)        !< (nr) R's row scaling (dgbequ)
+    real(c_double), allocatable :: colscale(:)        !< (nr) dgbequ's column scaling (not applied)
   end type band_content
 
   interface
@@ -74,6 +102,13 @@ module airlaunch_lapack_band
       real(c_double), intent(inout) :: b(ldb, *)
       integer, intent(out) :: info
     end subroutine dgbtrs
+    subroutine dgbequ(m, n, kl, ku, ab, ldab, r, c, rowcnd, colcnd, amax, info)
+      import :: c_double
+      integer, intent(in) :: m, n, kl, ku, ldab
+      real(c_double), intent(in) :: ab(ldab, *)
+      real(c_double), intent(out) :: r(*), c(*), rowcnd, colcnd, amax
+      integer, intent(out) :: info
+    end subroutine dgbequ
     subroutine dtbsv(uplo, trans, diag, n, k, a, lda, x, incx)
       import :: c_double
       character, intent(in) :: uplo, trans, diag
@@ -91,7 +126,7 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    ls => new_solver(ctx, .false., c)
+    ls => new_solver(ctx, kind_full, c)
     c%n = int(FSUNBandMatrix_Columns(a))
     c%ml = int(FSUNBandMatrix_LowerBandwidth(a))
     c%mu = int(FSUNBandMatrix_UpperBandwidth(a))
@@ -205,7 +240,7 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    ls => new_solver(ctx, .true., c)
+    ls => new_solver(ctx, kind_velocity, c)
     c%nodes = int(FSUNBandMatrix_Columns(a))/6
     c%ldab = 3*kr + 1
     allocate(c%s(c%ldab, 3*c%nodes), c%mvx(3, 3, -1:1, c%nodes), c%rv(3*c%nodes), c%ipiv(3*c%nodes))
@@ -228,22 +263,26 @@ contains
   !> callbacks, and a new content `c` attached.  (The callbacks are chosen here:
   !> a c_funloc constant passed as an actual argument lands in .rodata with a
   !> run-time relocation, DT_TEXTREL in the PIE executable.)
-  function new_solver(ctx, velocity_reduced, c) result(ls)
+  function new_solver(ctx, kind, c) result(ls)
     type(c_ptr), intent(in) :: ctx                  !< SUNDIALS context
-    logical, intent(in) :: velocity_reduced         !< the reduced solver's callbacks, else the full LU's
+    integer, intent(in) :: kind                     !< kind_full, kind_velocity or kind_position
     type(band_content), pointer, intent(out) :: c   !< its content (to be filled by the caller)
     type(SUNLinearSolver), pointer :: ls
     type(SUNLinearSolver_Ops), pointer :: ops
     ls => FSUNLinSolNewEmpty(ctx)
     call c_f_pointer(ls%ops, ops)
     ops%gettype = c_funloc(band_gettype)
-    if (velocity_reduced) then
+    select case (kind)
+    case (kind_velocity)
       ops%setup = c_funloc(reduced_setup)
       ops%solve = c_funloc(reduced_solve)
-    else
+    case (kind_position)
+      ops%setup = c_funloc(position_setup)
+      ops%solve = c_funloc(position_solve)
+    case default
       ops%setup = c_funloc(band_setup)
       ops%solve = c_funloc(band_solve)
-    end if
+    end select
     ops%lastflag = c_funloc(band_lastflag)
     ops%free = c_funloc(band_free)
     allocate(c)
@@ -373,6 +412,177 @@ contains
     if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
     if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
   end function reduced_solve
+
+  !> True if `partner` describes positions the position-reduced solver can
+  !> eliminate: at least one, each partner a state that is not a position.
+  pure logical function partners_ok(partner) result(ok)
+    integer, intent(in) :: partner(:)   !< velocity state of a position, 0 otherwise
+    integer :: i
+    ok = any(partner /= 0)
+    do i = 1, size(partner)
+      if (partner(i) == 0) cycle
+      if (partner(i) < 1 .or. partner(i) > size(partner)) then
+        ok = .false.
+      else if (partner(partner(i)) /= 0) then
+        ok = .false.
+      end if
+    end do
+  end function partners_ok
+
+  !> The position-reduced solver for CVODE's band matrix `a` (FSUNBandMatrix
+  !> with LU storage) of a system whose state i is a position with derivative
+  !> state partner(i) (> 0), or not (0).  Every partner must be a kept state
+  !> (not itself a position).  The kept states' half-bandwidths in R follow
+  !> from M's and the map.
+  function new_position_reduced_solver(a, ctx, partner) result(ls)
+    type(SUNMatrix), intent(inout) :: a     !< the band matrix CVODE fills
+    type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
+    integer, intent(in) :: partner(:)       !< (n) velocity state of a position, 0 otherwise
+    type(SUNLinearSolver), pointer :: ls
+    type(band_content), pointer :: c
+    integer :: i, col, j, k
+    ls => new_solver(ctx, kind_position, c)
+    c%n = int(FSUNBandMatrix_Columns(a))
+    c%ml = int(FSUNBandMatrix_LowerBandwidth(a))
+    c%mu = int(FSUNBandMatrix_UpperBandwidth(a))
+    c%partner = partner
+    c%nr = count(partner == 0)
+    allocate(c%rmap(c%n), c%g(c%n), c%mx_first(c%n + 1))
+    ! kept states numbered from the last to the first (see the module header)
+    k = c%nr + 1
+    do i = 1, c%n
+      c%rmap(i) = 0
+      if (partner(i) == 0) then
+        k = k - 1
+        c%rmap(i) = k
+      end if
+    end do
+    ! R's half-bandwidths: every entry of a kept row within M's band lands at
+    ! (rmap(i), rmap(j)) with j the column or, for a position, its velocity
+    c%klr = 0
+    c%kur = 0
+    j = 0
+    do i = 1, c%n
+      if (partner(i) /= 0) cycle
+      do col = max(1, i - c%ml), min(c%n, i + c%mu)
+        k = col
+        if (partner(col) /= 0) then
+          k = partner(col)
+          j = j + 1
+        end if
+        c%klr = max(c%klr, c%rmap(i) - c%rmap(k))
+        c%kur = max(c%kur, c%rmap(k) - c%rmap(i))
+      end do
+    end do
+    allocate(c%mx_col(max(1, j)), c%mx_val(max(1, j)))
+    c%ldab = 2*c%klr + c%kur + 1
+    allocate(c%s(c%ldab, c%nr), c%rv(c%nr), c%ipiv(c%nr), c%rowscale(c%nr), c%colscale(c%nr))
+  end function new_position_reduced_solver
+
+  !> Build R from M (see the module header) and factor it (dgbtrf); the terms
+  !> M(i, x) of the kept rows are kept for the solve.  A position row of M that
+  !> is not exactly dx - g dv is an unrecoverable failure (the system declared
+  !> a position that is not one; last flag -1).
+  integer(c_int) function position_setup(s, a) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(band_content), pointer :: c
+    real(c_double), pointer :: ab(:)
+    real(c_double) :: m
+    integer :: ldim, smu, i, col, k, nnz, p, q, info
+    real(c_double) :: rowcnd, colcnd, amax
+    call c_f_pointer(s%content, c)
+    ldim = int(FSUNBandMatrix_LDim(a))
+    smu = int(FSUNBandMatrix_StoredUpperBandwidth(a))
+    ab => band_data(a, ldim)
+    ierr = SUNLS_SUCCESS
+    do i = 1, c%n
+      if (c%partner(i) == 0) cycle
+      c%g(i) = -band_entry(ab, ldim, smu, i, c%partner(i))
+      do col = max(1, i - c%ml), min(c%n, i + c%mu)
+        if (col == c%partner(i)) cycle
+        if (band_entry(ab, ldim, smu, i, col) /= merge(1.0_c_double, 0.0_c_double, col == i)) then
+          c%last_flag = -1_c_long
+          ierr = SUNLS_PACKAGE_FAIL_UNREC
+          return
+        end if
+      end do
+    end do
+    c%s = 0.0_c_double
+    nnz = 0
+    do i = 1, c%n
+      c%mx_first(i) = nnz + 1
+      if (c%partner(i) /= 0) cycle
+      do col = max(1, i - c%ml), min(c%n, i + c%mu)
+        m = band_entry(ab, ldim, smu, i, col)
+        if (m == 0.0_c_double) cycle
+        if (c%partner(col) == 0) then
+          k = c%rmap(col)
+        else
+          k = c%rmap(c%partner(col))
+          m = c%g(col)*m
+          nnz = nnz + 1
+          c%mx_col(nnz) = col
+          c%mx_val(nnz) = band_entry(ab, ldim, smu, i, col)
+        end if
+        ! R(p, q), p = rmap(i), q = k, in LAPACK band storage with kl = klr, ku = kur
+        c%s(c%klr + c%kur + 1 + c%rmap(i) - k, k) = c%s(c%klr + c%kur + 1 + c%rmap(i) - k, k) + m
+      end do
+    end do
+    c%mx_first(c%n + 1) = nnz + 1
+    ! rows scaled to unit largest entry (dgbequ's row scaling; the solve scales
+    ! the right-hand side alike)
+    call dgbequ(c%nr, c%nr, c%klr, c%kur, c%s(c%klr + 1, 1), c%ldab, c%rowscale, c%colscale, rowcnd, colcnd, &
+      amax, info)
+    if (info /= 0) then
+      c%last_flag = int(info, c_long)
+      ierr = SUNLS_LUFACT_FAIL
+      return
+    end if
+    do q = 1, c%nr
+      do p = max(1, q - c%kur), min(c%nr, q + c%klr)
+        c%s(c%klr + c%kur + 1 + p - q, q) = c%rowscale(p)*c%s(c%klr + c%kur + 1 + p - q, q)
+      end do
+    end do
+    ierr = band_lu_factor(c, c%nr, c%klr, c%kur, c%s)
+
+  end function position_setup
+
+  !> x = M^-1 b through the kept states: r = b_kept - M(kept, x) b_x, R d = r,
+  !> then every position from its velocity.
+  integer(c_int) function position_solve(s, a, x, b, tol) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(N_Vector) :: x, b
+    real(c_double), value :: tol
+    type(band_content), pointer :: c
+    real(c_double), pointer :: xd(:), bd(:)
+    real(c_double) :: r
+    integer :: i, k, info
+    call c_f_pointer(s%content, c)
+    xd => FN_VGetArrayPointer(x)
+    bd => FN_VGetArrayPointer(b)
+    do i = 1, c%n
+      if (c%partner(i) /= 0) cycle
+      r = bd(i)
+      do k = c%mx_first(i), c%mx_first(i + 1) - 1
+        r = r - c%mx_val(k)*bd(c%mx_col(k))
+      end do
+      c%rv(c%rmap(i)) = c%rowscale(c%rmap(i))*r
+    end do
+    call band_lu_solve(c%nr, c%klr, c%kur, c%s, c%ldab, c%ipiv, c%no_interchange, c%rv, info)
+    ! positions first (they read b, which x may alias), then the kept states
+    do i = 1, c%n
+      if (c%partner(i) /= 0) xd(i) = bd(i) + c%g(i)*c%rv(c%rmap(c%partner(i)))
+    end do
+    do i = 1, c%n
+      if (c%partner(i) == 0) xd(i) = c%rv(c%rmap(i))
+    end do
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
+    if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
+  end function position_solve
 
   integer(c_long) function band_lastflag(s) result(f) bind(C)
     type(SUNLinearSolver) :: s

@@ -49,6 +49,7 @@ module airlaunch_ode
     procedure :: jacobian => ode_jacobian
     procedure :: has_node_jacobian => ode_has_node_jacobian
     procedure :: node_jacobian => ode_node_jacobian
+    procedure :: velocity_partners => ode_velocity_partners
   end type ode_system
 
   abstract interface
@@ -171,4 +172,15 @@ contains
     self%failure = "the system has no node-block Jacobian"
     if (.false.) blk%gamma = t + y(1) + merge(1, 0, reuse_ok)
   end subroutine ode_node_jacobian
+
+  !> The states that are positions with x' = v exactly (v another state, not a
+  !> position itself): partner(i) = the index of v for such a state i, 0 for
+  !> every other state.  Read once by the position-reduced band solver, which
+  !> eliminates them from Newton's system.  Default: none.
+  subroutine ode_velocity_partners(self, partner)
+    class(ode_system), intent(in) :: self     !< the system
+    integer, intent(out) :: partner(:)        !< (number of states)
+    partner = 0
+    if (.false.) partner(1) = len(self%failure)
+  end subroutine ode_velocity_partners
 end module airlaunch_ode

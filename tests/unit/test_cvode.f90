@@ -108,7 +108,7 @@ program test_cvode
   use fnvector_serial_mod
   use fsunmatrix_band_mod
   use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, band_data, &
-    use_node_blocks
+    use_node_blocks, new_position_reduced_solver, partners_ok
   use airlaunch_ode, only: node_blocks
   use testing
   implicit none
@@ -249,6 +249,97 @@ program test_cvode
     call FN_VDestroy(nb)
     call FN_VDestroy(nx1)
     call FN_VDestroy(nx2)
+    ierr = FSUNContext_Free(ctx)
+  end block
+
+  call section("position-reduced band solver: the same linear solve as the full band LU")
+  block
+    ! The air-launch scene's layout: two bodies [r(3), v(3), q(4), w(3)] and
+    ! nn nodes [x(3), v(3)]; positions r and x with rows exactly [1, -g_x] (g_x
+    ! per row, as CVODE's difference quotients of x' = v give it), every other
+    ! row random within the band (ml = mu = 18).  Two matrices: one diagonally
+    ! dominant, one whose velocity rows carry the line's stiff spring entries
+    ! (100 times the diagonal, to neighbouring positions: the full system's LU
+    ! must swap rows).  The reduced solve must give the full band LU's solution
+    ! (1e-11 relative: both are backward stable, the matrices' condition
+    ! numbers are below 1e4) and a residual at round-off.  A declared position
+    ! whose row holds anything else is refused at setup; partners_ok rejects a
+    ! velocity that is itself a position and a system without positions.
+    integer, parameter :: nn = 5, n = 26 + 6*nn, bw = 18
+    type(c_ptr) :: ctx
+    type(SUNMatrix), pointer :: m_full, m_red
+    type(SUNLinearSolver), pointer :: ls_full, ls_red
+    type(N_Vector), pointer :: nb, nx1, nx2
+    real(c_double), pointer :: bd(:), x1(:), x2(:)
+    real(dp) :: r, dense(n, n)
+    integer :: partner(n), i, j, k, p, ierr, case
+    partner = 0
+    do p = 1, 3
+      partner(p) = 3 + p
+      partner(13 + p) = 16 + p
+      do k = 1, nn
+        partner(26 + 6*(k - 1) + p) = 26 + 6*(k - 1) + 3 + p
+      end do
+    end do
+    call check(partners_ok(partner), "the scene's positions are accepted")
+    call check(.not. partners_ok([0, 0, 0]), "no position: refused")
+    call check(.not. partners_ok([2, 3, 0]), "a velocity that is a position: refused")
+    ierr = FSUNContext_Create(c_null_ptr, ctx)
+    do case = 1, 2
+      dense = 0.0_dp
+      do i = 1, n
+        if (partner(i) /= 0) then
+          dense(i, i) = 1.0_dp
+          dense(i, partner(i)) = -0.013_dp*(1.0_dp + 1.0e-9_dp*i)
+          cycle
+        end if
+        do j = max(1, i - bw), min(n, i + bw)
+          call random_number(r)
+          dense(i, j) = 2*r - 1
+          if (case == 2 .and. i > 26 .and. partner(j) /= 0 .and. abs(i - j) <= 9) dense(i, j) = 100*dense(i, j)
+        end do
+        dense(i, i) = dense(i, i) + 2.0_dp*bw
+      end do
+      m_full => FSUNBandMatrix(int(n, c_long), int(bw, c_long), int(bw, c_long), ctx)
+      m_red => FSUNBandMatrixStorage(int(n, c_long), int(bw, c_long), int(bw, c_long), int(bw, c_long), ctx)
+      do j = 1, n
+        do i = max(1, j - bw), min(n, j + bw)
+          call set_band(m_full, i, j, dense(i, j))
+          call set_band(m_red, i, j, dense(i, j))
+        end do
+      end do
+      nb => FN_VNew_Serial(int(n, c_long), ctx)
+      nx1 => FN_VNew_Serial(int(n, c_long), ctx)
+      nx2 => FN_VNew_Serial(int(n, c_long), ctx)
+      bd => FN_VGetArrayPointer(nb)
+      x1 => FN_VGetArrayPointer(nx1)
+      x2 => FN_VGetArrayPointer(nx2)
+      call random_number(bd)
+      ls_full => new_lapack_band_solver(m_full, ctx)
+      ls_red => new_position_reduced_solver(m_red, ctx, partner)
+      ierr = FSUNLinSolSetup(ls_full, m_full)
+      ierr = ierr + FSUNLinSolSolve(ls_full, m_full, nx1, nb, 0.0_c_double)
+      ierr = ierr + FSUNLinSolSetup(ls_red, m_red)
+      ierr = ierr + FSUNLinSolSolve(ls_red, m_red, nx2, nb, 0.0_c_double)
+      call check(ierr == 0, merge("dominant: ", "stiff:    ", case == 1) // "setup and solve succeed")
+      call check_close(maxval(abs(x1 - x2)), 0.0_dp, merge("dominant: ", "stiff:    ", case == 1) // &
+        "the full band LU's solution", abs=1e-11_dp*maxval(abs(x1)))
+      call check_close(maxval(abs(matmul(dense, x2) - bd)), 0.0_dp, merge("dominant: ", "stiff:    ", case == 1) // &
+        "residual", abs=1e-11_dp*maxval(abs(bd))*maxval(abs(x2)))
+      if (case == 2) then
+        ! the first body's position row with a stray entry: not a position row
+        call set_band(m_red, 2, 9, 1.0e-3_dp)
+        ierr = FSUNLinSolSetup(ls_red, m_red)
+        call check(ierr /= 0 .and. FSUNLinSolLastFlag(ls_red) == -1, "a declared position that is not one: refused")
+      end if
+      ierr = FSUNLinSolFree(ls_full)
+      ierr = FSUNLinSolFree(ls_red)
+      call FSUNMatDestroy(m_full)
+      call FSUNMatDestroy(m_red)
+      call FN_VDestroy(nb)
+      call FN_VDestroy(nx1)
+      call FN_VDestroy(nx2)
+    end do
     ierr = FSUNContext_Free(ctx)
   end block
 
