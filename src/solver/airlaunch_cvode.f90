@@ -24,7 +24,7 @@ module airlaunch_cvode
   use fsunnonlinsol_fixedpoint_mod
   use fcvode_mod
   use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, &
-    new_position_reduced_solver, partners_ok, &
+    new_position_reduced_solver, partners_ok, new_lapack_dense_solver, &
     band_data, use_node_blocks
   implicit none
   private
@@ -33,8 +33,10 @@ module airlaunch_cvode
   !> How to integrate.
   type :: cvode_options
     character(len=16) :: method = "bdf"          !< "bdf" (stiff) or "adams"
-    !> "dense", "band" (LAPACK), "second_order_band" (LAPACK on the velocity system of
-    !> [x, v]-per-node states, airlaunch_lapack_band), "sundials_band" or "none" (fixed point)
+    !> "dense", "band" (both LAPACK), "second_order_band" (LAPACK on the velocity system of
+    !> [x, v]-per-node states), "position_reduced_band" (LAPACK on the band system without
+    !> the positions x' = v; airlaunch_lapack_band), "sundials_dense", "sundials_band"
+    !> (SUNDIALS' own LU, for comparison) or "none" (fixed point)
     character(len=24) :: linear_solver = "dense"
     integer :: upper_bandwidth = 0               !< band solver: upper half-bandwidth
     integer :: lower_bandwidth = 0               !< band solver: lower half-bandwidth
@@ -164,6 +166,12 @@ contains
 
     select case (opts%linear_solver)
     case ("dense")
+      ! dense Newton matrix factored by LAPACK (airlaunch_lapack_band)
+      self%mat => FSUNDenseMatrix(neq, neq, self%ctx)
+      self%ls => new_lapack_dense_solver(self%mat, self%ctx)
+      ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
+    case ("sundials_dense")
+      ! SUNDIALS' own dense LU (kept for comparison)
       self%mat => FSUNDenseMatrix(neq, neq, self%ctx)
       self%ls => FSUNLinSol_Dense(self%nv_y, self%mat, self%ctx)
       ierr = FCVodeSetLinearSolver(self%mem, self%ls, self%mat)
@@ -216,7 +224,7 @@ contains
       ierr = FCVodeSetNonlinearSolver(self%mem, self%nls)
     case default
       call fatal_error(error, "CVODE: unknown linear solver '" // trim(opts%linear_solver) // &
-        "' (allowed: dense, band, second_order_band, position_reduced_band, sundials_band, none)")
+        "' (allowed: dense, band, second_order_band, position_reduced_band, sundials_dense, sundials_band, none)")
       return
     end select
     if (ierr /= 0) then

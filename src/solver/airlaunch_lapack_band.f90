@@ -1,7 +1,9 @@
-!> SUNDIALS linear solvers on CVODE's band Newton matrix, factored by LAPACK
-!> (dgbtrf/dgbtrs, OpenBLAS here): the full band LU, and the velocity-reduced
-!> solve for second-order systems (below); one content type and one set of
-!> SUNDIALS callbacks (type, last flag, free) for both.
+!> SUNDIALS linear solvers on CVODE's Newton matrix, factored by LAPACK
+!> (OpenBLAS here): the full band LU (dgbtrf/dgbtrs), the velocity-reduced and
+!> position-reduced band solves (below) and the dense LU (dgetrf/dgetrs, for
+!> the small rigid systems: Debian's SUNDIALS has no LAPACK solvers, and its
+!> own dense LU is not LAPACK); one content type and one set of SUNDIALS
+!> callbacks (type, last flag, free) for all.
 !>
 !> The full band LU.  Debian's SUNDIALS has no LAPACK band solver;
 !> its own band LU (SUNDlsMat_bandGBTRF/GBTRS) took a third of the paper
@@ -49,16 +51,17 @@ module airlaunch_lapack_band
   use fsundials_nvector_mod
   use fnvector_serial_mod
   use fsunmatrix_band_mod
+  use fsunmatrix_dense_mod
   use airlaunch_ode, only: node_blocks
   implicit none
   private
   public :: new_lapack_band_solver, new_second_order_band_solver, second_order_band_ok, band_data, &
-    use_node_blocks, new_position_reduced_solver, partners_ok
+    use_node_blocks, new_position_reduced_solver, partners_ok, new_lapack_dense_solver
 
   !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
   integer, parameter :: kr = 5
   !> The solvers (new_solver): full band LU, velocity-reduced, position-reduced.
-  integer, parameter :: kind_full = 1, kind_velocity = 2, kind_position = 3
+  integer, parameter :: kind_full = 1, kind_velocity = 2, kind_position = 3, kind_dense = 4
 
   !> What a solver keeps between setup and solve: the full band LU uses n, ml,
   !> mu, ldab, ipiv; the velocity-reduced solve uses nodes, ldab, ipiv and its
@@ -102,6 +105,20 @@ module airlaunch_lapack_band
       real(c_double), intent(inout) :: b(ldb, *)
       integer, intent(out) :: info
     end subroutine dgbtrs
+    subroutine dgetrf(m, n, a, lda, ipiv, info)
+      import :: c_double
+      integer, intent(in) :: m, n, lda
+      real(c_double), intent(inout) :: a(lda, *)
+      integer, intent(out) :: ipiv(*), info
+    end subroutine dgetrf
+    subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+      import :: c_double
+      character, intent(in) :: trans
+      integer, intent(in) :: n, nrhs, lda, ldb, ipiv(*)
+      real(c_double), intent(in) :: a(lda, *)
+      real(c_double), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dgetrs
     subroutine dgbequ(m, n, kl, ku, ab, ldab, r, c, rowcnd, colcnd, amax, info)
       import :: c_double
       integer, intent(in) :: m, n, kl, ku, ldab
@@ -265,7 +282,7 @@ contains
   !> run-time relocation, DT_TEXTREL in the PIE executable.)
   function new_solver(ctx, kind, c) result(ls)
     type(c_ptr), intent(in) :: ctx                  !< SUNDIALS context
-    integer, intent(in) :: kind                     !< kind_full, kind_velocity or kind_position
+    integer, intent(in) :: kind                     !< kind_full, kind_velocity, kind_position or kind_dense
     type(band_content), pointer, intent(out) :: c   !< its content (to be filled by the caller)
     type(SUNLinearSolver), pointer :: ls
     type(SUNLinearSolver_Ops), pointer :: ops
@@ -279,6 +296,9 @@ contains
     case (kind_position)
       ops%setup = c_funloc(position_setup)
       ops%solve = c_funloc(position_solve)
+    case (kind_dense)
+      ops%setup = c_funloc(dense_setup)
+      ops%solve = c_funloc(dense_solve)
     case default
       ops%setup = c_funloc(band_setup)
       ops%solve = c_funloc(band_solve)
@@ -412,6 +432,56 @@ contains
     if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
     if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
   end function reduced_solve
+
+  !> A direct linear solver for CVODE with a dense matrix A (FSUNDenseMatrix),
+  !> factored in place by LAPACK (dgetrf/dgetrs; SUNDIALS' dense storage is
+  !> LAPACK's column-major n x n).
+  function new_lapack_dense_solver(a, ctx) result(ls)
+    type(SUNMatrix), intent(inout) :: a     !< the dense matrix CVODE will fill
+    type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
+    type(SUNLinearSolver), pointer :: ls
+    type(band_content), pointer :: c
+    ls => new_solver(ctx, kind_dense, c)
+    c%n = int(FSUNDenseMatrix_Columns(a))
+    c%ldab = int(FSUNDenseMatrix_Rows(a))
+    allocate(c%ipiv(c%n))
+  end function new_lapack_dense_solver
+
+  !> LU factorisation in place (dgetrf); a zero pivot is a recoverable failure
+  !> (CVODE retries with a smaller step).
+  integer(c_int) function dense_setup(s, a) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(band_content), pointer :: c
+    real(c_double), pointer :: ad(:)
+    integer :: info
+    call c_f_pointer(s%content, c)
+    ad => FSUNDenseMatrix_Data(a)
+    call dgetrf(c%n, c%n, ad, c%ldab, c%ipiv, info)
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+  end function dense_setup
+
+  !> x = A^-1 b from the factors (dgetrs).
+  integer(c_int) function dense_solve(s, a, x, b, tol) result(ierr) bind(C)
+    type(SUNLinearSolver) :: s
+    type(SUNMatrix) :: a
+    type(N_Vector) :: x, b
+    real(c_double), value :: tol
+    type(band_content), pointer :: c
+    real(c_double), pointer :: ad(:), xd(:)
+    integer :: info
+    call c_f_pointer(s%content, c)
+    ad => FSUNDenseMatrix_Data(a)
+    xd => FN_VGetArrayPointer(x)
+    call FN_VScale(1.0_c_double, b, x)   ! x = b without a temporary (they may alias)
+    call dgetrs('N', c%n, 1, ad, c%ldab, c%ipiv, xd, c%n, info)
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
+    if (.false.) xd(1) = tol
+  end function dense_solve
 
   !> True if `partner` describes positions the position-reduced solver can
   !> eliminate: at least one, each partner a state that is not a position.
