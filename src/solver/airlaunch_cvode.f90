@@ -203,9 +203,9 @@ contains
         integer, allocatable :: partner(:)
         allocate(partner(neq))
         call sys%velocity_partners(partner)
-        if (.not. partners_ok(partner)) then
-          call fatal_error(error, "CVODE: position_reduced_band needs positions whose velocities are states " // &
-            "and not positions themselves (" // str(count(partner /= 0)) // " positions declared)")
+        if (.not. partners_ok(partner, opts%upper_bandwidth, opts%lower_bandwidth)) then
+          call fatal_error(error, "CVODE: position_reduced_band needs positions whose velocities are states, " // &
+            "not positions themselves, within the band (" // str(count(partner /= 0)) // " positions declared)")
           return
         end if
         self%mat => FSUNBandMatrixStorage(neq, int(opts%upper_bandwidth, c_long), &

@@ -43,6 +43,9 @@
 !> partial pivoting, which swapped the rocket's rows for the node rows whose
 !> stiff springs dominate its columns in the full system, finds nothing to swap.
 !> Each g_x is read from M, so the solve is exact for the M that CVODE built.
+!> R's rows are scaled to a unit largest entry (LAPACK's dgbequ) before dgbtrf:
+!> a heavy node (the parachute) otherwise loses its own column's pivot to the
+!> lighter neighbour's row.
 module airlaunch_lapack_band
   use, intrinsic :: iso_c_binding
   use fsundials_context_mod
@@ -488,14 +491,16 @@ contains
   end function dense_solve
 
   !> True if `partner` describes positions the position-reduced solver can
-  !> eliminate: at least one, each partner a state that is not a position.
-  pure logical function partners_ok(partner) result(ok)
+  !> eliminate from a band matrix of half-bandwidths mu, ml: at least one, each
+  !> partner a state that is not a position and within the band of its row.
+  pure logical function partners_ok(partner, mu, ml) result(ok)
     integer, intent(in) :: partner(:)   !< velocity state of a position, 0 otherwise
+    integer, intent(in) :: mu, ml       !< upper and lower half-bandwidths of M
     integer :: i
     ok = any(partner /= 0)
     do i = 1, size(partner)
       if (partner(i) == 0) cycle
-      if (partner(i) < 1 .or. partner(i) > size(partner)) then
+      if (partner(i) < 1 .or. partner(i) > size(partner) .or. partner(i) - i > mu .or. i - partner(i) > ml) then
         ok = .false.
       else if (partner(partner(i)) /= 0) then
         ok = .false.
@@ -503,11 +508,11 @@ contains
     end do
   end function partners_ok
 
-  !> The position-reduced solver for CVODE's band matrix `a` (FSUNBandMatrix
-  !> with LU storage) of a system whose state i is a position with derivative
-  !> state partner(i) (> 0), or not (0).  Every partner must be a kept state
-  !> (not itself a position).  The kept states' half-bandwidths in R follow
-  !> from M's and the map.
+  !> The position-reduced solver for CVODE's band matrix `a` (FSUNBandMatrix,
+  !> with or without the LU fill rows: only read) of a system whose state i is a
+  !> position with derivative state partner(i) (> 0), or not (0); check with
+  !> partners_ok first.  The kept states' half-bandwidths in R follow from M's
+  !> and the map.
   function new_position_reduced_solver(a, ctx, partner) result(ls)
     type(SUNMatrix), intent(inout) :: a     !< the band matrix CVODE fills
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
@@ -619,7 +624,6 @@ contains
       end do
     end do
     ierr = band_lu_factor(c, c%nr, c%klr, c%kur, c%s)
-
   end function position_setup
 
   !> x = M^-1 b through the kept states: r = b_kept - M(kept, x) b_x, R d = r,

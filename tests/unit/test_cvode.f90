@@ -264,7 +264,8 @@ program test_cvode
     ! (1e-11 relative: both are backward stable, the matrices' condition
     ! numbers are below 1e4) and a residual at round-off.  A declared position
     ! whose row holds anything else is refused at setup; partners_ok rejects a
-    ! velocity that is itself a position and a system without positions.
+    ! velocity that is itself a position or outside the band, and a system
+    ! without positions.
     integer, parameter :: nn = 5, n = 26 + 6*nn, bw = 18
     type(c_ptr) :: ctx
     type(SUNMatrix), pointer :: m_full, m_red
@@ -281,9 +282,10 @@ program test_cvode
         partner(26 + 6*(k - 1) + p) = 26 + 6*(k - 1) + 3 + p
       end do
     end do
-    call check(partners_ok(partner), "the scene's positions are accepted")
-    call check(.not. partners_ok([0, 0, 0]), "no position: refused")
-    call check(.not. partners_ok([2, 3, 0]), "a velocity that is a position: refused")
+    call check(partners_ok(partner, bw, bw), "the scene's positions are accepted")
+    call check(.not. partners_ok(partner, 2, bw), "a velocity outside the band: refused")
+    call check(.not. partners_ok([0, 0, 0], 2, 2), "no position: refused")
+    call check(.not. partners_ok([2, 3, 0], 2, 2), "a velocity that is a position: refused")
     ierr = FSUNContext_Create(c_null_ptr, ctx)
     do case = 1, 2
       dense = 0.0_dp
