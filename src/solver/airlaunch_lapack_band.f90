@@ -64,13 +64,14 @@ module airlaunch_lapack_band
   !> Half-bandwidths of the reduced velocity matrix (3x3 blocks, neighbours only).
   integer, parameter :: kr = 5
   !> The solvers (new_solver): full band LU, velocity-reduced, position-reduced.
-  integer, parameter :: kind_full = 1, kind_velocity = 2, kind_position = 3, kind_dense = 4
+  integer, parameter :: kind_full = 1, kind_velocity = 2, kind_position = 3
 
   !> What a solver keeps between setup and solve: the full band LU uses n, ml,
   !> mu, ldab, ipiv; the velocity-reduced solve uses nodes, ldab, ipiv and its
   !> reduced matrix (s), the M_vx blocks and gamma.
   type :: band_content
     integer :: n = 0, ml = 0, mu = 0, ldab = 0
+    logical :: dense = .false.                        !< full LU of a dense matrix (dgetrf/dgetrs)
     integer, allocatable :: ipiv(:)
     integer(c_long) :: last_flag = 0
     logical :: no_interchange = .false.               !< the last factorisation swapped no rows
@@ -160,19 +161,28 @@ contains
     if (.false.) t = int(merge(1, 0, c_associated(s%content)), c_int)
   end function band_gettype
 
-  !> LU factorisation in place (dgbtrf); a zero pivot is a recoverable failure
-  !> (CVODE retries with a smaller step).
+  !> LU factorisation in place (dgbtrf, or dgetrf for a dense matrix); a zero
+  !> pivot is a recoverable failure (CVODE retries with a smaller step).
   integer(c_int) function band_setup(s, a) result(ierr) bind(C)
     type(SUNLinearSolver) :: s
     type(SUNMatrix) :: a
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:)
+    integer :: info
     call c_f_pointer(s%content, c)
-    ab => FSUNBandMatrix_Data(a)
-    ierr = band_lu_factor(c, c%n, c%ml, c%mu, ab)
+    if (c%dense) then
+      ab => FSUNDenseMatrix_Data(a)
+      call dgetrf(c%n, c%n, ab, c%ldab, c%ipiv, info)
+      c%last_flag = int(info, c_long)
+      ierr = SUNLS_SUCCESS
+      if (info > 0) ierr = SUNLS_LUFACT_FAIL
+    else
+      ab => FSUNBandMatrix_Data(a)
+      ierr = band_lu_factor(c, c%n, c%ml, c%mu, ab)
+    end if
   end function band_setup
 
-  !> x = A^-1 b from the factors (dgbtrs).
+  !> x = A^-1 b from the factors (band: band_lu_solve; dense: dgetrs).
   integer(c_int) function band_solve(s, a, x, b, tol) result(ierr) bind(C)
     type(SUNLinearSolver) :: s
     type(SUNMatrix) :: a
@@ -182,12 +192,17 @@ contains
     real(c_double), pointer :: ab(:), xd(:)
     integer :: info
     call c_f_pointer(s%content, c)
-    ab => FSUNBandMatrix_Data(a)
     xd => FN_VGetArrayPointer(x)
     ! x = b by an N_Vector copy: xd = bd between two pointers that may alias
     ! would go through a heap temporary (once per Newton iteration)
     call FN_VScale(1.0_c_double, b, x)
-    call band_lu_solve(c%n, c%ml, c%mu, ab, c%ldab, c%ipiv, c%no_interchange, xd, info)
+    if (c%dense) then
+      ab => FSUNDenseMatrix_Data(a)
+      call dgetrs('N', c%n, 1, ab, c%ldab, c%ipiv, xd, c%n, info)
+    else
+      ab => FSUNBandMatrix_Data(a)
+      call band_lu_solve(c%n, c%ml, c%mu, ab, c%ldab, c%ipiv, c%no_interchange, xd, info)
+    end if
     c%last_flag = int(info, c_long)
     ierr = SUNLS_SUCCESS
     if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
@@ -289,7 +304,7 @@ contains
   !> run-time relocation, DT_TEXTREL in the PIE executable.)
   function new_solver(ctx, kind, c) result(ls)
     type(c_ptr), intent(in) :: ctx                  !< SUNDIALS context
-    integer, intent(in) :: kind                     !< kind_full, kind_velocity, kind_position or kind_dense
+    integer, intent(in) :: kind                     !< kind_full, kind_velocity or kind_position
     type(band_content), pointer, intent(out) :: c   !< its content (to be filled by the caller)
     type(SUNLinearSolver), pointer :: ls
     type(SUNLinearSolver_Ops), pointer :: ops
@@ -303,9 +318,6 @@ contains
     case (kind_position)
       ops%setup = c_funloc(position_setup)
       ops%solve = c_funloc(position_solve)
-    case (kind_dense)
-      ops%setup = c_funloc(dense_setup)
-      ops%solve = c_funloc(dense_solve)
     case default
       ops%setup = c_funloc(band_setup)
       ops%solve = c_funloc(band_solve)
@@ -448,47 +460,13 @@ contains
     type(c_ptr), intent(in) :: ctx          !< SUNDIALS context
     type(SUNLinearSolver), pointer :: ls
     type(band_content), pointer :: c
-    ls => new_solver(ctx, kind_dense, c)
+    ls => new_solver(ctx, kind_full, c)
+    c%dense = .true.
     c%n = int(FSUNDenseMatrix_Columns(a))
     c%ldab = int(FSUNDenseMatrix_Rows(a))
     allocate(c%ipiv(c%n))
   end function new_lapack_dense_solver
 
-  !> LU factorisation in place (dgetrf); a zero pivot is a recoverable failure
-  !> (CVODE retries with a smaller step).
-  integer(c_int) function dense_setup(s, a) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
-    type(band_content), pointer :: c
-    real(c_double), pointer :: ad(:)
-    integer :: info
-    call c_f_pointer(s%content, c)
-    ad => FSUNDenseMatrix_Data(a)
-    call dgetrf(c%n, c%n, ad, c%ldab, c%ipiv, info)
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info > 0) ierr = SUNLS_LUFACT_FAIL
-  end function dense_setup
-
-  !> x = A^-1 b from the factors (dgetrs).
-  integer(c_int) function dense_solve(s, a, x, b, tol) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
-    type(N_Vector) :: x, b
-    real(c_double), value :: tol
-    type(band_content), pointer :: c
-    real(c_double), pointer :: ad(:), xd(:)
-    integer :: info
-    call c_f_pointer(s%content, c)
-    ad => FSUNDenseMatrix_Data(a)
-    xd => FN_VGetArrayPointer(x)
-    call FN_VScale(1.0_c_double, b, x)   ! x = b without a temporary (they may alias)
-    call dgetrs('N', c%n, 1, ad, c%ldab, c%ipiv, xd, c%n, info)
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
-    if (.false.) xd(1) = tol
-  end function dense_solve
 
   !> True if `partner` describes positions the position-reduced solver can
   !> eliminate from a band matrix of half-bandwidths mu, ml: at least one, each
