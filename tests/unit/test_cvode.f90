@@ -160,7 +160,7 @@ program test_cvode
     type(N_Vector), pointer :: nb, nx1, nx2
     real(c_double), pointer :: bd(:), x1(:), x2(:)
     real(dp) :: g, r, dense(n, n)
-    integer :: i, j, k, p, q, ierr
+    integer :: j, k, p, q, ierr
     g = 0.013_dp
     dense = 0.0_dp
     do j = 1, nn
@@ -179,12 +179,8 @@ program test_cvode
     ierr = FSUNContext_Create(c_null_ptr, ctx)
     m_full => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)
     m_red => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)
-    do j = 1, n
-      do i = max(1, j - 8), min(n, j + 11)
-        call set_band(m_full, i, j, dense(i, j))
-        call set_band(m_red, i, j, dense(i, j))
-      end do
-    end do
+    call fill_band(m_full, dense, 8, 11)
+    call fill_band(m_red, dense, 8, 11)
     nb => FN_VNew_Serial(int(n, c_long), ctx)
     nx1 => FN_VNew_Serial(int(n, c_long), ctx)
     nx2 => FN_VNew_Serial(int(n, c_long), ctx)
@@ -274,6 +270,7 @@ program test_cvode
     real(c_double), pointer :: bd(:), x1(:), x2(:)
     real(dp) :: r, dense(n, n)
     integer :: partner(n), i, j, k, p, ierr, case
+    integer(c_long) :: flag
     partner = 0
     do p = 1, 3
       partner(p) = 3 + p
@@ -304,12 +301,8 @@ program test_cvode
       end do
       m_full => FSUNBandMatrix(int(n, c_long), int(bw, c_long), int(bw, c_long), ctx)
       m_red => FSUNBandMatrixStorage(int(n, c_long), int(bw, c_long), int(bw, c_long), int(bw, c_long), ctx)
-      do j = 1, n
-        do i = max(1, j - bw), min(n, j + bw)
-          call set_band(m_full, i, j, dense(i, j))
-          call set_band(m_red, i, j, dense(i, j))
-        end do
-      end do
+      call fill_band(m_full, dense, bw, bw)
+      call fill_band(m_red, dense, bw, bw)
       nb => FN_VNew_Serial(int(n, c_long), ctx)
       nx1 => FN_VNew_Serial(int(n, c_long), ctx)
       nx2 => FN_VNew_Serial(int(n, c_long), ctx)
@@ -332,7 +325,8 @@ program test_cvode
         ! the first body's position row with a stray entry: not a position row
         call set_band(m_red, 2, 9, 1.0e-3_dp)
         ierr = FSUNLinSolSetup(ls_red, m_red)
-        call check(ierr /= 0 .and. FSUNLinSolLastFlag(ls_red) == -1, "a declared position that is not one: refused")
+        flag = FSUNLinSolLastFlag(ls_red)
+        call check(ierr /= 0 .and. flag == -1, "a declared position that is not one: refused")
       end if
       ierr = FSUNLinSolFree(ls_full)
       ierr = FSUNLinSolFree(ls_red)
@@ -373,11 +367,7 @@ program test_cvode
         dense(j, j) = merge(real(ml + mu + 2, dp), 1.0e-3_dp, case == 1)
       end do
       m => FSUNBandMatrix(int(n, c_long), int(mu, c_long), int(ml, c_long), ctx)
-      do j = 1, n
-        do i = max(1, j - mu), min(n, j + ml)
-          call set_band(m, i, j, dense(i, j))
-        end do
-      end do
+      call fill_band(m, dense, mu, ml)
       nb => FN_VNew_Serial(int(n, c_long), ctx)
       nx => FN_VNew_Serial(int(n, c_long), ctx)
       bd => FN_VGetArrayPointer(nb)
@@ -455,6 +445,20 @@ program test_cvode
   call solver%free()
   call finish()
 contains
+  !> The band (mu above, ml below the diagonal) of the square `dense` into m.
+  subroutine fill_band(m, dense, mu, ml)
+    type(SUNMatrix), intent(inout) :: m
+    real(dp), intent(in) :: dense(:, :)
+    integer, intent(in) :: mu, ml
+    integer :: i, j, n
+    n = size(dense, 1)
+    do j = 1, n
+      do i = max(1, j - mu), min(n, j + ml)
+        call set_band(m, i, j, dense(i, j))
+      end do
+    end do
+  end subroutine fill_band
+
   !> M(i, j) = v in SUNDIALS band storage.
   subroutine set_band(m, i, j, v)
     type(SUNMatrix), intent(inout) :: m
