@@ -63,6 +63,7 @@ module airlaunch_launch_system
     procedure :: nroots => launch_nroots_fn
     procedure :: roots => launch_roots
     procedure :: prepare => launch_prepare
+    procedure :: load_bodies => launch_load_bodies
     procedure :: to_absolute => launch_to_absolute
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
     procedure :: velocity_partners => launch_velocity_partners
@@ -94,12 +95,19 @@ contains
 
   !> Everything the rigid scene needs before it evaluates: bodies from the
   !> state, the line's node forces, the end force and phase in the loads.
+  !> The absolute state from y and the bodies loaded from it (no forces).
+  subroutine launch_load_bodies(self, t, y)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t, y(:)
+    call self%to_absolute(t, y)
+    call self%sep%load_state(self%yabs(1:rigid_size))
+  end subroutine launch_load_bodies
+
   subroutine launch_prepare(self, t, y, status)
     class(launch_system), intent(inout) :: self
     real(dp), intent(in) :: t, y(:)
     integer, intent(out) :: status
-    call self%to_absolute(t, y)
-    call self%sep%load_state(self%yabs(1:rigid_size))
+    call self%load_bodies(t, y)
     if (self%has_line) then
       self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
       self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
@@ -176,8 +184,7 @@ contains
     else
       ! the other events read the bodies' states only: no line forces (they were
       ! a third of the event functions' cost, ~5 % of a sweep case)
-      call self%to_absolute(t, y)
-      call self%sep%load_state(self%yabs(1:rigid_size))
+      call self%load_bodies(t, y)
     end if
     call self%sep%roots(t, self%yabs(1:rigid_size), g(1:separation_nroots), status)
     if (status /= rhs_ok) then

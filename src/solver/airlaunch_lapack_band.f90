@@ -577,10 +577,10 @@ contains
           k = c%rmap(col)
         else
           k = c%rmap(c%partner(col))
-          m = c%g(col)*m
           nnz = nnz + 1
           c%mx_col(nnz) = col
-          c%mx_val(nnz) = band_entry(ab, ldim, smu, i, col)
+          c%mx_val(nnz) = m
+          m = c%g(col)*m
         end if
         ! R(p, q), p = rmap(i), q = k, in LAPACK band storage with kl = klr, ku = kur
         c%s(c%klr + c%kur + 1 + c%rmap(i) - k, k) = c%s(c%klr + c%kur + 1 + c%rmap(i) - k, k) + m
