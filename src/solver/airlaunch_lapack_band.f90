@@ -173,9 +173,7 @@ contains
     if (c%dense) then
       ab => FSUNDenseMatrix_Data(a)
       call dgetrf(c%n, c%n, ab, c%ldab, c%ipiv, info)
-      c%last_flag = int(info, c_long)
-      ierr = SUNLS_SUCCESS
-      if (info > 0) ierr = SUNLS_LUFACT_FAIL
+      ierr = factor_flag(c, info)
     else
       ab => FSUNBandMatrix_Data(a)
       ierr = band_lu_factor(c, c%n, c%ml, c%mu, ab)
@@ -203,9 +201,7 @@ contains
       ab => FSUNBandMatrix_Data(a)
       call band_lu_solve(c%n, c%ml, c%mu, ab, c%ldab, c%ipiv, c%no_interchange, xd, info)
     end if
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
+    ierr = solve_flag(c, info)
     if (.false.) xd(1) = tol
   end function band_solve
 
@@ -220,9 +216,7 @@ contains
     integer :: info
     call dgbtrf(n, n, kl, ku, ab, c%ldab, c%ipiv, info)
     c%no_interchange = no_row_interchange(c%ipiv(1:n))
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+    ierr = factor_flag(c, info)
   end function band_lu_factor
 
   !> True if the pivots of a factorisation (dgbtrf's ipiv) swapped no rows.
@@ -446,9 +440,7 @@ contains
         xd(i0 + q) = bd(i0 + q) + c%gamma*c%rv(3*(j - 1) + q)
       end do
     end do
-    c%last_flag = int(info, c_long)
-    ierr = SUNLS_SUCCESS
-    if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
+    ierr = solve_flag(c, info)
     if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
   end function reduced_solve
 
@@ -634,11 +626,30 @@ contains
     do i = 1, c%n
       if (c%partner(i) == 0) xd(i) = c%rv(c%rmap(i))
     end do
+    ierr = solve_flag(c, info)
+    if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
+  end function position_solve
+
+  !> SUNDIALS' flag of a factorisation with LAPACK's info (kept as the last
+  !> flag): a zero pivot (info > 0) is a recoverable failure, CVODE retries
+  !> with a smaller step.
+  integer(c_int) function factor_flag(c, info) result(ierr)
+    type(band_content), intent(inout) :: c   !< last_flag out
+    integer, intent(in) :: info              !< LAPACK's info
+    c%last_flag = int(info, c_long)
+    ierr = SUNLS_SUCCESS
+    if (info > 0) ierr = SUNLS_LUFACT_FAIL
+  end function factor_flag
+
+  !> SUNDIALS' flag of a solve with LAPACK's info (kept as the last flag):
+  !> any nonzero info is unrecoverable.
+  integer(c_int) function solve_flag(c, info) result(ierr)
+    type(band_content), intent(inout) :: c   !< last_flag out
+    integer, intent(in) :: info              !< LAPACK's info
     c%last_flag = int(info, c_long)
     ierr = SUNLS_SUCCESS
     if (info /= 0) ierr = SUNLS_PACKAGE_FAIL_UNREC
-    if (.false.) xd(1) = tol + real(FSUNBandMatrix_Columns(a), c_double)
-  end function position_solve
+  end function solve_flag
 
   integer(c_long) function band_lastflag(s) result(f) bind(C)
     type(SUNLinearSolver) :: s
