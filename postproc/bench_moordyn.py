@@ -118,7 +118,7 @@ def airlaunch_run(n, rtol, cd, tmp, reps=3, timeout=RUN_TIMEOUT, t_end=T_END, ta
     out = tmp / f"{name}.nc"
     nml = tmp / f"{name}.nml"
     nml.write_text(f"""&run scene = 'line', t_end = {t_end}, output_dt = {DT_OUT}, output = '{out}',
-  rtol = {rtol:.1e}, atol = {rtol:.1e} /
+  rtol = {rtol:.1e}, atol = {rtol:.1e}, max_steps = 0 /
 &line length = {L}, n_seg = {n}, ea = {EA}, mass_per_length = {RHO}, damping = {cd!r},
   gravity = .true., air = .false. /
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0,

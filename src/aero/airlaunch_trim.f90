@@ -81,7 +81,12 @@ contains
       end do
       dx(:, 1) = -r
       call solve_general(jac, dx, error, "trim Jacobian")
-      if (allocated(error)) return
+      if (allocated(error)) then
+        error%message = "trim: no equilibrium found at Newton step " // str(it) // " (" // error%message // &
+          ": alpha, elevator and thrust do not move the force and moment residuals); check masses, speed " // &
+          "and aerodynamic data"
+        return
+      end if
       x = x + dx(:, 1)
     end do
     if (.not. all(abs(r) <= 1.0e-8_dp*scale)) then

@@ -126,18 +126,15 @@ contains
     character(len=1), parameter :: nl = new_line("a")
     s = "trim: alpha " // fx(r%trim_alpha_deg, 4) // " deg, elevator " // fx(r%trim_elevator_deg, 3) // &
       " deg, thrust " // fx(r%trim_thrust_n/1000, 1) // " kN" // nl // &
-      "release (Case 0->1):        t = " // fx(r%release_time, 3) // " s" // nl // &
-      "edge (Case 1->2):           t = " // fx(r%edge_time, 3) // " s" // nl // &
-      "separation (Case 2->3):     t = " // fx(r%separation_time, 3) // " s" // &
+      "release (Case 0->1):        " // at(r%release_time) // nl // &
+      "edge (Case 1->2):           " // at(r%edge_time) // nl // &
+      "separation (Case 2->3):     " // at(r%separation_time) // &
       trim(merge(" (early: edge normal force reached zero)", "                                        ", &
         r%early_separation)) // nl // &
       edge_note(r%edge_pull_time) // &
-      "  rocket pitch " // fx(r%pitch_at_separation_deg, 2) // " deg, pitch rate " // &
-      fx(r%pitch_rate_at_separation_deg_s, 2) // " deg/s" // nl // &
-      "first rocket pitch maximum: t = " // fx(r%pitch_max_time, 3) // " s, pitch " // fx(r%pitch_max_deg, 2) // &
-      " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg)" // nl // &
-      "minimum rocket-empennage clearance: " // fx(merge(r%min_clearance, -1.0d0, r%min_clearance < 1.0d300), 2) // &
-      " m" // nl // &
+      separation_note(r) // &
+      "first rocket pitch maximum: " // pitch_max_note(r) // nl // &
+      "minimum rocket-empennage clearance: " // clearance_note(r%min_clearance) // nl // &
       tension_note(r) // &
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
       "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
@@ -152,12 +149,49 @@ contains
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s
     if (r%has_line) then
-      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at t = " // fx(r%peak_tension_time, 3) // &
-        " s" // new_line("a")
+      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at " // at(r%peak_tension_time) // new_line("a")
     else
       s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
     end if
   end function tension_note
+
+  ! The notes below format their numbers whether or not the milestone was
+  ! reached, so that a run's summary costs the same heap allocations either way
+  ! (tests/python/test_heap_per_step.py compares a short and a long run).
+
+  !> "t = 3.875 s", or "not reached" for an event the run did not get to (t < 0).
+  function at(t) result(s)
+    double precision, intent(in) :: t
+    character(len=:), allocatable :: s
+    s = "t = " // fx(t, 3) // " s"
+    if (t < 0.0d0) s = "not reached"
+  end function at
+
+  !> The rocket's pitch and pitch rate at separation (empty before it).
+  function separation_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s
+    s = "  rocket pitch " // fx(r%pitch_at_separation_deg, 2) // " deg, pitch rate " // &
+      fx(r%pitch_rate_at_separation_deg_s, 2) // " deg/s" // new_line("a")
+    if (r%separation_time < 0.0d0) s = ""
+  end function separation_note
+
+  !> Time, pitch and nose elevation of the rocket's first pitch maximum.
+  function pitch_max_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s
+    s = at(r%pitch_max_time) // ", pitch " // fx(r%pitch_max_deg, 2) // &
+      " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg)"
+    if (r%pitch_max_time < 0.0d0) s = "not reached"
+  end function pitch_max_note
+
+  !> The smallest rocket-empennage clearance [m] (none recorded: huge).
+  function clearance_note(c) result(s)
+    double precision, intent(in) :: c
+    character(len=:), allocatable :: s
+    s = fx(c, 2) // " m"
+    if (.not. (c < 1.0d300)) s = "not reached (the rocket did not leave the bay)"
+  end function clearance_note
 
   !> Note on a bilateral edge that had to pull (empty otherwise).
   function edge_note(t) result(s)
@@ -168,14 +202,28 @@ contains
       fx(t, 3) // " s)" // new_line("a")
   end function edge_note
 
-  !> Fixed-point number with d decimals.
+  !> Fixed-point number with d decimals (exponent form beyond 1e12, "NaN", "Inf").
   function fx(x, d) result(s)
     double precision, intent(in) :: x
     integer, intent(in) :: d
     character(len=:), allocatable :: s
-    character(len=32) :: buf, fmt
-    write(fmt, '("(f0.",i0,")")') d
-    write(buf, fmt) x
+    character(len=32) :: buf
+    if (.not. (abs(x) < 1.0d12)) then
+      write(buf, '(es12.4)') x
+      s = trim(adjustl(buf))
+      return
+    end if
+    ! literal formats: gfortran parses (and allocates for) a run-time format at every write
+    select case (d)
+    case (1)
+      write(buf, '(f0.1)') x
+    case (2)
+      write(buf, '(f0.2)') x
+    case (3)
+      write(buf, '(f0.3)') x
+    case default
+      write(buf, '(f0.4)') x
+    end select
     s = trim(adjustl(buf))
     if (s(1:1) == ".") s = "0" // s
     if (s(1:2) == "-.") s = "-0" // s(2:)

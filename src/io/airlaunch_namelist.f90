@@ -10,6 +10,7 @@
 !> f%position(group, unit, present)`; `read(unit, nml=...)`; on failure `call
 !> f%diagnose(...)`; then range checks with `require_*`.
 module airlaunch_namelist
+  use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
@@ -49,6 +50,10 @@ module airlaunch_namelist
     type(nml_assignment), allocatable :: items(:)
     character(len=32), allocatable :: groups(:)   !< groups present (lower case)
     integer, allocatable :: group_lines(:)
+    !> The file's last line has no newline: gfortran's namelist read then meets
+    !> the end of the file at the last group's '/' (iostat = -1, "End of
+    !> file", values read); `position` gives the runtime a terminated copy.
+    logical :: unterminated = .false.
   contains
     procedure :: load => nml_load
     procedure :: check_groups => nml_check_groups
@@ -116,8 +121,26 @@ contains
       pos = pos + lt + 1
     end do
     close(unit)
+    self%unterminated = .not. ends_with_newline(path)
     call scan_text(self, text(1:pos), line_of(1:pos), col_of(1:pos), error)
   end subroutine nml_load
+
+  !> The file is empty or its last byte is a line feed.
+  logical function ends_with_newline(path) result(ok)
+    character(len=*), intent(in) :: path  !< an existing, readable file
+    integer :: unit, ios
+    integer(int64) :: size
+    character(len=1) :: last
+    ok = .true.
+    open(newunit=unit, file=path, access="stream", form="unformatted", status="old", action="read", iostat=ios)
+    if (ios /= 0) return
+    inquire(unit=unit, size=size)
+    if (size > 0) then
+      read(unit, pos=size, iostat=ios) last
+      if (ios == 0) ok = last == achar(10)
+    end if
+    close(unit)
+  end function ends_with_newline
 
   !> Length of a line without its comment and trailing blanks.
   pure integer function stripped_length(line) result(n)
@@ -376,9 +399,23 @@ contains
     character(len=*), intent(in) :: group   !< group name
     integer, intent(out) :: unit            !< unit to read from (closed by the caller)
     logical, intent(out) :: present         !< the group is in the file
+    integer :: src, ios
+    character(len=4096) :: buf
     present = self%has_group(group)
     unit = -1
-    if (present) open(newunit=unit, file=self%path, status="old", action="read")
+    if (.not. present) return
+    open(newunit=unit, file=self%path, status="old", action="read")
+    if (.not. self%unterminated) return
+    ! the same lines, each terminated, in a scratch file (deleted at close)
+    src = unit
+    open(newunit=unit, status="scratch", action="readwrite", form="formatted")
+    do
+      read(src, '(a)', iostat=ios) buf
+      if (ios /= 0) exit
+      write(unit, '(a)') trim(buf)
+    end do
+    close(src)
+    rewind(unit)
   end subroutine nml_position
 
   !> After a failed namelist read of `group`: find the value that does not

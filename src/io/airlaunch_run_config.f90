@@ -4,12 +4,20 @@ module airlaunch_run_config
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_namelist
+  use airlaunch_strings, only: str
   implicit none
   private
   public :: run_config, read_run_config, echo_namelist_unit, scene_names, require_output_directory
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
+
+  !> Default step budget of a run: the paper scenario takes 709 steps, its
+  !> converged reference (N = 240, rtol 1e-9) 150 399; the longest benchmark runs
+  !> (undamped cable pendulum, N = 120, rtol 1e-6) 2.3 million set their own.
+  integer, parameter :: default_max_steps = 2000000
+  !> Most output times a run may ask for (t_end / output_dt).
+  real(dp), parameter :: max_output_times = 1.0e7_dp
 
   !> Settings of one run.
   type :: run_config
@@ -24,6 +32,9 @@ module airlaunch_run_config
     !> End the run as soon as its milestones are final (sweeps in summary mode):
     !> the scene decides when (airlaunch: see docs/input.md).
     logical :: stop_when_final = .false.
+    !> The most steps the run's integrator may take (a run that cannot make
+    !> progress stops with a message instead of crawling on); 0 = no limit.
+    integer :: max_steps = default_max_steps
   end type run_config
 
 contains
@@ -38,17 +49,17 @@ contains
     real(dp) :: t_end, output_dt, rtol, atol
     character(len=256) :: output
     logical :: trajectory, present, stop_when_final
-    integer :: unit, ios, max_order
+    integer :: unit, ios, max_order, max_steps
     character(len=256) :: msg
-    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final
-    type(nml_var), parameter :: vars(9) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps
+    type(nml_var), parameter :: vars(10) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
       nml_var("output_dt", "real"), nml_var("output", "string"), nml_var("rtol", "real"), &
       nml_var("atol", "real"), nml_var("trajectory", "logical"), nml_var("max_order", "integer"), &
-      nml_var("stop_when_final", "logical")]
+      nml_var("stop_when_final", "logical"), nml_var("max_steps", "integer")]
 
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
     rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
-    stop_when_final = cfg%stop_when_final
+    stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps
     call f%check_group("run", vars, error)
     if (allocated(error)) return
     call f%position("run", unit, present)
@@ -66,13 +77,21 @@ contains
     call require_range(f, "run", "rtol", rtol, 1.0e-14_dp, 1.0e-1_dp, "", error)
     call require_range(f, "run", "atol", atol, 1.0e-16_dp, 1.0_dp, "", error)
     call require_int_range(f, "run", "max_order", max_order, 0, 5, error)
+    call require_int_range(f, "run", "max_steps", max_steps, 0, huge(1), error)
     if (allocated(error)) return
+    if (t_end/output_dt > max_output_times) then
+      call fatal_error(error, f%path // ": &run: t_end / output_dt = " // str(t_end) // " s / " // &
+        str(output_dt) // " s is not allowed (" // str(t_end/output_dt) // " output times; at most " // &
+        str(nint(max_output_times)) // ": raise output_dt or shorten t_end)")
+      return
+    end if
     if (len_trim(output) == 0) then
       call fatal_error(error, f%path // ": &run: output = '' is not allowed (a file name, e.g. 'output/run.nc')")
       return
     end if
 
-    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final)
+    cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, &
+      max_steps)
     block
       integer :: u
       open(newunit=u, status="scratch", action="readwrite")

@@ -33,7 +33,7 @@ module airlaunch_line_cvode
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
-  use airlaunch_line_model, only: line_model, line_energy
+  use airlaunch_line_model, only: line_model, line_energy, node_state_name
   use airlaunch_line_ends, only: line_end, end_point_mass
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
   implicit none
@@ -78,6 +78,7 @@ module airlaunch_line_cvode
     procedure :: rhs => system_rhs
     procedure :: setup => system_setup
     procedure :: n_state => system_n_state
+    procedure :: state_name => system_state_name
     procedure :: pack => system_pack
     procedure :: unpack => system_unpack
     procedure :: energy => system_energy
@@ -144,6 +145,14 @@ contains
       y(j+4:j+6) = v(:, k)
     end do
   end subroutine system_pack
+
+  !> State i is node first + (i - 1)/6, component 1 + mod(i - 1, 6) of [x, v].
+  function system_state_name(self, i) result(name)
+    class(line_system), intent(in) :: self   !< system
+    integer, intent(in) :: i                 !< state index
+    character(len=:), allocatable :: name
+    name = node_state_name(self%first + (i - 1)/6, 1 + modulo(i - 1, 6))
+  end function system_state_name
 
   !> Fill the work arrays x, v from the state y at time t (kinematic ends from
   !> their motion).
@@ -377,7 +386,8 @@ contains
     scheme%sys%v = v0
     scheme%opts = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%rtol, atol=opts%atol, max_step=opts%max_step, &
-      max_order=opts%max_order, max_num_steps=1000000, analytic_jacobian=opts%analytic_jacobian, &
+      max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, &
+      analytic_jacobian=opts%analytic_jacobian, &
       newton_coefficient=line_newton_coefficient(opts%rtol))
     if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends
     allocate(y0(scheme%sys%n_state()))

@@ -58,7 +58,7 @@ module airlaunch_line_model
   use airlaunch_atmosphere, only: isa, air_state
   implicit none
   private
-  public :: line_params, line_model, line_energy
+  public :: line_params, line_model, line_energy, node_state_name
 
   !> Physical parameters of one line (all SI; namelist group `&line`).
   type :: line_params
@@ -469,4 +469,15 @@ contains
     t = 0.0_dp
     if (ell > tiny_fraction*self%l0) t = dx/ell
   end function model_end_tangent
+
+  !> What component j (1..6) of node k's state [x, v] is, e.g. "line node 7 velocity y".
+  pure function node_state_name(k, j) result(name)
+    integer, intent(in) :: k  !< node
+    integer, intent(in) :: j  !< component of [x, v]
+    character(len=:), allocatable :: name
+    character(len=1), parameter :: xyz(3) = ["x", "y", "z"]
+    character(len=12) :: buf
+    write(buf, '(i0)') k
+    name = "line node " // trim(buf) // merge(" position ", " velocity ", j <= 3) // xyz(modulo(j - 1, 3) + 1)
+  end function node_state_name
 end module airlaunch_line_model

@@ -26,6 +26,8 @@ module airlaunch_line_scheme
     !> quotients (.false.; for comparison: same answers, 20 force evaluations
     !> per Jacobian)
     logical :: analytic_jacobian = .true.
+    !> cvode: steps allowed over the whole run (`&run max_steps`); 0 = no limit
+    integer :: max_steps = 0
     ! marching
     real(dp) :: dt = 1.0e-4_dp              !< marching: fixed time step [s]
     real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]

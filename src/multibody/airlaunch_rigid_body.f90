@@ -24,7 +24,7 @@ module airlaunch_rigid_body
   implicit none
   private
   public :: rigid_body, body_state_size, new_rigid_body, check_mass_properties
-  public :: newton_euler, body_state_derivative, quaternion_drift_rate, cross
+  public :: newton_euler, body_state_derivative, quaternion_drift_rate, cross, body_state_name
 
   !> Number of state variables of one free rigid body.
   integer, parameter :: body_state_size = 13
@@ -220,4 +220,23 @@ contains
     real(dp) :: c(3)
     c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
   end function cross
+
+  !> What component j (1..13) of a body's state is, e.g. "angular velocity z (body axes)".
+  pure function body_state_name(j) result(name)
+    integer, intent(in) :: j  !< component of [r, v, q, w]
+    character(len=:), allocatable :: name
+    character(len=1), parameter :: xyz(3) = ["x", "y", "z"], wxyz(4) = ["w", "x", "y", "z"]
+    select case (j)
+    case (1:3)
+      name = "position " // xyz(j)
+    case (4:6)
+      name = "velocity " // xyz(j - 3)
+    case (7:10)
+      name = "attitude quaternion " // wxyz(j - 6)
+    case (11:13)
+      name = "angular velocity " // xyz(j - 10) // " (body axes)"
+    case default
+      name = "?"
+    end select
+  end function body_state_name
 end module airlaunch_rigid_body

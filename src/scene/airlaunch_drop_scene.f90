@@ -37,9 +37,20 @@ module airlaunch_drop_scene
     procedure :: rhs => drop_rhs
     procedure :: nroots => drop_nroots
     procedure :: roots => drop_roots
+    procedure :: state_name => drop_state_name
   end type drop_system
 
 contains
+
+  !> State i of [x, y, z, vx, vy, vz] as "store position y" etc.
+  function drop_state_name(self, i) result(name)
+    class(drop_system), intent(in) :: self  !< the system
+    integer, intent(in) :: i                !< state index (1..6)
+    character(len=:), allocatable :: name
+    character(len=1), parameter :: xyz(3) = ["x", "y", "z"]
+    name = "store " // merge("position ", "velocity ", i <= 3) // xyz(modulo(i - 1, 3) + 1)
+    if (.false.) name = name // str(self%y_stop)
+  end function drop_state_name
 
   !> Read and validate &store.
   subroutine read_drop_config(f, cfg, echo, error)
@@ -150,6 +161,7 @@ contains
     v0 = cfg%mach*air%sound_speed
     opts%rtol = run%rtol
     opts%atol = run%atol
+    opts%max_total_steps = run%max_steps
     opts%atol_vector = [spread(run%atol*1.0e3_dp, 1, 3), spread(run%atol*1.0e2_dp, 1, 3)]
     call solver%init(sys, 0.0_dp, [0.0_dp, cfg%altitude, 0.0_dp, v0, 0.0_dp, 0.0_dp], opts, error)
     if (allocated(error)) return

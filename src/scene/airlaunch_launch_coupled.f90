@@ -157,6 +157,7 @@ contains
     ropt%inner_atol = 100.0_dp*run%atol   ! as the direct scene's line nodes (atol_scaling)
     ropt%chain_max_order = 2
     ropt%inner_max_order = 2
+    ropt%max_steps = run%max_steps
     if (run%max_order > 0) then
       ropt%chain_max_order = run%max_order
       ropt%inner_max_order = run%max_order
@@ -221,6 +222,7 @@ contains
     type(cvode_options), intent(out) :: opts
     opts%rtol = run%rtol
     opts%atol = run%atol
+    opts%max_total_steps = run%max_steps
     ! Newton's band system with the positions (bodies' and nodes', x' = v)
     ! eliminated: 65 of the paper scenario's 116 unknowns, and LAPACK's partial
     ! pivoting no longer swaps the line's rows (airlaunch_lapack_band;

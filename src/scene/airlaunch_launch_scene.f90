@@ -93,7 +93,10 @@ contains
       alpha_target=cfg%flight%trim_alpha)
     loads%aircraft = cfg%aircraft%aero
     call trim_case0(tp, loads%aircraft, tr, error)
-    if (allocated(error)) return
+    if (allocated(error)) then
+      error%message = "Case 0 trim (t = 0 s): " // error%message
+      return
+    end if
     res%trim_alpha_deg = tr%alpha*rad2deg
     res%trim_elevator_deg = tr%delta_e*rad2deg
     res%trim_thrust_n = tr%thrust
@@ -185,8 +188,9 @@ contains
     if (.not. allocated(straight_error)) return
     call hanging_line(sys, cfg%line%ea, rho, v0, x0, y0)
     call settle_line(sys, y0, error)
-    if (allocated(error)) error%message = error%message // " (from a straight and from a hanging start; " // &
-      "the first: " // straight_error%message // ")"
+    if (allocated(error)) error%message = "Case 0 trim (t = 0 s): the towed line's equilibrium in the " // &
+      "trimmed flight was not found from a straight nor from a hanging start: " // error%message // &
+      " (the first: " // straight_error%message // ")"
   end subroutine place_line
 
   !> Node positions of the line in the steady flight, from the far end

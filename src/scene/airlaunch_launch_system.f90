@@ -31,7 +31,8 @@ module airlaunch_launch_system
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
   use airlaunch_separation, only: separation_system, separation_nroots
   use airlaunch_cut_joint, only: phase_free, phase_rotation
-  use airlaunch_line_model, only: line_model
+  use airlaunch_line_model, only: line_model, node_state_name
+  use airlaunch_rigid_body, only: body_state_name
   use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_launch_loads, only: launch_loads
   implicit none
@@ -69,9 +70,29 @@ module airlaunch_launch_system
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: project => launch_project
+    procedure :: state_name => launch_state_name
   end type launch_system
 
 contains
+
+  !> State i: the aircraft's 13, the rocket's 13, then the line's nodes 1..N
+  !> (node N carries the parachute); positions and velocities relative to the
+  !> reference frame (see the module's header).
+  function launch_state_name(self, i) result(name)
+    class(launch_system), intent(in) :: self  !< the system
+    integer, intent(in) :: i                  !< state index
+    character(len=:), allocatable :: name
+    integer :: k
+    if (i <= 13) then
+      name = "aircraft " // body_state_name(i)
+    else if (i <= rigid_size) then
+      name = "rocket " // body_state_name(i - 13)
+    else
+      k = 1 + (i - rigid_size - 1)/6
+      name = node_state_name(k, 1 + modulo(i - rigid_size - 1, 6))
+      if (k == self%line%n) name = name // " (parachute)"
+    end if
+  end function launch_state_name
 
   !> Absolute state (earth frame) of the rigid part and the nodes from y.
   subroutine launch_to_absolute(self, t, y)

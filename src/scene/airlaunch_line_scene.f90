@@ -379,6 +379,15 @@ contains
     if (f%is_set("run", "rtol")) cfg%integration%rtol = run%rtol
     if (f%is_set("run", "atol")) cfg%integration%atol = run%atol
     if (f%is_set("run", "max_order")) cfg%integration%max_order = run%max_order
+    cfg%integration%max_steps = run%max_steps
+    if (scheme == "marching" .and. run%max_steps > 0) then
+      if (run%t_end/dt > run%max_steps) then
+        call fatal_error(error, f%path // ": &line_scene: dt = " // str(dt) // " s is not allowed with t_end = " // &
+          str(run%t_end) // " s (" // str(run%t_end/dt) // " marching steps; &run max_steps = " // &
+          str(run%max_steps) // ": raise dt or max_steps)")
+        return
+      end if
+    end if
     cfg%t_end = run%t_end
     cfg%output_interval = run%output_dt
     cfg%record_nodes = run%trajectory

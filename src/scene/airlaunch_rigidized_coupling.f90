@@ -95,6 +95,9 @@ module airlaunch_rigidized_coupling
     !> Restart the chain's CVODE after every refresh (true) or let its error
     !> control absorb the small jump of the parameters (false).
     logical :: restart_on_refresh = .false.
+    !> Steps each of the two integrators (chain, line) may take over the run
+    !> (`&run max_steps`); 0 = no limit.
+    integer :: max_steps = 0
   end type rigidized_settings
 
   !> The virtual rigid body of the line (§2.4) as the chain uses it.
@@ -747,7 +750,8 @@ contains
     end if
     if (allocated(error)) return
     copt = cvode_options(method="bdf", linear_solver="dense", rtol=opts%chain_rtol, &
-      atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000)
+      atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000, \
+      max_total_steps=opts%max_steps)
     call self%chain_solver%init(self%chain, t0, y, copt, error)
     if (allocated(error)) return
     ! --- the line's integrator
@@ -756,7 +760,7 @@ contains
     atol_l = opts%inner_atol
     lopt = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%inner_rtol, atol_vector=atol_l, &
-      max_order=opts%inner_max_order, max_num_steps=1000000)
+      max_order=opts%inner_max_order, max_num_steps=1000000, max_total_steps=opts%max_steps)
     self%t = t0
     call sample_ends(self, t0, self%chain_solver%y)
     call self%line%near%set_body_motion(t0, self%tie_x, self%tie_v, t0 + opts%outer_dt, &

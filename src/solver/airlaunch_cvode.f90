@@ -47,6 +47,9 @@ module airlaunch_cvode
     real(dp) :: initial_step = 0.0_dp            !< first step [s]; 0 = CVODE's estimate
     integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
     integer :: max_num_steps = 200000            !< steps allowed between two outputs
+    !> steps allowed over the solver's life, re-initialisations included (a run's
+    !> budget: `&run max_steps`); 0 = no limit
+    integer :: max_total_steps = 0
     logical :: stability_limit_detection = .false. !< BDF order reduction near the imaginary axis
     !> Newton's convergence test: the iteration stops when its estimated error is
     !> below this fraction of the error tolerance (CVodeSetNonlinConvCoef); 0 = CVODE's 0.1
@@ -85,8 +88,12 @@ module airlaunch_cvode
     real(c_double), pointer :: y(:) => null()
     type(callback_data), pointer :: cb => null()
     real(dp) :: t = 0.0_dp   !< time of `y`
+    integer(c_long) :: steps_before = 0    !< steps before the last re-initialisation
+    integer(c_long) :: max_total = 0       !< cvode_options%max_total_steps
+    integer(c_long) :: max_interval = 0    !< cvode_options%max_num_steps
   contains
     procedure :: init => solver_init
+    procedure :: steps_taken => solver_steps_taken
     procedure :: advance => solver_advance
     procedure :: reinit => solver_reinit
     procedure :: set_roots => solver_set_roots
@@ -249,6 +256,9 @@ contains
       end select
     end if
     ierr = FCVodeSetMaxNumSteps(self%mem, int(opts%max_num_steps, c_long))
+    self%max_interval = int(opts%max_num_steps, c_long)
+    self%max_total = int(max(0, opts%max_total_steps), c_long)
+    self%steps_before = 0
     if (opts%max_step > 0.0_dp) ierr = FCVodeSetMaxStep(self%mem, real(opts%max_step, c_double))
     if (opts%initial_step > 0.0_dp) ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
     if (opts%max_order > 0) ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
@@ -302,7 +312,18 @@ contains
     integer, intent(out), optional :: which(:)            !< CVodeGetRootInfo
     integer(c_int) :: ierr
     real(c_double) :: tret(1)
+    integer(c_long) :: left
     if (present(event)) event = .false.
+    if (self%max_total > 0) then
+      ! this call may take what is left of the budget (and no more than the
+      ! per-output limit)
+      left = self%max_total - self%steps_taken()
+      if (left <= 0) then
+        call fatal_error(error, failure_message(self, CV_TOO_MUCH_WORK))
+        return
+      end if
+      ierr = FCVodeSetMaxNumSteps(self%mem, min(self%max_interval, left))
+    end if
     ierr = FCVode(self%mem, real(tout, c_double), self%nv_y, tret, CV_NORMAL)
     self%t = tret(1)
     if (ierr < 0) then
@@ -327,6 +348,7 @@ contains
     real(dp), intent(in) :: y(:)                          !< new state
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer(c_int) :: ierr
+    self%steps_before = self%steps_taken()
     self%y = y
     self%t = t
     ierr = FCVodeReInit(self%mem, real(t, c_double), self%nv_y)
@@ -348,6 +370,17 @@ contains
     integer(c_int) :: ierr
     ierr = FCVodeSetMaxStep(self%mem, real(hmax, c_double))
   end subroutine solver_set_max_step
+
+  !> Steps taken since `init`, over every re-initialisation.
+  integer(c_long) function solver_steps_taken(self) result(n)
+    class(cvode_solver), intent(in) :: self  !< solver
+    integer(c_int) :: ierr
+    integer(c_long) :: nst(1)
+    n = self%steps_before
+    if (.not. c_associated(self%mem)) return
+    ierr = FCVodeGetNumSteps(self%mem, nst)
+    if (ierr == 0) n = n + nst(1)
+  end function solver_steps_taken
 
   !> Integration counters so far.
   function solver_stats(self) result(s)
@@ -411,7 +444,12 @@ contains
     character(len=:), allocatable :: why
     select case (flag)
     case (CV_TOO_MUCH_WORK)
-      why = "too many steps (CV_TOO_MUCH_WORK): the problem is stiffer or faster than expected"
+      if (self%max_total > 0 .and. self%steps_taken() >= self%max_total) then
+        why = "the step budget is spent (" // str(int(self%max_total)) // " steps in total, &run max_steps)"
+      else
+        why = "too many steps between two outputs (" // str(int(self%max_interval)) // &
+          ", CV_TOO_MUCH_WORK): the problem is stiffer or faster than expected"
+      end if
     case (CV_TOO_MUCH_ACC)
       why = "tolerances too tight for double precision (CV_TOO_MUCH_ACC)"
     case (CV_ERR_FAILURE)
@@ -428,12 +466,47 @@ contains
       why = "CVODE flag " // str(int(flag))
     end select
     msg = "integration failed at t = " // str(self%t) // " s: " // why
+    select case (flag)
+    case (CV_TOO_MUCH_WORK, CV_ERR_FAILURE, CV_CONV_FAILURE)
+      msg = msg // "; " // error_culprit(self)
+    end select
     if (allocated(self%cb%sys%failure)) then
       if (len(self%cb%sys%failure) > 0) msg = msg // ": " // self%cb%sys%failure
     end if
     if (allocated(self%cb%last_message)) msg = msg // " [CVODE: " // self%cb%last_message // "]"
 
   end function failure_message
+
+  !> The step size and the state with the largest weighted local error
+  !> estimate of the last step: the quantity the integrator could not follow.
+  function error_culprit(self) result(s)
+    type(cvode_solver), intent(in) :: self
+    character(len=:), allocatable :: s
+    type(N_Vector), pointer :: nv_e, nv_w
+    real(c_double), pointer :: e(:), w(:)
+    real(c_double) :: h(1)
+    integer(c_int) :: ierr
+    integer :: i
+    s = ""
+    if (.not. c_associated(self%mem)) return
+    ierr = FCVodeGetCurrentStep(self%mem, h)
+    if (ierr == 0) s = "step size " // str(h(1)) // " s"
+    nv_e => FN_VClone(self%nv_y)
+    nv_w => FN_VClone(self%nv_y)
+    if (associated(nv_e) .and. associated(nv_w)) then
+      ierr = FCVodeGetEstLocalErrors(self%mem, nv_e)
+      if (ierr == 0) ierr = FCVodeGetErrWeights(self%mem, nv_w)
+      if (ierr == 0) then
+        e => FN_VGetArrayPointer(nv_e)
+        w => FN_VGetArrayPointer(nv_w)
+        i = maxloc(abs(e*w), dim=1)
+        if (abs(e(i)*w(i)) > 0.0_c_double) s = s // ", largest local error estimate in " // &
+          self%cb%sys%state_name(i) // " (state " // str(i) // ")"
+      end if
+    end if
+    if (associated(nv_e)) call FN_VDestroy(nv_e)
+    if (associated(nv_w)) call FN_VDestroy(nv_w)
+  end function error_culprit
 
   !> CVODE right-hand side callback.
   integer(c_int) function rhs_callback(t, nv_y, nv_ydot, user_data) result(ierr) bind(C)

@@ -50,6 +50,7 @@ module airlaunch_ode
     procedure :: has_node_jacobian => ode_has_node_jacobian
     procedure :: node_jacobian => ode_node_jacobian
     procedure :: velocity_partners => ode_velocity_partners
+    procedure :: state_name => ode_state_name
   end type ode_system
 
   abstract interface
@@ -183,4 +184,15 @@ contains
     partner = 0
     if (.false.) partner(1) = len(self%failure)
   end subroutine ode_velocity_partners
+
+  !> What state i is, for messages (e.g. "rocket velocity y"); default "state i".
+  function ode_state_name(self, i) result(name)
+    class(ode_system), intent(in) :: self     !< the system
+    integer, intent(in) :: i                  !< state index
+    character(len=:), allocatable :: name
+    character(len=16) :: buf
+    write(buf, '(i0)') i
+    name = "state " // trim(buf)
+    if (.false.) name = name // self%failure
+  end function ode_state_name
 end module airlaunch_ode

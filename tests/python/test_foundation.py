@@ -151,3 +151,75 @@ def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
     res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "none" / "x.nc")
     line = assert_input_error(res, "--output = ", tmp_path / "none" / "x.nc")
     assert "HDF5" not in res.stderr
+
+
+def test_file_without_final_newline_reads_like_one_with_it(airlaunch_exe, tmp_path):
+    """gfortran's namelist read meets the end of the file at a last group's '/'
+    with no newline after it (iostat -1, "End of file") although every value
+    was read; editors write such files. Reference: the same file with the
+    newline, whose result must be identical to the last printed digit."""
+    nml, out = drop_nml(tmp_path, t_end=5.0)
+    text = nml.read_text().strip()
+    assert not text.endswith("\n")
+    res_nl = run_airlaunch(airlaunch_exe, write(tmp_path / "nl.nml", text + "\n"))
+    assert res_nl.returncode == 0, res_nl.stderr
+    bare = write(tmp_path / "bare.nml", text)
+    assert bare.read_bytes()[-1:] == b"/"
+    res = run_airlaunch(airlaunch_exe, bare)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout == res_nl.stdout
+    # the error messages still point at the user's file and its lines
+    bad = write(tmp_path / "bad.nml", text.replace("mass = 28000.0", "mass = -1.0"))
+    res = run_airlaunch(airlaunch_exe, bad)
+    assert res.returncode == 2 and f"{bad}: &store: mass = -1.0 is not allowed" in res.stderr, res.stderr
+
+
+@pytest.mark.parametrize("old,new,fragment", [
+    # 1e30 s / 0.05 s output times overflowed the record count (a crash, not a message)
+    ("t_end = 30.0", "t_end = 1.0e30", "&run: t_end / output_dt = 1.00000000E+30 s / 0.05 s is not allowed"),
+    ("output_dt = 0.05", "output_dt = 1.0e-30", "output times; at most 10000000: raise output_dt or shorten t_end"),
+    ("t_end = 30.0", "t_end = 30.0, max_steps = -1",
+     "&run: max_steps = -1 is not allowed (must be an integer in [0, 2147483647])"),
+])
+def test_run_limits_are_input_errors(airlaunch_exe, tmp_path, old, new, fragment):
+    nml, out = drop_nml(tmp_path)
+    text = nml.read_text()
+    assert old in text
+    nml.write_text(text.replace(old, new))
+    assert_input_error(run_airlaunch(airlaunch_exe, nml), fragment, out)
+
+
+def test_step_budget_stops_a_run_that_cannot_progress(airlaunch_exe, tmp_path):
+    """An infinitely stiff elevator loop (k_q = 1e30 rad per rad/s) chatters at
+    the deflection limit: CVODE steps at ~5e-7 s and the 15 s run would take
+    about two hours. With a step budget the run stops with one line naming the
+    phase, the time, the step size and the state the integrator could not
+    follow (the aircraft's pitch rate: body axis z), exit 3, and the output so
+    far stays readable with status 'failed'."""
+    from conftest import nml_variant
+    out = tmp_path / "kq.nc"
+    nml = nml_variant(tmp_path, "kq", edits=[(r"^  k_q = .*$", "  k_q = 1.0e30"),
+                                             (r"^  output = .*$", f"  output = '{out}'\n  max_steps = 3000")])
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 3, res.stderr
+    first = res.stderr.strip().splitlines()[0]
+    assert first.startswith("airlaunch: error: phase 0 (preparation"), first
+    assert "the step budget is spent (3000 steps in total, &run max_steps)" in first, first
+    assert "largest local error estimate in aircraft angular velocity z (body axes)" in first, first
+    assert "step size " in first
+    assert "separation (Case 2->3):     not reached" in res.stderr
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs.get("status") == "failed"
+        assert np.isfinite(ds["time"].values).all()
+
+
+def test_marching_step_count_is_checked_before_the_run(airlaunch_exe, tmp_path):
+    """The paper's marching scheme takes t_end/dt fixed steps: more than the
+    run's step budget is an input error naming dt, not hours of stepping."""
+    from conftest import nml_variant
+    out = tmp_path / "m.nc"
+    nml = nml_variant(tmp_path, "m", base=ROOT / "input" / "line_pendulum.nml",
+                      edits=[(r"^  output = .*$", f"  output = '{out}'"),
+                             (r"^  b_kind = 'point_mass'$", "  b_kind = 'point_mass'\n  scheme = 'marching', dt = 1.0e-9")])
+    assert_input_error(run_airlaunch(airlaunch_exe, nml),
+                       "&line_scene: dt = 1.00000000E-09 s is not allowed with t_end = 6.0 s", out)
