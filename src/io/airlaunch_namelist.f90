@@ -38,7 +38,9 @@ module airlaunch_namelist
   end type nml_assignment
 
   !> Expected name and type of a variable, for diagnosis: kind is one of
-  !> "real", "integer", "logical", "string", "real_list".
+  !> "real", "integer", "logical", "string", "real_list", "real3" (a vector of
+  !> exactly three reals when assigned whole: `v = 1.0, 2.0, 3.0` or `v = 3*0.0`;
+  !> elements one by one, `v(2) = 1.0`, stay allowed).
   type :: nml_var
     character(len=32) :: name = ""
     character(len=16) :: kind = "real"
@@ -123,6 +125,8 @@ contains
     close(unit)
     self%unterminated = .not. ends_with_newline(path)
     call scan_text(self, text(1:pos), line_of(1:pos), col_of(1:pos), error)
+    if (.not. allocated(error) .and. size(self%groups) == 0) call fatal_error(error, path // &
+      ": no namelist group in the file (a group starts with &name and ends with /, e.g. &run ... /)")
   end subroutine nml_load
 
   !> The file is empty or its last byte is a line feed.
@@ -351,6 +355,19 @@ contains
           " (allowed: " // join(vars%name) // ")")
         return
       end if
+      ! A whole 3-vector given fewer or more values: Fortran's read would keep
+      ! the old value of the missing components, or stop at the extra one with
+      ! "Cannot match namelist object name".
+      do j = 1, size(vars)
+        if (lower(trim(vars(j)%name)) /= self%items(i)%name .or. vars(j)%kind /= "real3") cycle
+        if (len(self%items(i)%index) > 0) cycle
+        if (count_values(self%items(i)%value) /= 3) then
+          call fatal_error(error, self%where(self%items(i)) // "'" // self%items(i)%name // "' = " // &
+            self%items(i)%value // " has " // str(count_values(self%items(i)%value)) // &
+            " values; a vector of 3 (x, y, z) is expected")
+          return
+        end if
+      end do
       ! Fortran's namelist read keeps the last of two assignments without a word:
       ! a value written twice is an error, not a silent choice.
       do j = 1, i - 1
@@ -455,7 +472,7 @@ contains
             if (v(1:1) /= "'" .and. v(1:1) /= '"') ios = 1
           end if
           expected = "a quoted string"
-        case ("real_list")
+        case ("real_list", "real3")
           rl = 0
           read(v, *, iostat=ios) rl(1:count_items(v))
           expected = "a list of real numbers"
@@ -631,6 +648,41 @@ contains
     end do
     count_items = min(max(count_items, 1), 1000)
   end function count_items
+
+  !> Number of values of a list, repeat counts included ("3*0.0" and "2*" are 3
+  !> and 2 values; blanks and commas separate).
+  integer function count_values(v) result(n)
+    character(len=*), intent(in) :: v
+    integer :: i, start, star, k, ios
+    logical :: in_item
+    n = 0
+    in_item = .false.
+    start = 1
+    do i = 1, len(v) + 1
+      if (i > len(v)) then
+        if (in_item) call close_value(v(start:len(v)))
+        exit
+      end if
+      if (v(i:i) == "," .or. v(i:i) == " ") then
+        if (in_item) call close_value(v(start:i-1))
+        in_item = .false.
+      else if (.not. in_item) then
+        in_item = .true.
+        start = i
+      end if
+    end do
+  contains
+    subroutine close_value(item)
+      character(len=*), intent(in) :: item
+      star = index(item, "*")
+      k = 1
+      if (star > 1) then
+        read(item(1:star-1), *, iostat=ios) k
+        if (ios /= 0 .or. k < 1) k = 1
+      end if
+      n = n + k
+    end subroutine close_value
+  end function count_values
 
   !> Comma-separated list of names.
   pure function join(names) result(s)

@@ -223,3 +223,35 @@ def test_marching_step_count_is_checked_before_the_run(airlaunch_exe, tmp_path):
                              (r"^  b_kind = 'point_mass'$", "  b_kind = 'point_mass'\n  scheme = 'marching', dt = 1.0e-9")])
     assert_input_error(run_airlaunch(airlaunch_exe, nml),
                        "&line_scene: dt = 1.00000000E-09 s is not allowed with t_end = 6.0 s", out)
+
+
+@pytest.mark.parametrize("value,count", [("80.0, 0.0", 2), ("80.0, 0.0, 0.0, 1.0", 4), ("2*80.0", 2)])
+def test_a_whole_vector_takes_three_values(airlaunch_exe, tmp_path, value, count):
+    """Fortran's read keeps the old z of `b_position = 80.0, 0.0` without a word,
+    and stops at a fourth value with "Cannot match namelist object name"; both
+    are one line naming the vector and the count. Repeat counts count
+    (`3*0.0` is three values: the catenary input below runs with it)."""
+    base = (ROOT / "input" / "line_catenary.nml").read_text()
+    base = base.replace("output = 'output/line_catenary.nc'", f"output = '{tmp_path / 'c.nc'}'")
+    base = base.replace("t_end = 60.0", "t_end = 0.5")
+    assert "a_position = 0.0, 0.0, 0.0" in base and "b_position = 80.0, 0.0, 0.0" in base
+    ok = write(tmp_path / "ok.nml", base.replace("a_position = 0.0, 0.0, 0.0", "a_position = 3*0.0"))
+    res = run_airlaunch(airlaunch_exe, ok)
+    assert res.returncode == 0, res.stderr
+    bad = write(tmp_path / "bad.nml", base.replace("b_position = 80.0, 0.0, 0.0", f"b_position = {value}")
+                .replace(str(tmp_path / "c.nc"), str(tmp_path / "bad.nc")))
+    line = assert_input_error(run_airlaunch(airlaunch_exe, bad),
+                              f"&line_scene: 'b_position' = {value} has {count} values; a vector of 3 (x, y, z) "
+                              "is expected", tmp_path / "bad.nc")
+    assert line.startswith(f"airlaunch: error: {bad}:")
+
+
+def test_a_file_without_groups_is_named_as_such(airlaunch_exe, tmp_path):
+    """An empty file (or one of comments) was read as all defaults and failed on
+    the default output directory; now the message says what is wrong."""
+    for text in ("", "! only a comment\n"):
+        nml = write(tmp_path / "empty.nml", text)
+        res = run_airlaunch(airlaunch_exe, nml)
+        assert res.returncode == 2
+        assert res.stderr.strip() == f"airlaunch: error: {nml}: no namelist group in the file (a group starts " \
+            "with &name and ends with /, e.g. &run ... /)", res.stderr
