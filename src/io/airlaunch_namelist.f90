@@ -355,6 +355,18 @@ contains
           " (allowed: " // join(vars%name) // ")")
         return
       end if
+      ! NaN and Inf read as real numbers; no input is meant to be either
+      do j = 1, size(vars)
+        if (lower(trim(vars(j)%name)) /= self%items(i)%name) cycle
+        select case (vars(j)%kind)
+        case ("real", "real_list", "real3")
+          if (.not. all_finite(self%items(i)%value)) then
+            call fatal_error(error, self%where(self%items(i)) // "'" // self%items(i)%name // &
+              self%items(i)%index // "' = " // self%items(i)%value // " is not allowed (not a finite number)")
+            return
+          end if
+        end select
+      end do
       ! A whole 3-vector given fewer or more values: Fortran's read would keep
       ! the old value of the missing components, or stop at the extra one with
       ! "Cannot match namelist object name".
@@ -683,6 +695,33 @@ contains
       n = n + k
     end subroutine close_value
   end function count_values
+
+  !> No value of a list (repeat counts allowed) reads as NaN or infinity;
+  !> values that do not read as numbers are left to `diagnose`.
+  logical function all_finite(v) result(ok)
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    character(len=*), intent(in) :: v
+    integer :: i, start, star, ios
+    real(dp) :: x
+    ok = .true.
+    start = 0
+    do i = 1, len(v) + 1
+      if (i <= len(v)) then
+        if (v(i:i) /= "," .and. v(i:i) /= " ") then
+          if (start == 0) start = i
+          cycle
+        end if
+      end if
+      if (start > 0) then
+        star = index(v(start:i-1), "*")
+        if (start + star <= i - 1) then
+          read(v(start+star:i-1), *, iostat=ios) x
+          if (ios == 0) ok = ok .and. ieee_is_finite(x)
+        end if
+      end if
+      start = 0
+    end do
+  end function all_finite
 
   !> Comma-separated list of names.
   pure function join(names) result(s)
