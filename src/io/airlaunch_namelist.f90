@@ -643,57 +643,60 @@ contains
       scan(v, "0123456789") > 0
   end function is_number
 
-  !> Number of comma/blank separated items in a list value.
+
+  !> Bounds first:last of the next item of the list v at or after position pos
+  !> (blanks and commas separate items); first = 0 when there is none.
+  pure subroutine next_item(v, pos, first, last)
+    character(len=*), intent(in) :: v
+    integer, intent(in) :: pos
+    integer, intent(out) :: first, last
+    first = pos
+    do while (first <= len(v))
+      if (v(first:first) /= "," .and. v(first:first) /= " ") exit
+      first = first + 1
+    end do
+    if (first > len(v)) then
+      first = 0
+      last = 0
+      return
+    end if
+    last = first
+    do while (last < len(v))
+      if (v(last+1:last+1) == "," .or. v(last+1:last+1) == " ") exit
+      last = last + 1
+    end do
+  end subroutine next_item
+
+  !> Number of items of a list (1 to 1000, for reading it back in `diagnose`).
   pure integer function count_items(v)
     character(len=*), intent(in) :: v
-    integer :: i
-    logical :: in_item
+    integer :: first, last
     count_items = 0
-    in_item = .false.
-    do i = 1, len(v)
-      if (v(i:i) == "," .or. v(i:i) == " ") then
-        in_item = .false.
-      else if (.not. in_item) then
-        in_item = .true.
-        count_items = count_items + 1
-      end if
+    call next_item(v, 1, first, last)
+    do while (first > 0)
+      count_items = count_items + 1
+      call next_item(v, last + 1, first, last)
     end do
     count_items = min(max(count_items, 1), 1000)
   end function count_items
 
   !> Number of values of a list, repeat counts included ("3*0.0" and "2*" are 3
-  !> and 2 values; blanks and commas separate).
+  !> and 2 values).
   integer function count_values(v) result(n)
     character(len=*), intent(in) :: v
-    integer :: i, start, star, k, ios
-    logical :: in_item
+    integer :: first, last, star, k, ios
     n = 0
-    in_item = .false.
-    start = 1
-    do i = 1, len(v) + 1
-      if (i > len(v)) then
-        if (in_item) call close_value(v(start:len(v)))
-        exit
-      end if
-      if (v(i:i) == "," .or. v(i:i) == " ") then
-        if (in_item) call close_value(v(start:i-1))
-        in_item = .false.
-      else if (.not. in_item) then
-        in_item = .true.
-        start = i
-      end if
-    end do
-  contains
-    subroutine close_value(item)
-      character(len=*), intent(in) :: item
-      star = index(item, "*")
+    call next_item(v, 1, first, last)
+    do while (first > 0)
+      star = index(v(first:last), "*")
       k = 1
       if (star > 1) then
-        read(item(1:star-1), *, iostat=ios) k
+        read(v(first:first+star-2), *, iostat=ios) k
         if (ios /= 0 .or. k < 1) k = 1
       end if
       n = n + k
-    end subroutine close_value
+      call next_item(v, last + 1, first, last)
+    end do
   end function count_values
 
   !> No value of a list (repeat counts allowed) reads as NaN or infinity;
@@ -701,25 +704,17 @@ contains
   logical function all_finite(v) result(ok)
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     character(len=*), intent(in) :: v
-    integer :: i, start, star, ios
+    integer :: first, last, star, ios
     real(dp) :: x
     ok = .true.
-    start = 0
-    do i = 1, len(v) + 1
-      if (i <= len(v)) then
-        if (v(i:i) /= "," .and. v(i:i) /= " ") then
-          if (start == 0) start = i
-          cycle
-        end if
+    call next_item(v, 1, first, last)
+    do while (first > 0)
+      star = index(v(first:last), "*")
+      if (first + star <= last) then
+        read(v(first+star:last), *, iostat=ios) x
+        if (ios == 0) ok = ok .and. ieee_is_finite(x)
       end if
-      if (start > 0) then
-        star = index(v(start:i-1), "*")
-        if (start + star <= i - 1) then
-          read(v(start+star:i-1), *, iostat=ios) x
-          if (ios == 0) ok = ok .and. ieee_is_finite(x)
-        end if
-      end if
-      start = 0
+      call next_item(v, last + 1, first, last)
     end do
   end function all_finite
 
