@@ -24,6 +24,7 @@ program airlaunch
   character(len=:), allocatable :: path, echo, summary, output_override
   character(len=1024) :: arg
   integer :: i, nargs
+  logical :: written
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   nargs = command_argument_count()
@@ -98,7 +99,14 @@ program airlaunch
   if (allocated(error)) then
     write(error_unit, '(a)') "airlaunch: error: " // error%message
     if (allocated(summary)) write(error_unit, '(a)') summary
-    if (run%trajectory) write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
+    if (run%trajectory) then
+      inquire(file=trim(run%output), exist=written)
+      if (written) then
+        write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
+      else
+        write(error_unit, '(a)') "airlaunch: no output written (the run failed before its first record)"
+      end if
+    end if
     stop 3, quiet=.true.
   end if
   write(output_unit, '(a)') summary
@@ -107,9 +115,13 @@ program airlaunch
 contains
 
   !> The output file's directory must exist: checked once the whole input is
-  !> read (its own errors first), before the run.
+  !> read (its own errors first), before the run.  An old file of the same
+  !> name is removed then: the run replaces it in any case (completed, or
+  !> failed with what it computed), and one that fails before its first record
+  !> must not leave an older result that passes for its own.
   subroutine check_output_directory()
     type(error_type), allocatable :: out_error
+    integer :: u, ios
     if (.not. run%trajectory) return
     if (len(output_override) > 0) then
       call require_output_directory("--output", run%output, out_error)
@@ -117,6 +129,8 @@ contains
       call require_output_directory(path // ": &run: output", run%output, out_error)
     end if
     if (allocated(out_error)) call fail_input(out_error%message)
+    open(newunit=u, file=trim(run%output), status="old", action="read", iostat=ios)
+    if (ios == 0) close(u, status="delete", iostat=ios)
   end subroutine check_output_directory
 
   !> The milestones of an air-launch run, one per line.

@@ -259,3 +259,22 @@ def test_a_file_without_groups_is_named_as_such(airlaunch_exe, tmp_path):
         assert res.returncode == 2
         assert res.stderr.strip() == f"airlaunch: error: {nml}: no namelist group in the file (a group starts " \
             "with &name and ends with /, e.g. &run ... /)", res.stderr
+
+
+def test_a_run_failing_before_its_first_record_leaves_no_old_file(airlaunch_exe, tmp_path):
+    """An aircraft of 1e30 kg cannot be trimmed (Case 0): the run fails before
+    writing anything. An older file under the same name (here a placeholder)
+    must not survive to pass for this run's output, and the program must not
+    point at it as 'output so far'."""
+    from conftest import nml_variant
+    out = tmp_path / "trim.nc"
+    out.write_text("an older result")
+    nml = nml_variant(tmp_path, "trim", edits=[(r"^  mass = 89000.0 .*$", "  mass = 1.0e30"),
+                                               (r"^  output = .*$", f"  output = '{out}'")])
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 3, res.stderr
+    first = res.stderr.strip().splitlines()[0]
+    assert first.startswith("airlaunch: error: Case 0 trim (t = 0 s): trim: no equilibrium found"), first
+    assert "airlaunch: no output written (the run failed before its first record)" in res.stderr
+    assert "output so far" not in res.stderr
+    assert not out.exists()
