@@ -215,6 +215,12 @@ def test_step_budget_stops_a_run_that_cannot_progress(airlaunch_exe, tmp_path):
     with xr.open_dataset(out) as ds:
         assert ds.attrs.get("status") == "failed"
         assert np.isfinite(ds["time"].values).all()
+    # scripts/run passes the status on and draws the output so far
+    out.unlink()
+    run = subprocess.run([str(ROOT / "scripts" / "run"), str(nml)], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 3, run.stderr
+    assert f"figure (of the output so far): {tmp_path / 'kq.png'}" in run.stdout, run.stdout
+    assert (tmp_path / "kq.png").stat().st_size > 10000
 
 
 def test_marching_step_count_is_checked_before_the_run(airlaunch_exe, tmp_path):
