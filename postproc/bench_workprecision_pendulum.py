@@ -66,7 +66,7 @@ def stable_step(n, cd):
 
 def namelist(n, cd, scheme, rtol, dt, out):
     return f"""&run scene = 'line', t_end = {T_END}, output_dt = {DT_OUT}, output = '{out}',
-  rtol = {rtol:.3e}, atol = {rtol:.3e} /
+  rtol = {rtol:.3e}, atol = {rtol:.3e}, max_steps = 0 /
 &line length = {L}, n_seg = {n}, ea = {EA}, mass_per_length = {RHO}, damping = {cd!r},
   gravity = .true., air = .false. /
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0,
