@@ -108,6 +108,7 @@ def main(argv=None):
     ap.add_argument("--values", default=None, help="comma-free list separated by ';' (default: %s)" % VALUES)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=600.0, help="s per run (a default-budget crawl takes ~3 min)")
+    ap.add_argument("--slow", type=float, default=20.0, help="print runs longer than this [s]")
     ap.add_argument("--quick", action="store_true", help="three values (%s) only" % QUICK_VALUES)
     args = ap.parse_args(argv)
     values = args.values.split(";") if args.values else (QUICK_VALUES if args.quick else VALUES)
@@ -123,6 +124,9 @@ def main(argv=None):
                 results.append(r)
                 if r[3] == "finding":
                     print(f"FINDING {r[0]}: {r[1]} = {r[2]}: {r[4]}", flush=True)
+                elif r[5] > args.slow:
+                    print(f"slow    {r[0]}: {r[1]} = {r[2]}: {r[3]} after {r[5]:.1f} s: {r[4][:160]}",
+                          flush=True)
     print(f"\n{'file':<24} {'runs':>5} {'completed':>9} {'input err':>9} {'num fail':>8} {'findings':>8} "
           f"{'slowest [s]':>11}")
     summary = {}

@@ -44,7 +44,13 @@ module airlaunch_namelist
   type :: nml_var
     character(len=32) :: name = ""
     character(len=16) :: kind = "real"
+    !> "string": the most characters the reader's variable holds (0: not
+    !> checked); longer values are an error, not cut off
+    integer :: length = 0
   end type nml_var
+
+  !> Most values of a list variable ("real_list", "integer_list") a reader holds.
+  integer, parameter, public :: max_list_items = 4096
 
   !> A scanned namelist file.
   type :: nml_file
@@ -63,6 +69,7 @@ module airlaunch_namelist
     procedure :: has_group => nml_has_group
     procedure :: is_set => nml_is_set
     procedure :: position => nml_position
+    procedure :: open_text => nml_open_text
     procedure :: diagnose => nml_diagnose
     procedure :: where => nml_where
   end type nml_file
@@ -76,8 +83,7 @@ contains
     character(len=*), intent(in) :: path                  !< file to read
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer :: unit, ios, lineno, k, nchar, pos, lt
-    character(len=4096) :: buf
-    character(len=:), allocatable :: text
+    character(len=:), allocatable :: buf, text
     integer, allocatable :: line_of(:), col_of(:)
     logical :: exists
 
@@ -103,7 +109,7 @@ contains
     ! went from 12.4 M to 2.8 M instructions)
     nchar = 0
     do
-      read(unit, '(a)', iostat=ios) buf
+      call read_line(unit, buf, ios)
       if (ios /= 0) exit
       nchar = nchar + stripped_length(buf) + 1
     end do
@@ -113,7 +119,7 @@ contains
     lineno = 0
     pos = 0
     do
-      read(unit, '(a)', iostat=ios) buf
+      call read_line(unit, buf, ios)
       if (ios /= 0 .or. pos >= nchar) exit
       lineno = lineno + 1
       lt = stripped_length(buf)
@@ -128,6 +134,22 @@ contains
     if (.not. allocated(error) .and. size(self%groups) == 0) call fatal_error(error, path // &
       ": no namelist group in the file (a group starts with &name and ends with /, e.g. &run ... /)")
   end subroutine nml_load
+
+  !> One whole line of any length (ios 0; nonzero at the end of the file).
+  subroutine read_line(unit, line, ios)
+    integer, intent(in) :: unit                          !< formatted sequential unit
+    character(len=:), allocatable, intent(out) :: line   !< the line without its end
+    integer, intent(out) :: ios                          !< 0, or the end of the file
+    character(len=4096) :: chunk
+    integer :: n
+    line = ""
+    do
+      read(unit, '(a)', advance="no", iostat=ios, size=n) chunk
+      line = line // chunk(1:n)
+      if (ios /= 0) exit
+    end do
+    if (is_iostat_eor(ios)) ios = 0
+  end subroutine read_line
 
   !> The file is empty or its last byte is a line feed.
   logical function ends_with_newline(path) result(ok)
@@ -367,6 +389,15 @@ contains
           end if
         end select
       end do
+      ! Strings: quoted (gfortran would take `name = 0` as the text "0"), and no
+      ! longer than the reader's variable (it would cut them off silently);
+      ! lists no longer than the reader's array ("Cannot match namelist object
+      ! name" otherwise)
+      do j = 1, size(vars)
+        if (lower(trim(vars(j)%name)) /= self%items(i)%name) cycle
+        call check_form(self%items(i), vars(j))
+        if (allocated(error)) return
+      end do
       ! A whole 3-vector given fewer or more values: Fortran's read would keep
       ! the old value of the missing components, or stop at the extra one with
       ! "Cannot match namelist object name".
@@ -393,6 +424,34 @@ contains
         end associate
       end do
     end do
+  contains
+    subroutine check_form(item, var)
+      type(nml_assignment), intent(in) :: item
+      type(nml_var), intent(in) :: var
+      integer :: n
+      character(len=:), allocatable :: v
+      v = item%value
+      select case (var%kind)
+      case ("string")
+        ! a leading repeat count (`4*'direct'`) is allowed
+        n = verify(v, "0123456789")
+        if (n > 1) then
+          if (v(n:n) == "*") v = v(n+1:)
+        end if
+        if (len(v) == 0) return
+        if (v(1:1) /= "'" .and. v(1:1) /= '"') then
+          call fatal_error(error, self%where(item) // "variable '" // item%name // "' = " // item%value // &
+            " is not a quoted string")
+        else if (var%length > 0 .and. len(v) - 2 > var%length) then
+          call fatal_error(error, self%where(item) // "'" // item%name // "' is " // str(len(v) - 2) // &
+            " characters long; at most " // str(var%length) // " are allowed")
+        end if
+      case ("real_list", "integer_list")
+        n = count_values(v)
+        if (len(item%index) == 0 .and. n > max_list_items) call fatal_error(error, self%where(item) // "'" // &
+          item%name // "' has " // str(n) // " values; at most " // str(max_list_items) // " are allowed")
+      end select
+    end subroutine check_form
   end subroutine nml_check_group
 
   !> "file:line: &group: " prefix of a message about an assignment.
@@ -428,24 +487,31 @@ contains
     character(len=*), intent(in) :: group   !< group name
     integer, intent(out) :: unit            !< unit to read from (closed by the caller)
     logical, intent(out) :: present         !< the group is in the file
-    integer :: src, ios
-    character(len=4096) :: buf
     present = self%has_group(group)
     unit = -1
-    if (.not. present) return
+    if (present) call self%open_text(unit)
+  end subroutine nml_position
+
+  !> Open the file at its start on a new unit for `read(unit, nml=...)` of its
+  !> groups in turn (closed by the caller): the file itself, or, if its last
+  !> line has no newline, the same lines each terminated in a scratch file.
+  subroutine nml_open_text(self, unit)
+    class(nml_file), intent(in) :: self
+    integer, intent(out) :: unit            !< unit to read from
+    integer :: src, ios
+    character(len=:), allocatable :: line
     open(newunit=unit, file=self%path, status="old", action="read")
     if (.not. self%unterminated) return
-    ! the same lines, each terminated, in a scratch file (deleted at close)
     src = unit
     open(newunit=unit, status="scratch", action="readwrite", form="formatted")
     do
-      read(src, '(a)', iostat=ios) buf
+      call read_line(src, line, ios)
       if (ios /= 0) exit
-      write(unit, '(a)') trim(buf)
+      write(unit, '(a)') line
     end do
     close(src)
     rewind(unit)
-  end subroutine nml_position
+  end subroutine nml_open_text
 
   !> After a failed namelist read of `group`: find the value that does not
   !> parse as its variable's type and report it; otherwise report the
@@ -474,7 +540,7 @@ contains
         case ("integer")
           read(v, *, iostat=ios) k
           if (ios == 0) ios = merge(0, 1, is_number(v) .and. verify(trim(v), "+-0123456789") == 0)
-          expected = "an integer"
+          expected = "an integer in [" // str(-huge(1)) // ", " // str(huge(1)) // "]"
         case ("logical")
           read(v, *, iostat=ios) l
           expected = ".true. or .false."

@@ -54,8 +54,8 @@ contains
     integer :: unit, ios, max_order, max_steps
     character(len=256) :: msg
     namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps
-    type(nml_var), parameter :: vars(10) = [nml_var("scene", "string"), nml_var("t_end", "real"), &
-      nml_var("output_dt", "real"), nml_var("output", "string"), nml_var("rtol", "real"), &
+    type(nml_var), parameter :: vars(10) = [nml_var("scene", "string", len(scene)), nml_var("t_end", "real"), &
+      nml_var("output_dt", "real"), nml_var("output", "string", len(output)), nml_var("rtol", "real"), &
       nml_var("atol", "real"), nml_var("trajectory", "logical"), nml_var("max_order", "integer"), &
       nml_var("stop_when_final", "logical"), nml_var("max_steps", "integer")]
 

@@ -6,17 +6,21 @@
 !> table; here they are applied again so that airlaunch-sweep never runs a
 !> table against a definition it does not satisfy.
 module airlaunch_sweep_definition
+  use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
-  use airlaunch_namelist, only: nml_file, nml_var, unset_real, unset_int
+  use airlaunch_namelist, only: nml_file, nml_var, unset_real, unset_int, max_list_items
   implicit none
   private
   public :: sweep_input, sweep_fixed, sweep_definition, read_sweep_definition
   public :: design_names, distribution_names, worst_by_names, max_list_values
 
   !> Largest number of values of a 'list' input and of keep_ids.
-  integer, parameter :: max_list_values = 4096
+  integer, parameter :: max_list_values = max_list_items
+  !> Most cases of a sweep (case ids are default integers; the table of 1e7
+  !> cases takes about 5 s to make)
+  integer, parameter :: max_cases = 10000000
   character(len=8), parameter :: design_names(3) = [character(len=8) :: "lhs", "sobol", "grid"]
   character(len=16), parameter :: distribution_names(4) = [character(len=16) :: "uniform", "normal", &
     "truncnorm", "list"]
@@ -133,13 +137,13 @@ contains
     character(len=512) :: msg
     character(len=:), allocatable :: where
     namelist /fixed/ name, value
-    type(nml_var), parameter :: vars(2) = [nml_var("name", "string"), nml_var("value", "string")]
+    type(nml_var), parameter :: vars(2) = [nml_var("name", "string", len(name)), nml_var("value", "string", len(value))]
     allocate(def%fixed(n_fixed))
     if (n_fixed == 0) return
     call f%check_group("fixed", vars, error)
     if (allocated(error)) return
     lines = pack(f%group_lines, f%groups == "fixed")
-    open(newunit=u, file=f%path, status="old", action="read")
+    call f%open_text(u)
     do k = 1, n_fixed
       name = ""
       value = ""
@@ -190,18 +194,21 @@ contains
     type(sweep_definition), intent(inout) :: def
     type(error_type), allocatable, intent(inout) :: error
     character(len=256) :: name, base, output_dir, design, worst_by, criteria
-    integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_grid, n_ids
+    integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_ids
+    integer(int64) :: n_grid
     real(dp) :: t_end, progress_interval
     logical :: keep_failed, present
     character(len=512) :: msg
     character(len=:), allocatable :: where
     namelist /sweep/ name, base, output_dir, design, n_cases, seed, t_end, keep_failed, keep_worst, &
       worst_by, keep_ids, criteria, progress_interval
-    type(nml_var), parameter :: vars(13) = [nml_var("name", "string"), nml_var("base", "string"), &
-      nml_var("output_dir", "string"), nml_var("design", "string"), nml_var("n_cases", "integer"), &
+    type(nml_var), parameter :: vars(13) = [nml_var("name", "string", len(name)), &
+      nml_var("base", "string", len(base)), nml_var("output_dir", "string", len(output_dir)), &
+      nml_var("design", "string", len(design)), nml_var("n_cases", "integer"), &
       nml_var("seed", "integer"), nml_var("t_end", "real"), nml_var("keep_failed", "logical"), &
-      nml_var("keep_worst", "integer"), nml_var("worst_by", "string"), nml_var("keep_ids", "integer_list"), &
-      nml_var("criteria", "string"), nml_var("progress_interval", "real")]
+      nml_var("keep_worst", "integer"), nml_var("worst_by", "string", len(worst_by)), &
+      nml_var("keep_ids", "integer_list"), nml_var("criteria", "string", len(criteria)), &
+      nml_var("progress_interval", "real")]
 
     where = f%path // ": &sweep: "
     name = ""; base = ""; output_dir = ""; design = ""; worst_by = "min_clearance_m"; criteria = ""
@@ -233,13 +240,31 @@ contains
     def%name = trim(name)
     if (len(def%name) == 0) def%name = stem(f%path)
     def%output_dir = trim(output_dir)
+    if (len(def%output_dir) == 0 .and. f%is_set("sweep", "output_dir")) then
+      call fatal_error(error, where // "output_dir = '' is not allowed (a directory, e.g. 'output/sweep_" // &
+        def%name // "', or leave it out for that default)")
+      return
+    end if
     if (len(def%output_dir) == 0) def%output_dir = "output/sweep_" // def%name
+    do i = 1, size(def%inputs)
+      associate(s => def%inputs(i))
+        if (s%levels > 0 .and. s%distribution == "list") then
+          call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
+            "': levels is not used by distribution = 'list' (its values are the grid's levels)")
+          return
+        else if (s%levels > 0 .and. def%design /= "grid") then
+          call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
+            "': levels is not used with design = '" // def%design // "' (only with 'grid')")
+          return
+        end if
+      end associate
+    end do
     if (def%design == "grid") then
       n_grid = 1
       do i = 1, size(def%inputs)
         associate(s => def%inputs(i))
           if (s%distribution == "list") then
-            n_grid = n_grid*size(s%values)
+            n_grid = n_grid*size(s%values, kind=int64)
           else if (s%levels < 1) then
             call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
               "': missing required value levels (design = 'grid' needs levels >= 1 or a list of values)")
@@ -247,12 +272,18 @@ contains
           else
             n_grid = n_grid*s%levels
           end if
+          n_grid = min(n_grid, huge(1_int64)/huge(1))   ! no overflow in the next product
         end associate
       end do
-      if (n_cases == unset_int) n_cases = n_grid
+      if (n_grid > max_cases) then
+        call fatal_error(error, where // "design = 'grid' is not allowed with these levels (the grid has " // &
+          str(real(n_grid, dp)) // " points; at most " // str(max_cases) // ")")
+        return
+      end if
+      if (n_cases == unset_int) n_cases = int(n_grid)
       if (n_cases /= n_grid) then
         call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (the grid has " // &
-          str(n_grid) // " points: the product of the levels)")
+          str(int(n_grid)) // " points: the product of the levels)")
         return
       end if
       if (seed == unset_int) seed = 0
@@ -268,6 +299,11 @@ contains
     end if
     if (n_cases < 1) then
       call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (must be >= 1: zero cases)")
+      return
+    end if
+    if (n_cases > max_cases) then
+      call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (at most " // &
+        str(max_cases) // ")")
       return
     end if
     if (seed < 0) then
@@ -326,16 +362,17 @@ contains
     character(len=512) :: msg
     character(len=:), allocatable :: where
     namelist /input/ name, distribution, lower, upper, mean, std, values, levels, units, description
-    type(nml_var), parameter :: vars(10) = [nml_var("name", "string"), nml_var("distribution", "string"), &
+    type(nml_var), parameter :: vars(10) = [nml_var("name", "string", len(name)), &
+      nml_var("distribution", "string", len(distribution)), &
       nml_var("lower", "real"), nml_var("upper", "real"), nml_var("mean", "real"), nml_var("std", "real"), &
-      nml_var("values", "real_list"), nml_var("levels", "integer"), nml_var("units", "string"), &
-      nml_var("description", "string")]
+      nml_var("values", "real_list"), nml_var("levels", "integer"), nml_var("units", "string", len(units)), &
+      nml_var("description", "string", len(description))]
 
     call f%check_group("input", vars, error)
     if (allocated(error)) return
     lines = pack(f%group_lines, f%groups == "input")
     allocate(def%inputs(n_input))
-    open(newunit=u, file=f%path, status="old", action="read")
+    call f%open_text(u)
     do k = 1, n_input
       name = ""; distribution = ""; units = ""; description = ""
       lower = unset_real; upper = unset_real; mean = unset_real; std = unset_real

@@ -1,0 +1,81 @@
+"""airlaunch-sweep's reading of a sweep definition at its limits (found by a fuzz
+of the sweep inputs, ninth session): each case was accepted with a silently
+changed value, or stopped with a message that named the wrong thing. Each now
+stops before any case runs with one line naming the variable and what is
+allowed (`--check`, exit 2); the valid forms next to them still pass."""
+import pytest
+
+from test_sweep_support import SMALL_INPUTS, SWEEP_EXE, run_sweep, small_definition
+
+
+def _check(definition, tmp_path):
+    if not SWEEP_EXE.exists():
+        pytest.fail(f"{SWEEP_EXE} is missing: run scripts/setup release first")
+    return run_sweep(definition, tmp_path, None, "--check")
+
+
+def _one_line(res):
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert len(lines) == 1 and lines[0].startswith("airlaunch-sweep: error: "), res.stderr
+    return lines[0]
+
+
+@pytest.mark.parametrize("last", ["input", "fixed"])
+def test_definition_without_final_newline(tmp_path, last):
+    """The &input and &fixed groups are read in turn from one unit; with the
+    last of them ending the file without a newline gfortran's read stopped with
+    "End of file" (the table step, in Python, read it)."""
+    definition = small_definition(tmp_path / "d.nml", n_cases=4)
+    text = definition.read_text().strip()
+    if last == "fixed":   # move the &fixed group to the end
+        fixed = "&fixed name = 'line%n_seg', value = '10' /"
+        text = text.replace(fixed, "").strip() + "\n" + fixed
+    assert text.endswith("/") and text.splitlines()[-1].startswith(f"&{last}")
+    definition.write_text(text)
+    res = _check(definition, tmp_path)
+    assert "End of file" not in res.stderr
+    assert res.returncode == 0, res.stderr
+    assert "definition ok" in res.stdout or "table" in res.stdout, res.stdout
+
+
+@pytest.mark.parametrize("change,words", [
+    # strings longer than the reader's variable were cut off (a 300-character
+    # output_dir became a 256-character one; a long &fixed value lost its end)
+    (dict(output_dir="o" * 300), ["'output_dir' is 300 characters long; at most 256 are allowed"]),
+    (dict(fixed="&fixed name = 'run%rtol', value = '" + "0" * 1100 + "1e-5' /"),
+     ["'value' is 1104 characters long; at most 1024 are allowed"]),
+    # an unquoted number for a string was taken as its text by Fortran (the table step refused it)
+    (dict(extra_sweep="criteria = 1e30"), ["variable 'criteria' = 1e30 is not a quoted string"]),
+    # lists longer than the reader's array: "Cannot match namelist object name 0.7"
+    (dict(inputs="&input name = 'bay%release_time', distribution = 'list', values = 4500*0.7 /"),
+     ["'values' has 4500 values; at most 4096 are allowed"]),
+    (dict(extra_sweep="keep_ids = 5000*1"), ["'keep_ids' has 5000 values; at most 4096 are allowed"]),
+    # a grid whose size overflowed a 32-bit integer (65536 x 65536 = 0 cases)
+    (dict(design="grid", n_cases="", inputs=SMALL_INPUTS.replace("units = 's' /", "units = 's', levels = 65536 /")
+          .replace("units = 'm2' /", "units = 'm2', levels = 65536 /").replace("std = 0.02 /", "std = 0.02, levels = 1 /")),
+     ["design = 'grid' is not allowed with these levels", "at most 10000000"]),
+    (dict(n_cases=2147483647), ["n_cases = 2147483647 is not allowed (at most 10000000)"]),
+    (dict(n_cases=2147483648), ["variable 'n_cases' = 2147483648 is not an integer in [-2147483647, 2147483647]"]),
+    # an empty output_dir meant the default here and the current directory in the table step
+    (dict(output_dir=""), ["output_dir = '' is not allowed"]),
+    # levels where nothing uses them (docs/sweep.md: a parameter a distribution does not use is an error)
+    (dict(inputs=SMALL_INPUTS.replace("units = 's' /", "units = 's', levels = 3 /")),
+     ["levels is not used with design = 'lhs' (only with 'grid')"]),
+    (dict(design="grid", n_cases="", inputs="&input name = 'bay%release_time', distribution = 'list', "
+          "values = 0.4, 0.6, levels = 2 /"),
+     ["levels is not used by distribution = 'list'"]),
+])
+def test_definition_limits_are_one_line_errors(tmp_path, change, words):
+    kw = dict(n_cases=4)
+    kw.update(change)
+    if kw.get("n_cases") == "":
+        kw["n_cases"] = 1
+        definition = small_definition(tmp_path / "d.nml", **kw)
+        definition.write_text(definition.read_text().replace("  n_cases = 1\n", ""))
+    else:
+        definition = small_definition(tmp_path / "d.nml", **kw)
+    line = _one_line(_check(definition, tmp_path))
+    for w in words:
+        assert w in line, (w, line)
+    assert not (tmp_path / "out" / "journal").exists()
