@@ -16,14 +16,17 @@ from .definition import DefinitionError, read_definition
 
 def cmd_table(args) -> int:
     """Draw the case table (or check an existing one against the definition)."""
-    from .table import check_table, write_table
+    from .table import check_table, output_dir_error, write_table
 
     defn = read_definition(args.definition)
     if args.check:
         check_table(defn)
         print(f"table: {defn.table_path} is the table of {defn.path}")
         return 0
-    path = write_table(defn)
+    try:
+        path = write_table(defn)
+    except (OSError, RuntimeError) as exc:   # netCDF4 reports some write errors as RuntimeError
+        raise output_dir_error(defn, defn.table_path, exc) from None
     print(f"table: {path} ({defn.n_cases} cases, {len(defn.inputs)} inputs, design {defn.design}, "
           f"seed {defn.seed})")
     if defn.design == "sobol" and defn.n_cases & (defn.n_cases - 1):
@@ -33,11 +36,9 @@ def cmd_table(args) -> int:
 
 def cmd_envelope(args) -> int:
     """Evaluate the criteria on the summary; write the envelope and the figures."""
-    import xarray as xr
-
     from .criteria import read_criteria
     from .envelope import evaluate, worst_case_table
-    from .table import write_atomic
+    from .table import open_netcdf, output_dir_error, write_atomic
 
     defn = read_definition(args.definition)
     criteria_path = args.criteria or defn.criteria
@@ -47,15 +48,29 @@ def cmd_envelope(args) -> int:
     summary_path = pathlib.Path(args.summary or defn.summary_path)
     if not summary_path.is_file():
         raise DefinitionError(f"{summary_path}: summary does not exist (run airlaunch-sweep first)")
-    with xr.open_dataset(summary_path) as summary:
-        names = [s.name for s in defn.inputs]
-        if summary.attrs.get("inputs", "").split() != names:
-            raise DefinitionError(f"{summary_path}: the summary's inputs ({summary.attrs.get('inputs', '')}) are "
-                                  f"not those of {defn.path} ({' '.join(names)})")
-        env = evaluate(summary.load(), criteria)
+    hint = "give the summary.nc that airlaunch-sweep writes"
+    summary = open_netcdf(summary_path, "summary", hint)
+    names = [s.name for s in defn.inputs]
+    inputs = summary.attrs.get("inputs")
+    if not isinstance(inputs, str):
+        raise DefinitionError(f"{summary_path}: not a sweep summary: the global attribute 'inputs' is missing ({hint})")
+    if inputs.split() != names:
+        raise DefinitionError(f"{summary_path}: the summary's inputs ({inputs}) are "
+                              f"not those of {defn.path} ({' '.join(names)})")
+    needed = ["status"] + names + sorted({m for c in criteria for m in c.metrics})
+    for var in needed:
+        if var not in summary.variables:
+            raise DefinitionError(f"{summary_path}: not a sweep summary: variable '{var}' is missing ({hint})")
+        if summary[var].dims != ("case",) or summary[var].dtype.kind not in "biuf":
+            raise DefinitionError(f"{summary_path}: not a sweep summary: variable '{var}' is not a number per case "
+                                  f"(dimensions {summary[var].dims}, type {summary[var].dtype}) ({hint})")
+    env = evaluate(summary, criteria)
     env.attrs["criteria_file"] = str(criteria_path)
     env.attrs["summary"] = str(summary_path)
-    out = write_atomic(env, defn.envelope_path)
+    try:
+        out = write_atomic(env, defn.envelope_path)
+    except (OSError, RuntimeError) as exc:
+        raise output_dir_error(defn, defn.envelope_path, exc) from None
     print(f"envelope: {out}")
     all_ = env.sel(criterion="all")
     print(f"probability of success (all criteria): {float(all_['probability']):.4f} "
@@ -69,7 +84,10 @@ def cmd_envelope(args) -> int:
     if not args.no_figures:
         from .figures import draw_all
 
-        paths = draw_all(env, defn.figure_dir)
+        try:
+            paths = draw_all(env, defn.figure_dir)
+        except OSError as exc:
+            raise output_dir_error(defn, getattr(exc, "filename", None) or defn.figure_dir, exc) from None
         print(f"figures: {defn.figure_dir} ({', '.join(p.name for p in paths.values())})")
     print("worst cases:")
     print(worst_case_table(env, 10), end="")

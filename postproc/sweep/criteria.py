@@ -10,12 +10,12 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-import pathlib
+import sys
 
 import f90nml
 import numpy as np
 
-from .definition import DefinitionError
+from .definition import DefinitionError, check_namelist_text, read_namelist_text, show, to_float
 
 #: Variables of &criteria (what each limits is in docs/sweep.md).
 CRITERIA_VARS = ("min_clearance_m", "line_strength_n", "line_safety_factor",
@@ -59,17 +59,26 @@ class Criterion:
 
 
 def _number(path, key, value):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
-        raise DefinitionError(f"{path}: &criteria: {key} = {value!r} is not a finite real number")
-    return float(value)
+    """A finite real number of normal magnitude: 0, or |x| in [2.2e-308, 1.8e308]
+    (a subnormal limit would overflow the relative margins, margin / limit)."""
+    number = None if isinstance(value, bool) or not isinstance(value, (int, float)) else to_float(value)
+    if number is None or not math.isfinite(number):
+        raise DefinitionError(f"{path}: &criteria: {key} = {show(value)} is not a finite real number "
+                              f"(|x| <= {sys.float_info.max:.4g})")
+    if number != 0 and abs(number) < sys.float_info.min:
+        raise DefinitionError(f"{path}: &criteria: {key} = {number!r} is not allowed (a subnormal number, too "
+                              f"small to compute with: give 0 or a magnitude >= {sys.float_info.min:.4g})")
+    return number
 
 
 def parse_criteria(text, path="<criteria>"):
     """Validate a criteria namelist text; return the list of Criterion."""
+    check_namelist_text(text, path)
     try:
         nml = f90nml.reads(text)
     except Exception as exc:  # f90nml raises several exception types
-        raise DefinitionError(f"{path}: cannot read the namelist: {exc}") from None
+        lines = str(exc).strip().splitlines() or [type(exc).__name__]
+        raise DefinitionError(f"{path}: cannot read the namelist: {lines[0]}") from None
     for group in nml:
         if group != "criteria":
             raise DefinitionError(f"{path}: unknown group &{group} (allowed: criteria)")
@@ -138,7 +147,4 @@ def parse_criteria(text, path="<criteria>"):
 
 def read_criteria(path):
     """Read and validate a criteria file."""
-    p = pathlib.Path(path)
-    if not p.is_file():
-        raise DefinitionError(f"{path}: file does not exist (give the path of a criteria file)")
-    return parse_criteria(p.read_text(), str(path))
+    return parse_criteria(read_namelist_text(path, "a criteria file"), str(path))

@@ -7,10 +7,12 @@ variables are checked there, against the scenario readers themselves.
 """
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import difflib
 import math
 import pathlib
+import sys
 
 import f90nml
 
@@ -25,6 +27,9 @@ INPUT_VARS = ("name", "distribution", "lower", "upper", "mean", "std", "values",
               "description")
 FIXED_VARS = ("name", "value")
 MAX_SEED = 2**31 - 1
+#: Most cases a sweep may have (n_cases, or the points of a grid): airlaunch-sweep
+#: counts cases in 32-bit integers, and a table of 1e7 cases takes about 5 s to draw.
+MAX_CASES = 10_000_000
 
 
 class DefinitionError(ValueError):
@@ -108,6 +113,165 @@ def _suggest(name, allowed):
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
+def show(value):
+    """A value for a message: a very long integer is abbreviated."""
+    try:
+        text = str(value) if isinstance(value, int) and not isinstance(value, bool) else repr(value)
+    except ValueError:   # an integer of more digits than Python converts
+        return "an integer of more than 4000 digits"
+    if len(text) > 40:
+        return f"{text[:12]}...{text[-3:]} ({len(text)} digits)" if isinstance(value, int) else text[:40] + "..."
+    return text
+
+
+def to_float(value):
+    """float(value), or None when the number does not fit a float (e.g. a 400-digit integer)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return None
+
+
+def read_namelist_text(path, what):
+    """The text of a namelist file; any byte is accepted (UTF-8, else Latin-1:
+    a comment in any encoding just works)."""
+    p = pathlib.Path(path)
+    if not p.is_file():
+        raise DefinitionError(f"{path}: file does not exist (give the path of {what})")
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise DefinitionError(f"{path}: cannot read the file: {exc.strerror or exc} (give the path of {what})") \
+            from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def _strip_comment(line):
+    """A line without its '!' comment (quotes respected), as the Fortran readers do."""
+    quote = ""
+    for i, c in enumerate(line):
+        if quote:
+            if c == quote:
+                quote = ""
+        elif c in "'\"":
+            quote = c
+        elif c == "!":
+            return line[:i]
+    return line
+
+
+def _is_name_start(c):
+    return ("a" <= c <= "z") or ("A" <= c <= "Z")
+
+
+def _is_name_char(c):
+    return _is_name_start(c) or ("0" <= c <= "9") or c == "_"
+
+
+def check_namelist_text(text, path):
+    """Scan the raw text of a namelist like the Fortran readers
+    (src/io/airlaunch_namelist.f90) and raise DefinitionError for what a
+    namelist parser would let through silently or misreport: a string not
+    closed on its line, a group not closed, and a variable assigned twice in
+    one group (a namelist keeps the last value; x(1) and x(2) are different
+    variables)."""
+    parts, starts, pos = [], [], 0
+    for line in text.split("\n"):
+        line = _strip_comment(line.replace("\r", " ").replace("\t", " ")).rstrip()
+        starts.append(pos)
+        parts.append(line + " ")
+        pos += len(line) + 1
+    t = "".join(parts)
+    n = len(t)
+
+    def line_of(i):
+        return bisect.bisect_right(starts, i)
+
+    in_group, group, gline = False, "", 0
+    seen = {}
+    item = None   # (name, index, line, start of the value)
+
+    def close_item(end):
+        nonlocal item
+        if item is None:
+            return
+        name, idx, line, vstart = item
+        value = t[vstart:end].strip()
+        if value.endswith(","):
+            value = value[:-1].rstrip()
+        key = (name, idx)
+        if key in seen:
+            first_line, first_value = seen[key]
+            raise DefinitionError(f"{path}:{line}: &{group}: '{name}{idx}' = {value} is assigned a second time "
+                                  f"(first at line {first_line}: {first_value}); a namelist would keep the last "
+                                  "value silently, so give it once")
+        seen[key] = (line, value)
+        item = None
+
+    i = 0
+    while i < n:
+        c = t[i]
+        if not in_group:
+            if c in "&$":
+                j = i + 1
+                while j < n and _is_name_char(t[j]):
+                    j += 1
+                name = t[i + 1:j].lower()
+                if name != "end":
+                    in_group, group, gline, seen, item = True, name, line_of(i), {}, None
+                i = j
+                continue
+            i += 1
+            continue
+        if c in "'\"":
+            j = t.find(c, i + 1)
+            if j < 0 or line_of(j) != line_of(i):
+                shown = t[i:starts[line_of(i) - 1] + len(parts[line_of(i) - 1])].rstrip()
+                raise DefinitionError(f"{path}:{line_of(i)}: &{group}: unterminated string {shown[:40]} "
+                                      f"(a quoted value must end with its {c} on the same line)")
+            i = j + 1
+            continue
+        if c == "/":
+            close_item(i)
+            in_group = False
+            i += 1
+            continue
+        if c in "&$":
+            if t[i + 1:i + 4].lower() == "end":
+                close_item(i)
+                in_group = False
+                i += 4
+                continue
+            if c == "$":
+                i += 1
+                continue
+            raise DefinitionError(f"{path}:{line_of(i)}: group &{group} is not closed with / before the next group")
+        if _is_name_start(c) and (i == 0 or t[i - 1] in " ,&"):
+            j = i
+            while j < n and (_is_name_char(t[j]) or t[j] == "%"):
+                j += 1
+            k, idx = j, ""
+            if k < n and t[k] == "(":
+                close = t.find(")", k)
+                k = n if close < 0 else close + 1
+                idx = t[j:k].replace(" ", "").lower()
+            while k < n and t[k] == " ":
+                k += 1
+            if k < n and t[k] == "=":
+                close_item(i)
+                item = (t[i:j].lower(), idx, line_of(i), k + 1)
+                i = k + 1
+                continue
+            i = j
+            continue
+        i += 1
+    if in_group:
+        raise DefinitionError(f"{path}:{gline}: group &{group} is not closed (end it with /)")
+
+
 def _groups(nml, group):
     """All occurrences of a group (f90nml gives one Namelist or a Cogroup list)."""
     if group not in nml:
@@ -131,10 +295,11 @@ def _real(where, group_vars, key, required=False):
     value = group_vars[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise DefinitionError(f"{where}{key} = {value!r} is not a real number")
-    value = float(value)
-    if not math.isfinite(value):
-        raise DefinitionError(f"{where}{key} = {value} is not allowed (must be finite)")
-    return value
+    number = to_float(value)
+    if number is None or not math.isfinite(number):
+        raise DefinitionError(f"{where}{key} = {show(value)} is not allowed (must be a finite real number, "
+                              f"|x| <= {sys.float_info.max:.4g})")
+    return number
 
 
 def _int(where, group_vars, key, default=None):
@@ -156,7 +321,9 @@ def _str(where, group_vars, key, default=None):
     value = group_vars[key]
     if not isinstance(value, str):
         raise DefinitionError(f"{where}{key} = {value!r} is not a quoted string")
-    return value.strip()
+    # trailing blanks mean nothing to Fortran (blank-padded strings); leading
+    # blanks are part of the value, as for airlaunch-sweep
+    return value.rstrip()
 
 
 def _choice(where, key, value, choices):
@@ -192,8 +359,8 @@ def _read_fixed(path, index, group_vars, varied):
     return name, value
 
 
-def _read_input(path, index, group_vars):
-    """Validate one &input group."""
+def _read_input(path, index, group_vars, design):
+    """Validate one &input group (of a sweep of the given design)."""
     where = f"{path}: &input #{index}: "
     _check_names(where, group_vars, INPUT_VARS)
     name = _str(where, group_vars, "name").lower()
@@ -205,9 +372,14 @@ def _read_input(path, index, group_vars):
     _choice(where, "distribution", dist, DISTRIBUTIONS)
     spec = dict(name=name, distribution=dist, units=_str(where, group_vars, "units", ""),
                 description=_str(where, group_vars, "description", ""))
+    if "levels" in group_vars and design != "grid":
+        raise DefinitionError(f"{where}levels is not used by design = '{design}' (only by design = 'grid')")
+    if "levels" in group_vars and dist == "list":
+        raise DefinitionError(f"{where}levels is not used by distribution = 'list' (a grid takes the list's "
+                              "values; only by uniform, normal and truncnorm)")
     levels = _int(where, group_vars, "levels", 0)
     if levels < 0:
-        raise DefinitionError(f"{where}levels = {levels} is not allowed (must be >= 1)")
+        raise DefinitionError(f"{where}levels = {show(levels)} is not allowed (must be >= 1)")
     spec["levels"] = levels
     if dist in ("uniform", "truncnorm"):
         lower = _real(where, group_vars, "lower", required=True)
@@ -228,9 +400,11 @@ def _read_input(path, index, group_vars):
             raise DefinitionError(f"{where}missing required value values (the list of values)")
         values = []
         for v in raw:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-                raise DefinitionError(f"{where}values: {v!r} is not a finite real number")
-            values.append(float(v))
+            number = None if isinstance(v, bool) or not isinstance(v, (int, float)) else to_float(v)
+            if number is None or not math.isfinite(number):
+                raise DefinitionError(f"{where}values: {show(v)} is not a finite real number "
+                                      f"(|x| <= {sys.float_info.max:.4g})")
+            values.append(number)
         spec["values"] = tuple(values)
     else:
         for key in ("values",):
@@ -246,10 +420,11 @@ def _read_input(path, index, group_vars):
 
 def parse_definition(text, path="<sweep>"):
     """Validate the text of a sweep definition; return a SweepDefinition."""
+    check_namelist_text(text, path)
     try:
         nml = f90nml.reads(text)
     except Exception as exc:  # f90nml raises several exception types
-        raise DefinitionError(f"{path}: cannot read the namelist: {exc}") from None
+        raise DefinitionError(f"{path}: cannot read the namelist: {_first_line(exc)}") from None
     _check_names(f"{path}: ", list(nml.keys()), ("sweep", "input", "fixed"), kind="group")
     sweeps = _groups(nml, "sweep")
     if len(sweeps) != 1:
@@ -264,10 +439,12 @@ def parse_definition(text, path="<sweep>"):
         raise DefinitionError(f"{where}base = '' is not allowed (the base scenario file)")
     name = _str(where, sweep, "name", pathlib.Path(path).stem)
     output_dir = _str(where, sweep, "output_dir", f"output/sweep_{name}")
+    if not output_dir:
+        raise DefinitionError(f"{where}output_dir = '' is not allowed (a directory, e.g. 'output/sweep_{name}')")
     groups = _groups(nml, "input")
     if not groups:
         raise DefinitionError(f"{path}: no &input group (at least one varied input is needed)")
-    inputs = tuple(_read_input(path, i + 1, g) for i, g in enumerate(groups))
+    inputs = tuple(_read_input(path, i + 1, g, design) for i, g in enumerate(groups))
     names = [s.name for s in inputs]
     for i, n in enumerate(names):
         if n in names[:i]:
@@ -283,9 +460,13 @@ def parse_definition(text, path="<sweep>"):
                 raise DefinitionError(f"{path}: &input #{i + 1} '{s.name}': missing required value levels "
                                       "(design = 'grid' needs levels >= 1 or a list of values)")
         n_grid = math.prod(s.grid_size() for s in inputs)
+        if n_grid > MAX_CASES:
+            sizes = " x ".join(show(s.grid_size()) for s in inputs)
+            raise DefinitionError(f"{path}: &input: levels = {sizes} is not allowed (the grid would have "
+                                  f"{show(n_grid)} points; at most {MAX_CASES} cases)")
         n_cases = _int(where, sweep, "n_cases", n_grid)
         if n_cases != n_grid:
-            raise DefinitionError(f"{where}n_cases = {n_cases} is not allowed (the grid has "
+            raise DefinitionError(f"{where}n_cases = {show(n_cases)} is not allowed (the grid has "
                                   f"{n_grid} points: the product of the levels)")
         seed = _int(where, sweep, "seed", 0)
     else:
@@ -293,8 +474,11 @@ def parse_definition(text, path="<sweep>"):
         seed = _int(where, sweep, "seed")
     if n_cases < 1:
         raise DefinitionError(f"{where}n_cases = {n_cases} is not allowed (must be >= 1: zero cases)")
+    if n_cases > MAX_CASES:
+        raise DefinitionError(f"{where}n_cases = {show(n_cases)} is not allowed (at most {MAX_CASES} cases: "
+                              "airlaunch-sweep counts cases in 32-bit integers)")
     if not 0 <= seed <= MAX_SEED:
-        raise DefinitionError(f"{where}seed = {seed} is not allowed (must be in [0, {MAX_SEED}])")
+        raise DefinitionError(f"{where}seed = {show(seed)} is not allowed (must be in [0, {MAX_SEED}])")
     t_end = _real(where, sweep, "t_end")
     t_end = 0.0 if math.isnan(t_end) else t_end
     if t_end < 0:
@@ -305,13 +489,13 @@ def parse_definition(text, path="<sweep>"):
         raise DefinitionError(f"{where}keep_failed = {keep_failed!r} is not .true. or .false.")
     keep_worst = _int(where, sweep, "keep_worst", 0)
     if keep_worst < 0:
-        raise DefinitionError(f"{where}keep_worst = {keep_worst} is not allowed (must be >= 0)")
+        raise DefinitionError(f"{where}keep_worst = {show(keep_worst)} is not allowed (must be >= 0)")
     worst_by = _str(where, sweep, "worst_by", "min_clearance_m")
     _choice(where, "worst_by", worst_by, WORST_BY)
     keep_ids = []
     for v in _as_list(sweep.get("keep_ids")):
         if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < n_cases:
-            raise DefinitionError(f"{where}keep_ids: {v!r} is not allowed (case ids are integers in "
+            raise DefinitionError(f"{where}keep_ids: {show(v)} is not allowed (case ids are integers in "
                                   f"[0, {n_cases - 1}])")
         keep_ids.append(v)
     progress = _real(where, sweep, "progress_interval")
@@ -325,9 +509,12 @@ def parse_definition(text, path="<sweep>"):
                            progress_interval=progress, fixed=fixed)
 
 
+def _first_line(exc):
+    """The first line of an exception's message (messages must be one line)."""
+    lines = str(exc).strip().splitlines()
+    return lines[0] if lines else type(exc).__name__
+
+
 def read_definition(path):
     """Read and validate a sweep definition file."""
-    p = pathlib.Path(path)
-    if not p.is_file():
-        raise DefinitionError(f"{path}: file does not exist (give the path of a sweep definition)")
-    return parse_definition(p.read_text(), str(path))
+    return parse_definition(read_namelist_text(path, "a sweep definition"), str(path))

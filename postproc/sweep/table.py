@@ -130,13 +130,49 @@ def encoding(ds: xr.Dataset) -> dict:
 
 
 def write_atomic(ds: xr.Dataset, path) -> pathlib.Path:
-    """Write a netCDF-4 file under a temporary name and rename it."""
+    """Write a netCDF-4 file under a temporary name and rename it; on any
+    failure the temporary file is removed and the exception goes on."""
     path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".part")
-    ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds))
-    os.replace(tmp, path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds))
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+        raise
     return path
+
+
+def output_dir_error(defn: SweepDefinition, target, exc) -> DefinitionError:
+    """One-line error naming &sweep output_dir when `target` under it cannot be written."""
+    target = pathlib.Path(target)
+    out = pathlib.Path(defn.output_dir)
+    why = f"cannot write {target}: {getattr(exc, 'strerror', None) or str(exc).splitlines()[0]}"
+    try:
+        if target.is_dir():
+            why = f"{target} is a directory"
+        elif out.exists() and not out.is_dir():
+            why = "it is an existing file, not a directory"
+    except OSError:
+        pass
+    return DefinitionError(f"{defn.path}: &sweep: output_dir = '{defn.output_dir}' is not usable: {why} "
+                           "(allowed: a directory that can be created and written)")
+
+
+def open_netcdf(path, what, hint):
+    """Open a netCDF file and load it; a file that is not one (empty, text,
+    truncated, damaged) is a one-line DefinitionError."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.load()
+    except Exception as exc:  # netCDF4/HDF5/xarray raise OSError, RuntimeError, ValueError, KeyError...
+        lines = str(exc).strip().splitlines() or [type(exc).__name__]
+        raise DefinitionError(f"{path}: cannot read the {what}: not a netCDF file, or a truncated or damaged one "
+                              f"({lines[0]}) ({hint})") from None
 
 
 def write_table(defn: SweepDefinition, path=None) -> pathlib.Path:
@@ -150,15 +186,19 @@ def check_table(defn: SweepDefinition, path=None) -> None:
     if not path.is_file():
         raise DefinitionError(f"{path}: case table does not exist (run the table step first)")
     want = make_table(defn)
-    with xr.open_dataset(path, engine="netcdf4") as have:
-        names = [s.name for s in defn.inputs]
-        if sorted(have.data_vars) != sorted(names):
-            raise DefinitionError(f"{path}: the table's inputs ({', '.join(have.data_vars)}) are not "
-                                  f"those of {defn.path} ({', '.join(names)})")
-        if have.sizes.get("case") != defn.n_cases:
-            raise DefinitionError(f"{path}: the table has {have.sizes.get('case')} cases, {defn.path} "
-                                  f"asks for {defn.n_cases}")
-        for name in names:
-            if not np.array_equal(have[name].values, want[name].values):
-                raise DefinitionError(f"{path}: the values of {name} are not those that {defn.path} "
-                                      "draws (definition changed since the table was made?)")
+    have = open_netcdf(path, "case table", "run the table step again")
+    names = [s.name for s in defn.inputs]
+    if sorted(have.data_vars) != sorted(names):
+        raise DefinitionError(f"{path}: the table's inputs ({', '.join(have.data_vars)}) are not "
+                              f"those of {defn.path} ({', '.join(names)})")
+    for name in names:
+        if have[name].dims != ("case",):
+            raise DefinitionError(f"{path}: the table's {name} has dimensions {have[name].dims}, not (case,) "
+                                  "(run the table step again)")
+    if have.sizes.get("case") != defn.n_cases:
+        raise DefinitionError(f"{path}: the table has {have.sizes.get('case')} cases, {defn.path} "
+                              f"asks for {defn.n_cases}")
+    for name in names:
+        if not np.array_equal(have[name].values, want[name].values):
+            raise DefinitionError(f"{path}: the values of {name} are not those that {defn.path} "
+                                  "draws (definition changed since the table was made?)")

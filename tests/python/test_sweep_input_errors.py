@@ -1,0 +1,271 @@
+"""Bad input to the Python steps of a sweep (table, table --check, envelope) is
+exit status 2 and one line on stderr naming file, group, variable and value,
+never a traceback, and leaves no output or .part file: bytes that are not
+UTF-8, sizes too big to draw, an unusable output directory, files that are not
+the netCDF file asked for, a variable assigned twice, blanks inside quotes, an
+empty output_dir, levels where no grid uses them, subnormal limits and an
+unterminated string."""
+import pathlib
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from test_sweep_support import run_python, small_definition
+
+ONE_INPUT = "&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0 /\n"
+BIG = "1" + "0" * 400
+
+
+def definition(tmp_path, text=None, name="d.nml", **kw):
+    """A small sweep definition (one uniform input, 6 cases) under tmp_path."""
+    kw.setdefault("n_cases", 6)
+    kw.setdefault("inputs", ONE_INPUT)
+    path = small_definition(tmp_path / name, **kw)
+    if text is not None:
+        path.write_text(text(path.read_text()))
+    return path
+
+
+def assert_error(res, *words, tmp_path=None):
+    """Exit status 2, exactly one line on stderr starting 'sweep: error:' with
+    every word in it, no traceback, and no table, envelope or .part file."""
+    assert res.returncode == 2, res.stdout + res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1, res.stderr
+    assert lines[0].startswith("sweep: error: "), lines[0]
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    if tmp_path is not None:
+        left = [p for p in pathlib.Path(tmp_path).rglob("*")
+                if p.name.endswith(".part") or p.name in ("table.nc", "envelope.nc")]
+        assert not left, left
+    return lines[0]
+
+
+def table(tmp_path, path, *args):
+    return run_python(["table", path, *args], tmp_path)
+
+
+# 1. any byte in a namelist file --------------------------------------------
+
+def test_latin1_comment_in_definition_and_criteria_just_works(tmp_path):
+    d = definition(tmp_path)
+    d.write_bytes("! caf\xe9: d\xe9finition\n".encode("latin-1") + d.read_bytes())
+    res = table(tmp_path, d)
+    assert res.returncode == 0 and not res.stderr, res.stderr
+    assert (tmp_path / "out" / "table.nc").is_file()
+    crit = tmp_path / "c.nml"
+    crit.write_bytes("&criteria ! caf\xe9\n  min_clearance_m = 1.5 /\n".encode("latin-1"))
+    res = run_python(["envelope", d, "--criteria", crit, "--summary", tmp_path / "none.nc"], tmp_path)
+    # the criteria are read: the step goes on to the (missing) summary
+    assert_error(res, "none.nc", "summary does not exist")
+
+
+def test_binary_definition_is_one_line(tmp_path):
+    d = definition(tmp_path)
+    d.write_bytes(b"\x00\x01\xff" + d.read_bytes())
+    assert_error(table(tmp_path, d), str(d), tmp_path=tmp_path)
+
+
+# 2. sizes --------------------------------------------------------------------
+
+@pytest.mark.parametrize("n", ["2147483648", "10000001", BIG])
+def test_too_many_cases(tmp_path, n):
+    d = definition(tmp_path, n_cases=n)
+    assert_error(table(tmp_path, d), "&sweep", "n_cases = ", "is not allowed", "at most 10000000 cases",
+                 tmp_path=tmp_path)
+
+
+@pytest.mark.parametrize("levels,shown", [((1000, 1000, 1000), "1000 x 1000 x 1000"),
+                                          ((65536, 65536, 1), "65536 x 65536 x 1")])
+def test_too_big_grid(tmp_path, levels, shown):
+    names = ("bay%release_time", "parachute%drag_area", "flight%mach")
+    inputs = "".join(f"&input name = '{n}', distribution = 'uniform', lower = 0.5, upper = 0.7, levels = {k} /\n"
+                     for n, k in zip(names, levels))
+    d = definition(tmp_path, design="grid", inputs=inputs, text=lambda t: t.replace("n_cases = 6", ""))
+    assert_error(table(tmp_path, d), "&input", f"levels = {shown}", "at most 10000000 cases", tmp_path=tmp_path)
+
+
+def test_number_that_does_not_fit_a_float(tmp_path):
+    d = definition(tmp_path, inputs=ONE_INPUT.replace("upper = 1.0", f"upper = {BIG}"))
+    assert_error(table(tmp_path, d), "&input #1 'bay%release_time'", "upper = ", "(401 digits)",
+                 "finite real number", tmp_path=tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text(f"&criteria line_strength_n = {'9' * 350} /\n")
+    res = run_python(["envelope", definition(tmp_path, name="ok.nml"), "--criteria", crit], tmp_path)
+    assert_error(res, str(crit), "&criteria", "line_strength_n = ", "(350 digits)", "finite real number")
+
+
+# 3. unusable output_dir ---------------------------------------------------
+
+def test_output_dir_is_a_file(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    d = definition(tmp_path, output_dir="afile")
+    assert_error(table(tmp_path, d), str(d), "&sweep", "output_dir = 'afile'", "not a directory",
+                 tmp_path=tmp_path)
+
+
+@pytest.mark.parametrize("out", ["/proc/x", "d" * 300], ids=["unwritable", "too long"])
+def test_output_dir_cannot_be_made(tmp_path, out):
+    d = definition(tmp_path, output_dir=out)
+    assert_error(table(tmp_path, d), "&sweep", f"output_dir = '{out}'", "is not usable", tmp_path=tmp_path)
+
+
+def test_table_nc_is_a_directory(tmp_path):
+    (tmp_path / "out" / "table.nc").mkdir(parents=True)
+    d = definition(tmp_path)
+    res = table(tmp_path, d)
+    assert_error(res, "&sweep", "output_dir = 'out'", "table.nc is a directory")
+    assert not (tmp_path / "out" / "table.nc.part").exists()
+
+
+# 4. files that are not the netCDF file asked for ------------------------------
+
+@pytest.mark.parametrize("content", ["empty", "text", "truncated"])
+def test_check_of_a_table_that_is_not_netcdf(tmp_path, content):
+    d = definition(tmp_path)
+    assert table(tmp_path, d).returncode == 0
+    t = tmp_path / "out" / "table.nc"
+    data = {"empty": b"", "text": b"not a table\n", "truncated": t.read_bytes()[:3000]}[content]
+    t.write_bytes(data)
+    assert_error(table(tmp_path, d, "--check"), "table.nc", "cannot read the case table", "not a netCDF file")
+
+
+def summary_file(path, drop=()):
+    """A small summary-shaped file with the definition's one input."""
+    n = 4
+    ds = xr.Dataset({"bay%release_time": ("case", np.linspace(0.4, 1.0, n)),
+                     "status": ("case", np.zeros(n, dtype=np.int32)),
+                     "min_clearance_m": ("case", np.full(n, 5.0))}, coords={"case": np.arange(n)})
+    ds.attrs["inputs"] = "bay%release_time"
+    ds.drop_vars(list(drop)).to_netcdf(path)
+    return path
+
+
+@pytest.mark.parametrize("which", ["table", "envelope", "no metric", "text"])
+def test_envelope_of_a_file_that_is_not_a_summary(tmp_path, which):
+    d = definition(tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1.5 /\n")
+    assert table(tmp_path, d).returncode == 0
+    if which == "table":
+        summary, words = tmp_path / "out" / "table.nc", ["variable 'status' is missing"]
+    elif which == "envelope":
+        good = summary_file(tmp_path / "summary.nc")
+        res = run_python(["envelope", d, "--criteria", crit, "--summary", good, "--no-figures"], tmp_path)
+        assert res.returncode == 0, res.stderr
+        summary = tmp_path / "env.nc"
+        (tmp_path / "out" / "envelope.nc").rename(summary)
+        words = ["variable 'min_clearance_m' is missing"]
+    elif which == "no metric":
+        summary = summary_file(tmp_path / "s.nc", drop=["min_clearance_m"])
+        words = ["variable 'min_clearance_m' is missing"]
+    else:
+        summary = tmp_path / "s.txt"
+        summary.write_text("status = 0\n")
+        words = ["cannot read the summary", "not a netCDF file"]
+    res = run_python(["envelope", d, "--criteria", crit, "--summary", summary, "--no-figures"], tmp_path)
+    assert_error(res, str(summary), *words)
+    assert not (tmp_path / "out" / "envelope.nc").exists()
+    assert not list(tmp_path.rglob("*.part"))
+
+
+# 5. a variable assigned twice ------------------------------------------------
+
+def test_variable_assigned_twice_in_sweep(tmp_path):
+    d = definition(tmp_path, text=lambda t: t.replace("  n_cases = 6\n", "  n_cases = 1\n  n_cases = 6\n"))
+    line = assert_error(table(tmp_path, d), "&sweep", "'n_cases' = 6 is assigned a second time",
+                        "(first at line 6: 1)", tmp_path=tmp_path)
+    assert line.startswith(f"sweep: error: {d}:7: ")
+
+
+def test_variable_assigned_twice_in_input_and_criteria(tmp_path):
+    d = definition(tmp_path, inputs=ONE_INPUT.replace("lower = 0.4,", "lower = 0.32, lower = 0.5,"))
+    assert_error(table(tmp_path, d), "&input", "'lower' = 0.5 is assigned a second time", "(first at line",
+                 ": 0.32)", tmp_path=tmp_path)
+    d = definition(tmp_path, name="ok.nml")
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1 min_clearance_m = 2 /\n")
+    res = run_python(["envelope", d, "--criteria", crit], tmp_path)
+    assert_error(res, f"{crit}:1: &criteria: 'min_clearance_m' = 2 is assigned a second time",
+                 "(first at line 1: 1)")
+
+
+def test_array_elements_are_different_variables(tmp_path):
+    inputs = "&input name = 'flight%mach', distribution = 'list', values(1) = 0.6, values(2) = 0.7 /\n"
+    d = definition(tmp_path, inputs=inputs)
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+    inputs = "&input name = 'flight%mach', distribution = 'list', values(1) = 0.6, values( 1 ) = 0.7 /\n"
+    d = definition(tmp_path, inputs=inputs, output_dir="out2")
+    assert_error(table(tmp_path, d), "'values(1)' = 0.7 is assigned a second time")
+
+
+# 6. blanks inside quotes are part of the value --------------------------------
+
+def test_leading_blank_in_a_string_is_kept(tmp_path):
+    d = definition(tmp_path, extra_sweep="worst_by = ' min_clearance_m'")
+    assert_error(table(tmp_path, d), "&sweep", "worst_by = ' min_clearance_m' is not allowed",
+                 "one of: min_clearance_m", tmp_path=tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1 /\n")
+    d = definition(tmp_path, name="c_blank.nml", extra_sweep="criteria = ' c.nml'")
+    res = run_python(["envelope", d], tmp_path)
+    assert_error(res, "sweep: error:  c.nml: file does not exist")
+
+
+# 7. empty output_dir ---------------------------------------------------------
+
+def test_empty_output_dir(tmp_path):
+    d = definition(tmp_path, output_dir="")
+    assert_error(table(tmp_path, d), str(d), "&sweep", "output_dir = '' is not allowed",
+                 "a directory, e.g. 'output/sweep_small'", tmp_path=tmp_path)
+
+
+# 8. levels where no grid uses them ------------------------------------------
+
+def test_levels_with_lhs(tmp_path):
+    d = definition(tmp_path, inputs=ONE_INPUT.replace("upper = 1.0", "upper = 1.0, levels = 3"))
+    assert_error(table(tmp_path, d), "&input #1 'bay%release_time'", "levels is not used by design = 'lhs'",
+                 "only by design = 'grid'", tmp_path=tmp_path)
+
+
+def test_levels_with_a_list(tmp_path):
+    inputs = "&input name = 'flight%mach', distribution = 'list', values = 0.6, 0.7, levels = 2 /\n"
+    d = definition(tmp_path, design="grid", inputs=inputs, text=lambda t: t.replace("n_cases = 6", ""))
+    assert_error(table(tmp_path, d), "&input #1 'flight%mach'", "levels is not used by distribution = 'list'",
+                 tmp_path=tmp_path)
+
+
+# 9. subnormal limits ---------------------------------------------------------
+
+def test_subnormal_line_strength(tmp_path):
+    d = definition(tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria line_strength_n = 1e-320 /\n")
+    res = run_python(["envelope", d, "--criteria", crit], tmp_path)
+    assert_error(res, str(crit), "&criteria", "line_strength_n = 1e-320 is not allowed", "subnormal")
+
+
+def test_tiny_scale_gives_no_warning(tmp_path):
+    d = definition(tmp_path)
+    summary = summary_file(tmp_path / "s.nc")
+    with xr.open_dataset(summary) as ds:
+        ds = ds.load()
+    ds["peak_line_tension_N"] = ("case", np.full(4, 1.0e5))
+    ds.to_netcdf(tmp_path / "s2.nc")
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria line_strength_n = 1e-300, line_safety_factor = 1e10 /\n")
+    res = run_python(["envelope", d, "--criteria", crit, "--summary", tmp_path / "s2.nc", "--no-figures"],
+                     tmp_path)
+    assert res.returncode == 0 and not res.stderr, res.stderr
+
+
+# 10. unterminated string ---------------------------------------------------
+
+def test_unterminated_string(tmp_path):
+    d = definition(tmp_path, text=lambda t: t.replace("name = 'small'", "name = 'small"))
+    line = assert_error(table(tmp_path, d), "&sweep: unterminated string 'small", tmp_path=tmp_path)
+    assert line.startswith(f"sweep: error: {d}:2: "), line
+    assert "missing required value" not in line
