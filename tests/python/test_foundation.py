@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, assert_input_error, run_airlaunch
+from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
 
 G0 = 9.80665
 
@@ -193,6 +193,15 @@ def test_run_limits_are_input_errors(airlaunch_exe, tmp_path, old, new, fragment
     assert_input_error(run_airlaunch(airlaunch_exe, nml), fragment, out)
 
 
+def failed_paper_run(exe, tmp_path, name, edit, output_line):
+    """The paper scenario with one edit and its output line replaced: it must
+    fail numerically (exit 3); returns the input, the result, stderr's first line."""
+    nml = nml_variant(tmp_path, name, edits=[edit, (r"^  output = .*$", output_line)])
+    res = run_airlaunch(exe, nml)
+    assert res.returncode == 3, res.stderr
+    return nml, res, res.stderr.strip().splitlines()[0]
+
+
 def test_step_budget_stops_a_run_that_cannot_progress(airlaunch_exe, tmp_path):
     """An infinitely stiff elevator loop (k_q = 1e30 rad per rad/s) chatters at
     the deflection limit: CVODE steps at ~5e-7 s and the 15 s run would take
@@ -200,13 +209,9 @@ def test_step_budget_stops_a_run_that_cannot_progress(airlaunch_exe, tmp_path):
     phase, the time, the step size and the state the integrator could not
     follow (the aircraft's pitch rate: body axis z), exit 3, and the output so
     far stays readable with status 'failed'."""
-    from conftest import nml_variant
     out = tmp_path / "kq.nc"
-    nml = nml_variant(tmp_path, "kq", edits=[(r"^  k_q = .*$", "  k_q = 1.0e30"),
-                                             (r"^  output = .*$", f"  output = '{out}'\n  max_steps = 3000")])
-    res = run_airlaunch(airlaunch_exe, nml)
-    assert res.returncode == 3, res.stderr
-    first = res.stderr.strip().splitlines()[0]
+    nml, res, first = failed_paper_run(airlaunch_exe, tmp_path, "kq", (r"^  k_q = .*$", "  k_q = 1.0e30"),
+                                       f"  output = '{out}'\n  max_steps = 3000")
     assert first.startswith("airlaunch: error: phase 0 (preparation"), first
     assert "the step budget is spent (3000 steps in total, &run max_steps)" in first, first
     assert "largest local error estimate in aircraft angular velocity z (body axes)" in first, first
@@ -226,7 +231,6 @@ def test_step_budget_stops_a_run_that_cannot_progress(airlaunch_exe, tmp_path):
 def test_marching_step_count_is_checked_before_the_run(airlaunch_exe, tmp_path):
     """The paper's marching scheme takes t_end/dt fixed steps: more than the
     run's step budget is an input error naming dt, not hours of stepping."""
-    from conftest import nml_variant
     out = tmp_path / "m.nc"
     nml = nml_variant(tmp_path, "m", base=ROOT / "input" / "line_pendulum.nml",
                       edits=[(r"^  output = .*$", f"  output = '{out}'"),
@@ -272,14 +276,10 @@ def test_a_run_failing_before_its_first_record_leaves_no_old_file(airlaunch_exe,
     writing anything. An older file under the same name (here a placeholder)
     must not survive to pass for this run's output, and the program must not
     point at it as 'output so far'."""
-    from conftest import nml_variant
     out = tmp_path / "trim.nc"
     out.write_text("an older result")
-    nml = nml_variant(tmp_path, "trim", edits=[(r"^  mass = 89000.0 .*$", "  mass = 1.0e30"),
-                                               (r"^  output = .*$", f"  output = '{out}'")])
-    res = run_airlaunch(airlaunch_exe, nml)
-    assert res.returncode == 3, res.stderr
-    first = res.stderr.strip().splitlines()[0]
+    _, res, first = failed_paper_run(airlaunch_exe, tmp_path, "trim", (r"^  mass = 89000.0 .*$", "  mass = 1.0e30"),
+                                     f"  output = '{out}'")
     assert first.startswith("airlaunch: error: Case 0 trim (t = 0 s): trim: no equilibrium found"), first
     assert "airlaunch: no output written (the run failed before its first record)" in res.stderr
     assert "output so far" not in res.stderr
