@@ -3,7 +3,7 @@
 !> with its phase machine.  See docs/multibody.md for the equations and choices.
 module airlaunch_multibody
   use airlaunch_rigid_body, only: rigid_body, body_state_size, new_rigid_body, check_mass_properties, &
-    newton_euler, body_state_derivative, quaternion_drift_rate, cross
+    newton_euler, body_state_derivative, quaternion_drift_rate, cross, body_state_name
   use airlaunch_force_source, only: force_source, force_source_slot, add_point_force, gravity_source, &
     constant_load_source, pair_force_source
   use airlaunch_kane_chain, only: kane_chain, chain_link, max_chain_bodies
@@ -13,7 +13,7 @@ module airlaunch_multibody
   use airlaunch_separation, only: separation_system, separation_nroots
   implicit none
   private
-  public :: rigid_body, body_state_size, new_rigid_body, check_mass_properties
+  public :: rigid_body, body_state_size, new_rigid_body, check_mass_properties, body_state_name
   public :: newton_euler, body_state_derivative, quaternion_drift_rate, cross
   public :: force_source, force_source_slot, add_point_force, gravity_source
   public :: constant_load_source, pair_force_source

@@ -61,9 +61,10 @@ module airlaunch_rigidized_coupling
   use airlaunch_rotation, only: dcm_to_euler, dcm_to_quat, cross
   use airlaunch_ode, only: ode_system, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
-  use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free
+  use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free, &
+    body_state_name
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
-    line_force_jacobian
+    line_force_jacobian, node_state_name
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, canopy_node_acceleration, &
     canopy_node_jacobian, parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
@@ -158,6 +159,7 @@ module airlaunch_rigidized_coupling
     procedure :: to_absolute => chain_to_absolute
     procedure :: euler_pitch_rate => chain_euler_pitch_rate
     procedure :: line_force => chain_line_force
+    procedure :: state_name => chain_state_name
   end type rigidized_chain
 
   !> The flexible line (sub-stepped subsystem) as an ODE for CVODE: nodes
@@ -184,6 +186,7 @@ module airlaunch_rigidized_coupling
     procedure :: pack => line_pack
     procedure :: n_state => line_n_state
     procedure :: setup => line_setup
+    procedure :: state_name => line_state_name
   end type rigidized_line
 
   !> Both subsystems, their integrators and the outer loop.
@@ -548,6 +551,34 @@ contains
   end subroutine line_unpack
 
   !> State y from absolute node positions and velocities at time t.
+  !> State i of the chain: the aircraft's 13, the rocket's 13, then attitude
+  !> and angular velocity (7 each) of the virtual line body and the parachute link.
+  function chain_state_name(self, i) result(name)
+    class(rigidized_chain), intent(in) :: self  !< the chain
+    integer, intent(in) :: i                    !< state index
+    character(len=:), allocatable :: name
+    select case (i)
+    case (1:13)
+      name = "aircraft " // body_state_name(i)
+    case (14:26)
+      name = "rocket " // body_state_name(i - 13)
+    case (27:33)
+      name = "virtual line body " // body_state_name(i - 20)
+    case default
+      name = "parachute link " // body_state_name(i - 27)
+    end select
+    if (.false.) name = name // str(self%v_ref)
+  end function chain_state_name
+
+  !> State i of the sub-stepped line: node 1 + (i - 1)/6, [x, v] relative.
+  function line_state_name(self, i) result(name)
+    class(rigidized_line), intent(in) :: self  !< the line
+    integer, intent(in) :: i                   !< state index
+    character(len=:), allocatable :: name
+    name = node_state_name(1 + (i - 1)/6, 1 + modulo(i - 1, 6))
+    if (1 + (i - 1)/6 == self%model%n) name = name // " (parachute)"
+  end function line_state_name
+
   pure subroutine line_pack(self, t, x, v, y)
     class(rigidized_line), intent(in) :: self
     real(dp), intent(in) :: t, x(:, 0:), v(:, 0:)
