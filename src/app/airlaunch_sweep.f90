@@ -21,13 +21,13 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: make_dir, file_exists, delete_file
+  use airlaunch_sweep_files, only: file_exists, delete_file
   use airlaunch_sweep_case, only: run_case, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
   use airlaunch_sweep_summary, only: write_summary
   use airlaunch_sweep_scheduler, only: sweep_scheduler
-  use airlaunch_sweep_plan, only: sweep_setup, load_sweep, fingerprint_text, trajectory_ids
+  use airlaunch_sweep_plan, only: sweep_setup, load_sweep, fingerprint_text, trajectory_ids, make_output_dir
   use airlaunch_blas_threads, only: use_one_blas_thread
   implicit none
 
@@ -103,7 +103,7 @@ program airlaunch_sweep
   ! --- full trajectories of the cases the definition keeps
   call broadcast_ids(keep)
   if (size(keep) > 0) then
-    if (rank == 0) call make_dir(s%def%trajectory_dir(), error)
+    if (rank == 0) call make_output_dir(s%def, s%def%trajectory_dir(), error)
     if (allocated(error)) call die(error%message)
     call MPI_Barrier(MPI_COMM_WORLD)
     call run_pass(keep, .true.)
@@ -174,8 +174,8 @@ contains
     logical, allocatable :: done(:)
     type(sweep_row), allocatable :: old(:)
     integer :: duplicates, bad
-    call make_dir(s%def%journal_dir(), error)
-    if (.not. allocated(error)) call make_dir(s%def%work_dir(), error)
+    call make_output_dir(s%def, s%def%journal_dir(), error)
+    if (.not. allocated(error)) call make_output_dir(s%def, s%def%work_dir(), error)
     if (allocated(error)) then
       status = exit_runtime
       return
@@ -302,10 +302,15 @@ contains
       case ("--restart")
         restart = .true.
       case ("--case-namelist")
+        if (case_id >= 0) call fail_input("--case-namelist given twice (one case id per call)")
         i = i + 1
         call get_command_argument(i, arg)
-        read(arg, *, iostat=ios) case_id
-        if (ios /= 0 .or. i > nargs .or. case_id < 0) call fail_input("--case-namelist needs a case id (an integer >= 0)")
+        ! digits only: list-directed reading would take "1,2" or "0 0" as 1 and 0
+        ios = 1
+        if (len_trim(arg) > 0 .and. len_trim(arg) <= 9 .and. verify(trim(arg), "0123456789") == 0) &
+          read(arg, *, iostat=ios) case_id
+        if (ios /= 0 .or. i > nargs) call fail_input("--case-namelist " // trim(arg) // &
+          " is not allowed (a case id: an integer in [0, 999999999])")
       case default
         if (arg(1:1) == "-") call fail_input("unknown option " // trim(arg) // " (see airlaunch-sweep --help)")
         if (len(path) > 0) call fail_input("more than one sweep definition given")

@@ -51,6 +51,8 @@ module airlaunch_namelist
 
   !> Most values of a list variable ("real_list", "integer_list") a reader holds.
   integer, parameter, public :: max_list_items = 4096
+  !> Largest file read as a namelist [bytes] (the paper scenario: 5.6 kB)
+  integer, parameter :: max_file_size = 16*1024*1024
 
   !> A scanned namelist file.
   type :: nml_file
@@ -85,7 +87,10 @@ contains
     integer :: unit, ios, lineno, k, nchar, pos, lt
     character(len=:), allocatable :: buf, text
     integer, allocatable :: line_of(:), col_of(:)
-    logical :: exists
+    logical :: exists, is_dir
+    integer(int64) :: nbytes
+    character(len=*), parameter :: no_group = ": no namelist group in the file (a group starts with &name " // &
+      "and ends with /, e.g. &run ... /)"
 
     self%path = path
     if (allocated(self%items)) deallocate(self%items)
@@ -95,6 +100,23 @@ contains
     inquire(file=path, exist=exists)
     if (.not. exists) then
       call fatal_error(error, path // ": file does not exist (give the path of a namelist scenario file)")
+      return
+    end if
+    inquire(file=path // "/.", exist=is_dir)
+    if (is_dir) then
+      call fatal_error(error, path // ": is a directory (give the path of a namelist scenario file)")
+      return
+    end if
+    ! size 0: an empty file, or a device or pipe that reading would never end
+    ! (/dev/zero) or wait on (a FIFO)
+    inquire(file=path, size=nbytes)
+    if (nbytes == 0) then
+      call fatal_error(error, path // no_group)
+      return
+    end if
+    if (nbytes > max_file_size) then
+      call fatal_error(error, path // ": the file has " // str(real(nbytes, dp)) // " bytes; a namelist file " // &
+        "of at most " // str(max_file_size) // " is read")
       return
     end if
     open(newunit=unit, file=path, status="old", action="read", iostat=ios)
@@ -131,8 +153,7 @@ contains
     close(unit)
     self%unterminated = .not. ends_with_newline(path)
     call scan_text(self, text(1:pos), line_of(1:pos), col_of(1:pos), error)
-    if (.not. allocated(error) .and. size(self%groups) == 0) call fatal_error(error, path // &
-      ": no namelist group in the file (a group starts with &name and ends with /, e.g. &run ... /)")
+    if (.not. allocated(error) .and. size(self%groups) == 0) call fatal_error(error, path // no_group)
   end subroutine nml_load
 
   !> One whole line of any length (ios 0; nonzero at the end of the file).

@@ -21,6 +21,8 @@ module airlaunch_sweep_definition
   !> Most cases of a sweep (case ids are default integers; the table of 1e7
   !> cases takes about 5 s to make)
   integer, parameter :: max_cases = 10000000
+  character(len=*), parameter :: owned_note = "the sweep sets it for every case (the scene is the base's " // &
+    "airlaunch scene; the output and whether there is one are the sweep's: summary mode, keep_failed, keep_worst)"
   character(len=8), parameter :: design_names(3) = [character(len=8) :: "lhs", "sobol", "grid"]
   character(len=16), parameter :: distribution_names(4) = [character(len=16) :: "uniform", "normal", &
     "truncnorm", "list"]
@@ -161,6 +163,10 @@ contains
             "e.g. 'flight%trim_mode')")
           exit
         end if
+        if (owned_by_sweep(x%name)) then
+          call fatal_error(error, where // "name = '" // x%name // "' is not allowed: " // owned_note)
+          exit
+        end if
         x%group = x%name(:index(x%name, "%") - 1)
         x%variable = x%name(index(x%name, "%") + 1:)
         x%value = trim(adjustl(value))
@@ -272,12 +278,12 @@ contains
           else
             n_grid = n_grid*s%levels
           end if
-          n_grid = min(n_grid, huge(1_int64)/huge(1))   ! no overflow in the next product
+          n_grid = min(n_grid, int(max_cases, int64) + 1)   ! no overflow in the next product
         end associate
       end do
       if (n_grid > max_cases) then
         call fatal_error(error, where // "design = 'grid' is not allowed with these levels (the grid has " // &
-          str(real(n_grid, dp)) // " points; at most " // str(max_cases) // ")")
+          "more than " // str(max_cases) // " points, the most a sweep may have)")
         return
       end if
       if (n_cases == unset_int) n_cases = int(n_grid)
@@ -395,6 +401,10 @@ contains
         if (.not. valid_name(s%name)) then
           call fatal_error(error, where // "name = '" // s%name // "' is not allowed (write group%variable, " // &
             "e.g. 'bay%release_time')")
+          exit
+        end if
+        if (owned_by_sweep(s%name)) then
+          call fatal_error(error, where // "name = '" // s%name // "' is not allowed: " // owned_note)
           exit
         end if
         s%group = s%name(:index(s%name, "%") - 1)
@@ -536,11 +546,20 @@ contains
       verify(s, "abcdefghijklmnopqrstuvwxyz0123456789_%") == 0
   end function valid_name
 
+  !> Lower case without trailing blanks; a leading blank stays (and makes a
+  !> name invalid), as in the table step, which takes strings as written.
   pure function lower_trim(s) result(t)
     character(len=*), intent(in) :: s
     character(len=:), allocatable :: t
-    t = trim(adjustl(lower(s)))
+    t = trim(lower(s))
   end function lower_trim
+
+  !> Variables the sweep sets itself for every case: the scene (always the
+  !> base's airlaunch scene), the output file and whether there is one.
+  pure logical function owned_by_sweep(name)
+    character(len=*), intent(in) :: name  !< group%variable, lower case
+    owned_by_sweep = name == "run%scene" .or. name == "run%output" .or. name == "run%trajectory"
+  end function owned_by_sweep
 
   !> File name without directory and extension.
   pure function stem(path) result(s)

@@ -14,7 +14,7 @@ module airlaunch_sweep_plan
   use airlaunch_sweep_row, only: sweep_row, status_ok, metric_index
   implicit none
   private
-  public :: sweep_setup, load_sweep, fingerprint_text, trajectory_ids
+  public :: sweep_setup, load_sweep, fingerprint_text, trajectory_ids, make_output_dir
 
   !> Everything a rank needs to run cases.
   type :: sweep_setup
@@ -40,7 +40,7 @@ contains
     if (allocated(error)) return
     call check_varied_inputs(setup%def, setup%base, error)
     if (allocated(error)) return
-    call make_dir(setup%def%work_dir(), error)
+    call make_output_dir(setup%def, setup%def%work_dir(), error)
     if (allocated(error)) return
     call check_common_settings(setup%def, setup%base, setup%def%work_dir() // "/check_" // tag // ".nml", &
       error)
@@ -110,4 +110,15 @@ contains
     end if
     ids = pack([(k - 1, k = 1, size(rows))], keep)
   end function trajectory_ids
+
+  !> Make a directory under the definition's output_dir; a failure names
+  !> &sweep output_dir (a file in its way, no permission).
+  subroutine make_output_dir(def, dir, error)
+    type(sweep_definition), intent(in) :: def             !< the sweep
+    character(len=*), intent(in) :: dir                   !< a directory under def%output_dir
+    type(error_type), allocatable, intent(inout) :: error !< set if it cannot be made
+    call make_dir(dir, error)
+    if (allocated(error)) error%message = def%path // ": &sweep: output_dir = '" // def%output_dir // &
+      "' is not usable: " // error%message // " (a file in the way, or no permission)"
+  end subroutine make_output_dir
 end module airlaunch_sweep_plan

@@ -54,7 +54,7 @@ def test_definition_without_final_newline(tmp_path, last):
     # a grid whose size overflowed a 32-bit integer (65536 x 65536 = 0 cases)
     (dict(design="grid", n_cases="", inputs=SMALL_INPUTS.replace("units = 's' /", "units = 's', levels = 65536 /")
           .replace("units = 'm2' /", "units = 'm2', levels = 65536 /").replace("std = 0.02 /", "std = 0.02, levels = 1 /")),
-     ["design = 'grid' is not allowed with these levels", "at most 10000000"]),
+     ["design = 'grid' is not allowed with these levels", "more than 10000000 points"]),
     (dict(n_cases=2147483647), ["n_cases = 2147483647 is not allowed (at most 10000000)"]),
     (dict(n_cases=2147483648), ["variable 'n_cases' = 2147483648 is not an integer in [-2147483647, 2147483647]"]),
     # an empty output_dir meant the default here and the current directory in the table step
@@ -79,3 +79,58 @@ def test_definition_limits_are_one_line_errors(tmp_path, change, words):
     for w in words:
         assert w in line, (w, line)
     assert not (tmp_path / "out" / "journal").exists()
+
+
+def test_definition_that_is_not_a_regular_file(tmp_path):
+    """/dev/zero was read for ever and a FIFO waited for a writer (hangs); a
+    directory said 'no namelist group'. Each is one line at once; so is a base
+    scenario that is a device."""
+    import os
+    fifo = tmp_path / "fifo.nml"
+    os.mkfifo(fifo)
+    for path, words in (("/dev/zero", "/dev/zero: no namelist group in the file"),
+                        (fifo, f"{fifo}: no namelist group in the file"),
+                        (tmp_path, f"{tmp_path}: is a directory")):
+        line = _one_line(run_sweep(path, tmp_path, None, "--check", timeout=30))
+        assert words in line, line
+    definition = small_definition(tmp_path / "d.nml", n_cases=4)
+    definition.write_text(definition.read_text().replace("base = '", "base = '/dev/zero' ! '"))
+    line = _one_line(_check(definition, tmp_path))
+    assert "/dev/zero: no namelist group in the file" in line, line
+
+
+@pytest.mark.parametrize("change,words", [
+    # the cases ran the airlaunch scene whatever run%scene said; their printed
+    # namelists then failed on their own (unknown group &flight)
+    (dict(fixed="&fixed name = 'run%scene', value = \"'line'\" /"),
+     ["name = 'run%scene' is not allowed: the sweep sets it for every case"]),
+    (dict(fixed="&fixed name = 'run%output', value = \"'x.nc'\" /"), ["name = 'run%output' is not allowed"]),
+    # a leading blank is part of the string in both steps (the table step refused it, Fortran dropped it)
+    (dict(inputs=SMALL_INPUTS.replace("name = 'bay%release_time'", "name = ' bay%release_time'")),
+     ["name = ' bay%release_time' is not allowed (write group%variable"]),
+])
+def test_names_the_sweep_cannot_take(tmp_path, change, words):
+    definition = small_definition(tmp_path / "d.nml", n_cases=4, **change)
+    line = _one_line(_check(definition, tmp_path))
+    for w in words:
+        assert w in line, (w, line)
+
+
+def test_output_dir_with_a_file_in_the_way(tmp_path):
+    (tmp_path / "blocker").write_text("a file, not a directory")
+    definition = small_definition(tmp_path / "d.nml", n_cases=4, output_dir="blocker/out")
+    line = _one_line(_check(definition, tmp_path))
+    assert f"{definition}: &sweep: output_dir = 'blocker/out' is not usable" in line, line
+    assert "(a file in the way, or no permission)" in line
+
+
+@pytest.mark.parametrize("args,words", [
+    (["--case-namelist", "1,2"], "--case-namelist 1,2 is not allowed (a case id: an integer in [0, 999999999])"),
+    (["--case-namelist", "0 0"], "--case-namelist 0 0 is not allowed"),
+    (["--case-namelist", "2147483648"], "--case-namelist 2147483648 is not allowed"),
+    (["--case-namelist", "0", "--case-namelist", "1"], "--case-namelist given twice"),
+])
+def test_case_namelist_takes_one_case_id(tmp_path, args, words):
+    definition = small_definition(tmp_path / "d.nml", n_cases=4)
+    line = _one_line(run_sweep(definition, tmp_path, None, *args))
+    assert words in line, line
