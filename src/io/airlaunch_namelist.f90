@@ -145,6 +145,14 @@ contains
       if (ios /= 0 .or. pos >= nchar) exit
       lineno = lineno + 1
       lt = stripped_length(buf)
+      ! tabs scan as blanks, other control characters as '?' (messages stay one line)
+      do k = 1, lt
+        if (iachar(buf(k:k)) == 9) then
+          buf(k:k) = " "
+        else if (iachar(buf(k:k)) < 32 .or. iachar(buf(k:k)) == 127) then
+          buf(k:k) = "?"
+        end if
+      end do
       text(pos+1:pos+lt+1) = buf(1:lt) // " "
       line_of(pos+1:pos+lt+1) = lineno
       col_of(pos+1:pos+lt+1) = [(k, k = 1, lt + 1)]
@@ -472,6 +480,13 @@ contains
         if (len(item%index) == 0 .and. n > max_list_items) call fatal_error(error, self%where(item) // "'" // &
           item%name // "' has " // str(n) // " values; at most " // str(max_list_items) // " are allowed")
       end select
+      ! every value of a number looks like one (gfortran reads a lone "-" as 0)
+      select case (var%kind)
+      case ("real", "real_list", "real3", "integer", "integer_list")
+        if (.not. allocated(error) .and. .not. all_numbers(v)) call fatal_error(error, self%where(item) // &
+          "variable '" // item%name // "' = " // v // " is not " // &
+          trim(merge("an integer   ", "a real number", index(var%kind, "integer") == 1)))
+      end select
     end subroutine check_form
   end subroutine nml_check_group
 
@@ -785,6 +800,29 @@ contains
       call next_item(v, last + 1, first, last)
     end do
   end function count_values
+
+  !> Every value of a list has the form of a number (repeat counts `k*v` and
+  !> null values `k*` allowed; NaN and infinity are left to `all_finite`).
+  logical function all_numbers(v) result(ok)
+    character(len=*), intent(in) :: v
+    integer :: first, last, star
+    character(len=:), allocatable :: x
+    ok = .true.
+    call next_item(v, 1, first, last)
+    do while (first > 0)
+      star = index(v(first:last), "*")
+      x = v(first+star:last)
+      if (len(x) > 0) ok = ok .and. (is_number(x) .or. is_word(x))
+      call next_item(v, last + 1, first, last)
+    end do
+  end function all_numbers
+
+  !> NaN, Inf, Infinity with a sign or not (reported by `all_finite`).
+  pure logical function is_word(x)
+    character(len=*), intent(in) :: x
+    is_word = any(lower(adjustl(x)) == [character(len=9) :: "nan", "inf", "+inf", "-inf", "infinity", &
+      "+infinity", "-infinity"])
+  end function is_word
 
   !> No value of a list (repeat counts allowed) reads as NaN or infinity;
   !> values that do not read as numbers are left to `diagnose`.

@@ -88,6 +88,10 @@ def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
     # NaN and Inf read as reals; variables without a range check (e.g. the tail's
     # position in the air-launch scene) accepted them before the ninth session
     ("mass = nan", "'mass' = nan is not allowed (not a finite number)"),
+    # gfortran reads a lone sign as 0
+    ("mass = -", "variable 'mass' = - is not a real number"),
+    # a tab before a name hid the assignment from the checks (here: the second value)
+    ("mass = 28000.0,\n\tmass = 2800.0", "'mass' = 2800.0 is assigned a second time (first at line 3: 28000.0)"),
     ("mass = 100.0, altitude = -Inf", "'altitude' = -Inf is not allowed (not a finite number)"),
     # Fortran's namelist read would keep the second value without a word
     ("mass = 28000.0, drag_area = 10.0,\n mass = 2800.0",
