@@ -73,7 +73,7 @@ def _number(path, key, value):
 
 def parse_criteria(text, path="<criteria>"):
     """Validate a criteria namelist text; return the list of Criterion."""
-    check_namelist_text(text, path)
+    check_namelist_text(text, path, {"criteria": {k: ("real", 0) for k in CRITERIA_VARS}})
     try:
         nml = f90nml.reads(text)
     except Exception as exc:  # f90nml raises several exception types

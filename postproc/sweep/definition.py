@@ -12,6 +12,7 @@ import dataclasses
 import difflib
 import math
 import pathlib
+import re
 import sys
 
 import f90nml
@@ -132,6 +133,13 @@ def to_float(value):
         return None
 
 
+class NamelistText(str):
+    """The text of a namelist file, with the encoding its bytes were decoded
+    with (string lengths are counted in bytes of the file, as by Fortran)."""
+
+    encoding = "utf-8"
+
+
 def read_namelist_text(path, what):
     """The text of a namelist file; any byte is accepted (UTF-8, else Latin-1:
     a comment in any encoding just works)."""
@@ -144,9 +152,11 @@ def read_namelist_text(path, what):
         raise DefinitionError(f"{path}: cannot read the file: {exc.strerror or exc} (give the path of {what})") \
             from None
     try:
-        return data.decode("utf-8")
+        text = NamelistText(data.decode("utf-8"))
     except UnicodeDecodeError:
-        return data.decode("latin-1")
+        text = NamelistText(data.decode("latin-1"))
+        text.encoding = "latin-1"
+    return text
 
 
 def _strip_comment(line):
@@ -171,13 +181,139 @@ def _is_name_char(c):
     return _is_name_start(c) or ("0" <= c <= "9") or c == "_"
 
 
-def check_namelist_text(text, path):
+_ASCII_LOWER = str.maketrans("ABCDEFGHIJKLMNOPQRSTUVWXYZ", "abcdefghijklmnopqrstuvwxyz")
+
+
+def ascii_lower(s):
+    """Lower case of the ASCII letters only, as Fortran's lower()."""
+    return s.translate(_ASCII_LOWER)
+
+
+def shown_text(s):
+    """Text for a one-line message: control characters and line separators escaped."""
+    return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in s)
+
+
+#: Most values of a list variable (values, keep_ids): the Fortran reader's arrays
+#: (max_list_items in src/io/airlaunch_namelist.f90).
+MAX_LIST_ITEMS = 4096
+INT_MIN, INT_MAX = -2**31, 2**31 - 1
+#: Fortran's message for an integer that does not read as a default integer.
+NOT_AN_INTEGER = f"is not an integer in [{-INT_MAX}, {INT_MAX}]"
+
+#: Kind and most characters (bytes) of each variable, as the Fortran reader
+#: declares it (src/sweep/airlaunch_sweep_definition.f90): kinds as nml_var's
+#: "string", "integer", "real", "logical", "real_list", "integer_list".
+DEFINITION_FORMS = {
+    "sweep": {"name": ("string", 256), "base": ("string", 256), "output_dir": ("string", 256),
+              "design": ("string", 256), "n_cases": ("integer", 0), "seed": ("integer", 0),
+              "t_end": ("real", 0), "keep_failed": ("logical", 0), "keep_worst": ("integer", 0),
+              "worst_by": ("string", 256), "keep_ids": ("integer_list", 0), "criteria": ("string", 256),
+              "progress_interval": ("real", 0)},
+    "input": {"name": ("string", 128), "distribution": ("string", 128), "lower": ("real", 0),
+              "upper": ("real", 0), "mean": ("real", 0), "std": ("real", 0), "values": ("real_list", 0),
+              "levels": ("integer", 0), "units": ("string", 128), "description": ("string", 1024)},
+    "fixed": {"name": ("string", 128), "value": ("string", 1024)},
+}
+
+_REPEAT = re.compile(r"(\d+)\*(.*)", re.S)
+_INTEGER = re.compile(r"[+-]?\d+")
+_SIGNS = re.compile(r"[+-]+")
+
+
+def _list_items(v):
+    """The items of a list value (blanks and commas separate them), as Fortran's next_item."""
+    return [x for x in re.split(r"[ ,]+", v) if x]
+
+
+def _count_values(v):
+    """(number of values of a list, repeat counts included, and whether an item
+    cannot be a value: a repeat count < 1 or beyond a default integer, or a lone
+    sign).  A bad repeat count counts 1, as in Fortran's count_values."""
+    n, bad = 0, False
+    for x in _list_items(v):
+        star = x.find("*")
+        k, rest = 1, x
+        if star > 0:
+            prefix, rest = x[:star], x[star + 1:]
+            if _INTEGER.fullmatch(prefix) and len(prefix.lstrip("+-").lstrip("0")) <= 10 \
+                    and 1 <= int(prefix) <= INT_MAX:
+                k = int(prefix)
+            else:
+                bad = True
+        if _SIGNS.fullmatch(rest):
+            bad = True
+        n += k
+    return n, bad
+
+
+def _int_fits(text):
+    """An integer literal that fits a default (32-bit) integer."""
+    digits = text.lstrip("+-").lstrip("0")
+    return len(digits) <= 10 and INT_MIN <= int(text) <= INT_MAX
+
+
+def _check_form(path, item, kind, length, encoding):
+    """Check one assignment's value text against its variable's kind, as the
+    Fortran reader does (check_form and diagnose in src/io/airlaunch_namelist.f90):
+    quoted strings no longer than the reader's variable, lists of at most
+    MAX_LIST_ITEMS values, integers that fit 32 bits, numbers that are not a lone
+    sign (a namelist parser reads '+' as an empty value)."""
+    group, name, idx, line, v = item
+    where = f"{path}:{line}: &{group}: "
+    shown = shown_text(v)
+    if kind in ("real_list", "integer_list"):
+        n, bad = _count_values(v)
+        what = "a list of real numbers" if kind == "real_list" else "a list of integers"
+        if idx:
+            m = re.fullmatch(r"\(([+-]?\d+)\)", idx)
+            if m and not (len(m.group(1)) <= 10 and 1 <= int(m.group(1)) and int(m.group(1)) + n - 1
+                          <= MAX_LIST_ITEMS):
+                raise DefinitionError(f"{where}'{name}{idx}' = {shown} is not allowed ({name} holds at most "
+                                      f"{MAX_LIST_ITEMS} values: indices 1 to {MAX_LIST_ITEMS})")
+        elif n > MAX_LIST_ITEMS:
+            raise DefinitionError(f"{where}'{name}' has {n} values; at most {MAX_LIST_ITEMS} are allowed")
+        if bad:
+            raise DefinitionError(f"{where}variable '{name}' = {shown} is not {what}")
+        return
+    if kind == "string":
+        m = _REPEAT.fullmatch(v)
+        body = m.group(2) if m else v
+        if not body:
+            return
+        if body[0] not in "'\"" or (m and m.group(1).lstrip("0") != "1"):
+            raise DefinitionError(f"{where}variable '{name}' = {shown} is not a quoted string")
+        n = len(body.encode(encoding, "replace")) - 2
+        if length and n > length:
+            # output_dir: also say that the directory is not usable (as the table
+            # step says of a directory it cannot make)
+            usable = f" (output_dir = {shown} is not usable)" if (group, name) == ("sweep", "output_dir") else ""
+            raise DefinitionError(f"{where}'{name}' is {n} characters long; at most {length} are allowed{usable}")
+        return
+    expected = {"integer": f"an integer in [{-INT_MAX}, {INT_MAX}]", "real": "a real number",
+                "logical": ".true. or .false."}.get(kind)
+    if expected is None or not v:
+        return
+    n, bad = _count_values(v)
+    m = _REPEAT.fullmatch(v)
+    body = m.group(2) if m else v
+    out_of_range = (kind == "integer" and name != "n_cases"   # n_cases > 1e7: its own message
+                    and _INTEGER.fullmatch(body) is not None and not _int_fits(body))
+    if n != 1 or bad or _SIGNS.fullmatch(body) or out_of_range:
+        raise DefinitionError(f"{where}variable '{name}' = {shown} is not {expected}")
+
+
+def check_namelist_text(text, path, forms=None):
     """Scan the raw text of a namelist like the Fortran readers
     (src/io/airlaunch_namelist.f90) and raise DefinitionError for what a
-    namelist parser would let through silently or misreport: a string not
-    closed on its line, a group not closed, and a variable assigned twice in
-    one group (a namelist keeps the last value; x(1) and x(2) are different
-    variables)."""
+    namelist parser would let through silently or misreport: text outside a
+    group, a string not closed on its line, a group not closed (with /; '$end'
+    does not close a group), a variable assigned twice in one group (a namelist
+    keeps the last value; x(1) and x(2) are different variables), and, for the
+    variables of `forms` ({group: {variable: (kind, most characters)}}), a value
+    not of the variable's form (see _check_form).  Any value of more than
+    MAX_LIST_ITEMS values is refused before a parser expands it."""
+    encoding = getattr(text, "encoding", "utf-8")
     parts, starts, pos = [], [], 0
     for line in text.split("\n"):
         line = _strip_comment(line.replace("\r", " ").replace("\t", " ")).rstrip()
@@ -190,8 +326,8 @@ def check_namelist_text(text, path):
     def line_of(i):
         return bisect.bisect_right(starts, i)
 
-    in_group, group, gline = False, "", 0
-    seen = {}
+    in_group, group, gline, n_groups = False, "", 0, 0
+    items = []    # (group number, (group, name, index, line, value))
     item = None   # (name, index, line, start of the value)
 
     def close_item(end):
@@ -199,16 +335,10 @@ def check_namelist_text(text, path):
         if item is None:
             return
         name, idx, line, vstart = item
-        value = t[vstart:end].strip()
+        value = t[vstart:end].strip(" ")
         if value.endswith(","):
-            value = value[:-1].rstrip()
-        key = (name, idx)
-        if key in seen:
-            first_line, first_value = seen[key]
-            raise DefinitionError(f"{path}:{line}: &{group}: '{name}{idx}' = {value} is assigned a second time "
-                                  f"(first at line {first_line}: {first_value}); a namelist would keep the last "
-                                  "value silently, so give it once")
-        seen[key] = (line, value)
+            value = value[:-1].rstrip(" ")
+        items.append((n_groups, (group, name, idx, line, value)))
         item = None
 
     i = 0
@@ -219,19 +349,25 @@ def check_namelist_text(text, path):
                 j = i + 1
                 while j < n and _is_name_char(t[j]):
                     j += 1
-                name = t[i + 1:j].lower()
+                name = ascii_lower(t[i + 1:j])
                 if name != "end":
-                    in_group, group, gline, seen, item = True, name, line_of(i), {}, None
+                    in_group, group, gline, item = True, name, line_of(i), None
+                    n_groups += 1
                 i = j
                 continue
+            if c != " ":
+                raise DefinitionError(f"{path}:{line_of(i)}: text outside a namelist group: "
+                                      f"'{shown_text(t[i:i + 21].rstrip(' '))}' (groups start with &name and "
+                                      "end with /)")
             i += 1
             continue
         if c in "'\"":
             j = t.find(c, i + 1)
             if j < 0 or line_of(j) != line_of(i):
                 shown = t[i:starts[line_of(i) - 1] + len(parts[line_of(i) - 1])].rstrip()
-                raise DefinitionError(f"{path}:{line_of(i)}: &{group}: unterminated string {shown[:40]} "
-                                      f"(a quoted value must end with its {c} on the same line)")
+                raise DefinitionError(f"{path}:{line_of(i)}: &{group}: unterminated string "
+                                      f"{shown_text(shown[:40])} (a quoted value must end with its {c} on the "
+                                      "same line)")
             i = j + 1
             continue
         if c == "/":
@@ -239,14 +375,11 @@ def check_namelist_text(text, path):
             in_group = False
             i += 1
             continue
-        if c in "&$":
+        if c == "&":
             if t[i + 1:i + 4].lower() == "end":
                 close_item(i)
                 in_group = False
                 i += 4
-                continue
-            if c == "$":
-                i += 1
                 continue
             raise DefinitionError(f"{path}:{line_of(i)}: group &{group} is not closed with / before the next group")
         if _is_name_start(c) and (i == 0 or t[i - 1] in " ,&"):
@@ -257,12 +390,12 @@ def check_namelist_text(text, path):
             if k < n and t[k] == "(":
                 close = t.find(")", k)
                 k = n if close < 0 else close + 1
-                idx = t[j:k].replace(" ", "").lower()
+                idx = ascii_lower(t[j:k].replace(" ", ""))
             while k < n and t[k] == " ":
                 k += 1
             if k < n and t[k] == "=":
                 close_item(i)
-                item = (t[i:j].lower(), idx, line_of(i), k + 1)
+                item = (ascii_lower(t[i:j]), idx, line_of(i), k + 1)
                 i = k + 1
                 continue
             i = j
@@ -270,6 +403,23 @@ def check_namelist_text(text, path):
         i += 1
     if in_group:
         raise DefinitionError(f"{path}:{gline}: group &{group} is not closed (end it with /)")
+
+    seen = {}
+    for number, it in items:
+        grp, name, idx, line, value = it
+        kind, length = (forms or {}).get(grp, {}).get(name, (None, 0))
+        if kind is not None:
+            _check_form(path, it, kind, length, encoding)
+        elif _count_values(value)[0] > MAX_LIST_ITEMS:   # before a parser expands it
+            raise DefinitionError(f"{path}:{line}: &{grp}: '{name}{idx}' has {_count_values(value)[0]} values; "
+                                  f"at most {MAX_LIST_ITEMS} are allowed")
+        key = (number, name, idx)
+        if key in seen:
+            first_line, first_value = seen[key]
+            raise DefinitionError(f"{path}:{line}: &{grp}: '{name}{idx}' = {shown_text(value)} is assigned a second "
+                                  f"time (first at line {first_line}: {shown_text(first_value)}); a namelist would "
+                                  "keep the last value silently, so give it once")
+        seen[key] = (line, value)
 
 
 def _groups(nml, group):
@@ -338,14 +488,15 @@ def _as_list(value):
 
 
 def _valid_name(name):
-    return name.count("%") == 1 and all(part and part.replace("_", "a").isalnum() for part in name.split("%"))
+    """group%variable of ASCII letters, digits and '_' (valid_name in the Fortran reader)."""
+    return re.fullmatch(r"[a-z0-9_]+%[a-z0-9_]+", name) is not None
 
 
 def _read_fixed(path, index, group_vars, varied):
     """Validate one &fixed group: (name, value text)."""
     where = f"{path}: &fixed #{index}: "
     _check_names(where, group_vars, FIXED_VARS)
-    name = _str(where, group_vars, "name").lower()
+    name = ascii_lower(_str(where, group_vars, "name"))
     if not _valid_name(name):
         raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, e.g. "
                               "'flight%trim_mode')")
@@ -363,12 +514,12 @@ def _read_input(path, index, group_vars, design):
     """Validate one &input group (of a sweep of the given design)."""
     where = f"{path}: &input #{index}: "
     _check_names(where, group_vars, INPUT_VARS)
-    name = _str(where, group_vars, "name").lower()
+    name = ascii_lower(_str(where, group_vars, "name"))
     where = f"{path}: &input #{index} '{name}': "
     if not _valid_name(name):
         raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, "
                               "e.g. 'bay%release_time')")
-    dist = _str(where, group_vars, "distribution").lower()
+    dist = ascii_lower(_str(where, group_vars, "distribution"))
     _choice(where, "distribution", dist, DISTRIBUTIONS)
     spec = dict(name=name, distribution=dist, units=_str(where, group_vars, "units", ""),
                 description=_str(where, group_vars, "description", ""))
@@ -420,7 +571,7 @@ def _read_input(path, index, group_vars, design):
 
 def parse_definition(text, path="<sweep>"):
     """Validate the text of a sweep definition; return a SweepDefinition."""
-    check_namelist_text(text, path)
+    check_namelist_text(text, path, DEFINITION_FORMS)
     try:
         nml = f90nml.reads(text)
     except Exception as exc:  # f90nml raises several exception types
@@ -432,7 +583,7 @@ def parse_definition(text, path="<sweep>"):
     sweep = sweeps[0]
     where = f"{path}: &sweep: "
     _check_names(where, sweep, SWEEP_VARS)
-    design = _str(where, sweep, "design").lower()
+    design = ascii_lower(_str(where, sweep, "design"))
     _choice(where, "design", design, DESIGNS)
     base = _str(where, sweep, "base")
     if not base:

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from test_sweep_support import run_python, small_definition
+from test_sweep_support import SWEEP_EXE, run_python, run_sweep, small_definition
 
 ONE_INPUT = "&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0 /\n"
 BIG = "1" + "0" * 400
@@ -269,3 +269,171 @@ def test_unterminated_string(tmp_path):
     line = assert_error(table(tmp_path, d), "&sweep: unterminated string 'small", tmp_path=tmp_path)
     assert line.startswith(f"sweep: error: {d}:2: "), line
     assert "missing required value" not in line
+
+
+# 11. what the Fortran reader refuses: the table step refuses it too ------------
+
+def assert_check_refuses(tmp_path, path):
+    """airlaunch-sweep --check refuses the same definition: exit 2, one line."""
+    if not SWEEP_EXE.exists():
+        return
+    res = run_sweep(path, tmp_path, None, "--check")
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1, res.stderr
+
+
+LIST_INPUT = "&input name = 'flight%mach', distribution = 'list', values = {} /\n"
+
+
+@pytest.mark.parametrize("group,var,edit,n,most", [
+    ("sweep", "name", dict(text=lambda t: t.replace("name = 'small'", "name = '" + "s" * 257 + "'")), 257, 256),
+    ("sweep", "criteria", dict(extra_sweep="criteria = '" + "c" * 300 + "'"), 300, 256),
+    ("input", "name", dict(inputs=ONE_INPUT.replace("bay%release_time", "bay%" + "r" * 125)), 129, 128),
+    # 'é' is two bytes of UTF-8: Fortran counts the bytes of the file
+    ("input", "units", dict(inputs=ONE_INPUT.replace("/\n", ", units = '" + "é" * 65 + "' /\n")), 130, 128),
+    ("input", "description", dict(inputs=ONE_INPUT.replace("/\n", ", description = '" + "d" * 1025 + "' /\n")),
+     1025, 1024),
+    ("fixed", "value", dict(fixed="&fixed name = 'line%n_seg', value = '" + "1" * 1025 + "' /"), 1025, 1024),
+    ("fixed", "name", dict(fixed="&fixed name = 'line%" + "n" * 125 + "', value = '10' /"), 130, 128),
+], ids=["sweep name", "criteria", "input name", "units utf-8", "description", "fixed value", "fixed name"])
+def test_string_longer_than_the_fortran_variable(tmp_path, group, var, edit, n, most):
+    d = definition(tmp_path, **edit)
+    line = assert_error(table(tmp_path, d), f"&{group}: '{var}' is {n} characters long; at most {most} are allowed",
+                        tmp_path=tmp_path)
+    assert line.startswith(f"sweep: error: {d}:"), line
+    assert_check_refuses(tmp_path, d)
+
+
+def test_string_as_long_as_the_fortran_variable_is_accepted(tmp_path):
+    d = definition(tmp_path, inputs=ONE_INPUT.replace("/\n", ", units = '" + "é" * 64 + "' /\n"))
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("edit,var,n", [
+    (dict(inputs=LIST_INPUT.format("0.6, 4096*0.7")), "values", 4097),
+    (dict(inputs=LIST_INPUT.format("100000000*0.7")), "values", 100000000),
+    (dict(extra_sweep="keep_ids = 4097*1"), "keep_ids", 4097),
+], ids=["values", "values 1e8 (counted, not expanded)", "keep_ids"])
+def test_list_longer_than_the_fortran_array(tmp_path, edit, var, n):
+    d = definition(tmp_path, **edit)
+    assert_error(table(tmp_path, d), f"'{var}' has {n} values; at most 4096 are allowed", tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("values,words", [
+    ("4294967296*0.7", ["variable 'values' = 4294967296*0.7 is not a list of real numbers"]),
+    ("0*0.7, 0.8", ["variable 'values' = 0*0.7, 0.8 is not a list of real numbers"]),
+    ("0.7, +, 0.8", ["variable 'values' = 0.7, +, 0.8 is not a list of real numbers"]),
+])
+def test_list_with_a_bad_repeat_count_or_a_lone_sign(tmp_path, values, words):
+    d = definition(tmp_path, inputs=LIST_INPUT.format(values))
+    assert_error(table(tmp_path, d), "&input", *words, tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("index", ["0", "4097", "100000000"])
+def test_list_index_beyond_the_fortran_array(tmp_path, index):
+    inputs = f"&input name = 'flight%mach', distribution = 'list', values({index}) = 0.7 /\n"
+    d = definition(tmp_path, inputs=inputs)
+    assert_error(table(tmp_path, d), f"'values({index})' = 0.7 is not allowed", "at most 4096 values",
+                 tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("edit,var,value", [
+    (dict(extra_sweep="keep_worst = 4294967296"), "keep_worst", "4294967296"),
+    (dict(text=lambda t: t.replace("seed = 5", "seed = 2147483648")), "seed", "2147483648"),
+    (dict(inputs=ONE_INPUT.replace("/\n", ", levels = 4294967296 /\n")), "levels", "4294967296"),
+    (dict(extra_sweep="keep_worst = " + BIG), "keep_worst", BIG),
+])
+def test_integer_beyond_32_bits(tmp_path, edit, var, value):
+    d = definition(tmp_path, **edit)
+    assert_error(table(tmp_path, d), f"variable '{var}' = {value} is not an integer in [-2147483647, 2147483647]",
+                 tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+def test_smallest_32_bit_integer_gets_the_range_message(tmp_path):
+    d = definition(tmp_path, extra_sweep="keep_worst = -2147483648")
+    assert_error(table(tmp_path, d), "keep_worst = -2147483648 is not allowed (must be >= 0)", tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("edit,shown", [
+    (dict(inputs=ONE_INPUT.replace("release_time", "reléase_time")), "&input #1 'bay%reléase_time': "
+                                                                        "name = 'bay%reléase_time'"),
+    (dict(inputs=ONE_INPUT.replace("release_time", "release_\u212aime")), "name = 'bay%release_\u212aime'"),
+    (dict(fixed="&fixed name = 'line%n_ség', value = '10' /"), "&fixed #1: name = 'line%n_ség'"),
+], ids=["input é", "input Kelvin sign (lower() gives k)", "fixed é"])
+def test_name_with_non_ascii_letters(tmp_path, edit, shown):
+    d = definition(tmp_path, **edit)
+    assert_error(table(tmp_path, d), shown, "is not allowed (write group%variable", tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("edit,line,shown", [
+    (lambda t: "garbage text\n" + t, 1, "'garbage text &sweep'"),
+    (lambda t: t.replace("/\n&fixed", "/\ngarbage text\n&fixed"), 12, "'garbage text &fixed n'"),
+    (lambda t: t + "garbage text\n", 15, "'garbage text'"),
+    (lambda t: t.replace("/\n&fixed", "/ garbage text ! a comment\n&fixed"), 11, "'garbage text &fixed n'"),
+], ids=["before", "between", "after", "after / on its line"])
+def test_text_outside_a_group(tmp_path, edit, line, shown):
+    d = definition(tmp_path, text=edit)
+    res_line = assert_error(table(tmp_path, d), f"{d}:{line}: text outside a namelist group: {shown} "
+                            "(groups start with &name and end with /)", tmp_path=tmp_path)
+    assert "!" not in res_line
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("edit,words", [
+    (lambda t: t.replace("&sweep", "$sweep").replace("\n/\n&fixed", "\n$end\n&fixed"),
+     [":12: group &sweep is not closed with / before the next group"]),
+    (lambda t: t.replace("&", "$").replace("/\n", "$end\n"), [":1: group &sweep is not closed (end it with /)"]),
+], ids=["$sweep $end", "all $ groups"])
+def test_dollar_groups_are_not_closed(tmp_path, edit, words):
+    d = definition(tmp_path, text=edit)
+    assert_error(table(tmp_path, d), *words, tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+def test_whole_definition_on_one_line_is_accepted(tmp_path):
+    d = definition(tmp_path, text=lambda t: " ".join(t.split("\n")))
+    assert "\n" not in d.read_text()
+    res = table(tmp_path, d)
+    assert res.returncode == 0 and not res.stderr, res.stderr
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("old,new,words", [
+    ("n_cases = 6", "n_cases = +", ["&sweep: variable 'n_cases' = + is not an integer"]),
+    ("t_end = 4.0", "t_end = -", ["&sweep: variable 't_end' = - is not a real number"]),
+    ("progress_interval = 0.5", "progress_interval = -", ["variable 'progress_interval' = - is not a real number"]),
+    ("t_end = 4.0", "t_end = 2*4.0", ["variable 't_end' = 2*4.0 is not a real number"]),
+])
+def test_lone_sign_is_one_line(tmp_path, old, new, words):
+    d = definition(tmp_path, text=lambda t: t.replace(old, new))
+    assert_error(table(tmp_path, d), *words, tmp_path=tmp_path)
+    if new == "n_cases = +":
+        # airlaunch-sweep refuses it too (it reads '+' as no value: "missing
+        # required value n_cases"); it accepts t_end = - and progress_interval = -
+        assert_check_refuses(tmp_path, d)
+
+
+def test_lone_sign_in_criteria_is_one_line(tmp_path):
+    d = definition(tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = +\n  line_strength_n = 1e5 /\n")
+    res = run_python(["envelope", d, "--criteria", crit], tmp_path)
+    assert_error(res, f"{crit}:1: &criteria: variable 'min_clearance_m' = + is not a real number")
+
+
+def test_unquoted_string_and_control_character(tmp_path):
+    d = definition(tmp_path, text=lambda t: t.replace("design = 'lhs'", "design = lhs"))
+    assert_error(table(tmp_path, d), "&sweep: variable 'design' = lhs is not a quoted string", tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+    d = definition(tmp_path, name="vt.nml", text=lambda t: t.replace("name = 'small'", "name = \v'small'"))
+    assert_error(table(tmp_path, d), "&sweep: variable 'name' = \\x0b'small' is not a quoted string",
+                 tmp_path=tmp_path)
