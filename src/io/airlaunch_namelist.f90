@@ -406,39 +406,11 @@ contains
           " (allowed: " // join(vars%name) // ")")
         return
       end if
-      ! NaN and Inf read as real numbers; no input is meant to be either
-      do j = 1, size(vars)
-        if (lower(trim(vars(j)%name)) /= self%items(i)%name) cycle
-        select case (vars(j)%kind)
-        case ("real", "real_list", "real3")
-          if (.not. all_finite(self%items(i)%value)) then
-            call fatal_error(error, self%where(self%items(i)) // "'" // self%items(i)%name // &
-              self%items(i)%index // "' = " // self%items(i)%value // " is not allowed (not a finite number)")
-            return
-          end if
-        end select
-      end do
-      ! Strings: quoted (gfortran would take `name = 0` as the text "0"), and no
-      ! longer than the reader's variable (it would cut them off silently);
-      ! lists no longer than the reader's array ("Cannot match namelist object
-      ! name" otherwise)
+      ! The value's form against its variable (check_form below)
       do j = 1, size(vars)
         if (lower(trim(vars(j)%name)) /= self%items(i)%name) cycle
         call check_form(self%items(i), vars(j))
         if (allocated(error)) return
-      end do
-      ! A whole 3-vector given fewer or more values: Fortran's read would keep
-      ! the old value of the missing components, or stop at the extra one with
-      ! "Cannot match namelist object name".
-      do j = 1, size(vars)
-        if (lower(trim(vars(j)%name)) /= self%items(i)%name .or. vars(j)%kind /= "real3") cycle
-        if (len(self%items(i)%index) > 0) cycle
-        if (count_values(self%items(i)%value) /= 3) then
-          call fatal_error(error, self%where(self%items(i)) // "'" // self%items(i)%name // "' = " // &
-            self%items(i)%value // " has " // str(count_values(self%items(i)%value)) // &
-            " values; a vector of 3 (x, y, z) is expected")
-          return
-        end if
       end do
       ! Fortran's namelist read keeps the last of two assignments without a word:
       ! a value written twice is an error, not a silent choice.
@@ -454,12 +426,36 @@ contains
       end do
     end do
   contains
+    !> - reals: NaN and Inf read as real numbers; no input is meant to be either;
+    !> - numbers: every value looks like one (gfortran reads a lone "-" as 0);
+    !> - strings: quoted (gfortran would take `name = 0` as the text "0"), and no
+    !>   longer than the reader's variable (it would cut them off silently);
+    !> - lists: no longer than the reader's array ("Cannot match namelist object
+    !>   name" otherwise);
+    !> - a whole 3-vector: three values (Fortran's read would keep the old value
+    !>   of a missing component, or stop at an extra one).
     subroutine check_form(item, var)
       type(nml_assignment), intent(in) :: item
       type(nml_var), intent(in) :: var
       integer :: n
       character(len=:), allocatable :: v
       v = item%value
+      select case (var%kind)
+      case ("real", "real_list", "real3")
+        if (.not. all_finite(v)) then
+          call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // v // &
+            " is not allowed (not a finite number)")
+          return
+        end if
+      end select
+      select case (var%kind)
+      case ("real", "real_list", "real3", "integer", "integer_list")
+        if (.not. all_numbers(v)) then
+          call fatal_error(error, self%where(item) // "variable '" // item%name // "' = " // v // " is not " // &
+            trim(merge("an integer   ", "a real number", index(var%kind, "integer") == 1)))
+          return
+        end if
+      end select
       select case (var%kind)
       case ("string")
         ! a leading repeat count (`4*'direct'`) is allowed
@@ -479,13 +475,10 @@ contains
         n = count_values(v)
         if (len(item%index) == 0 .and. n > max_list_items) call fatal_error(error, self%where(item) // "'" // &
           item%name // "' has " // str(n) // " values; at most " // str(max_list_items) // " are allowed")
-      end select
-      ! every value of a number looks like one (gfortran reads a lone "-" as 0)
-      select case (var%kind)
-      case ("real", "real_list", "real3", "integer", "integer_list")
-        if (.not. allocated(error) .and. .not. all_numbers(v)) call fatal_error(error, self%where(item) // &
-          "variable '" // item%name // "' = " // v // " is not " // &
-          trim(merge("an integer   ", "a real number", index(var%kind, "integer") == 1)))
+      case ("real3")
+        n = count_values(v)
+        if (len(item%index) == 0 .and. n /= 3) call fatal_error(error, self%where(item) // "'" // item%name // &
+          "' = " // v // " has " // str(n) // " values; a vector of 3 (x, y, z) is expected")
       end select
     end subroutine check_form
   end subroutine nml_check_group
