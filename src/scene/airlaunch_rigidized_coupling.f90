@@ -550,7 +550,6 @@ contains
     end if
   end subroutine line_unpack
 
-  !> State y from absolute node positions and velocities at time t.
   !> State i of the chain: the aircraft's 13, the rocket's 13, then attitude
   !> and angular velocity (7 each) of the virtual line body and the parachute link.
   function chain_state_name(self, i) result(name)
@@ -579,6 +578,7 @@ contains
     if (1 + (i - 1)/6 == self%model%n) name = name // " (parachute)"
   end function line_state_name
 
+  !> State y from absolute node positions and velocities at time t.
   pure subroutine line_pack(self, t, x, v, y)
     class(rigidized_line), intent(in) :: self
     real(dp), intent(in) :: t, x(:, 0:), v(:, 0:)
