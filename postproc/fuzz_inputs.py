@@ -25,6 +25,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import numpy as np
@@ -52,10 +53,20 @@ def variants(path, values):
             yield m.group(2), v, "\n".join(new) + "\n"
 
 
+#: HDF5 (under netCDF4 and xarray) is not thread-safe: two runs' files read at
+#: once crashed the fuzz ("trap stack segment" in libhdf5)
+HDF5_LOCK = threading.Lock()
+
+
 def output_ok(out, failed):
     """No NaN/Inf in the output's floating-point variables; `status` as expected."""
     if not out.exists():
         return False, "no output file"
+    with HDF5_LOCK:
+        return _output_ok(out, failed)
+
+
+def _output_ok(out, failed):
     import xarray as xr
     with xr.open_dataset(out) as ds:
         for name, var in ds.variables.items():
