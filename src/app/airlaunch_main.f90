@@ -70,7 +70,7 @@ program airlaunch
       call f%check_groups([character(len=16) :: "run", "store"], error)
       if (.not. allocated(error)) call read_drop_config(f, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
-      call check_output_directory()
+      call prepare_output_file()
       call run_drop(run, cfg, echo, summary, error)
     end block
   case ("line")
@@ -79,7 +79,7 @@ program airlaunch
       call f%check_groups([character(len=16) :: "run", "line", "line_scene"], error)
       if (.not. allocated(error)) call read_line_scene_config(f, run, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
-      call check_output_directory()
+      call prepare_output_file()
       call run_line_scene(run, cfg, echo, summary, error)
     end block
   case ("airlaunch")
@@ -88,7 +88,7 @@ program airlaunch
       type(launch_result) :: res
       call read_scenario_config(f, cfg, echo, error, run%t_end)
       if (allocated(error)) call fail_input(error%message)
-      call check_output_directory()
+      call prepare_output_file()
       call run_launch(run, cfg, echo, res, error)
       summary = launch_summary(res)
     end block
@@ -115,11 +115,11 @@ program airlaunch
 contains
 
   !> The output file's directory must exist: checked once the whole input is
-  !> read (its own errors first), before the run.  An old file of the same
+  !> read (its own errors first), before the run; an old file of the same
   !> name is removed then: the run replaces it in any case (completed, or
   !> failed with what it computed), and one that fails before its first record
   !> must not leave an older result that passes for its own.
-  subroutine check_output_directory()
+  subroutine prepare_output_file()
     type(error_type), allocatable :: out_error
     integer :: u, ios
     if (.not. run%trajectory) return
@@ -131,7 +131,7 @@ contains
     if (allocated(out_error)) call fail_input(out_error%message)
     open(newunit=u, file=trim(run%output), status="old", action="read", iostat=ios)
     if (ios == 0) close(u, status="delete", iostat=ios)
-  end subroutine check_output_directory
+  end subroutine prepare_output_file
 
   !> The milestones of an air-launch run, one per line.
   function launch_summary(r) result(s)

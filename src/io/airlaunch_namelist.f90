@@ -184,14 +184,14 @@ contains
   logical function ends_with_newline(path) result(ok)
     character(len=*), intent(in) :: path  !< an existing, readable file
     integer :: unit, ios
-    integer(int64) :: size
+    integer(int64) :: nbytes
     character(len=1) :: last
     ok = .true.
     open(newunit=unit, file=path, access="stream", form="unformatted", status="old", action="read", iostat=ios)
     if (ios /= 0) return
-    inquire(unit=unit, size=size)
-    if (size > 0) then
-      read(unit, pos=size, iostat=ios) last
+    inquire(unit=unit, size=nbytes)
+    if (nbytes > 0) then
+      read(unit, pos=nbytes, iostat=ios) last
       if (ios == 0) ok = last == achar(10)
     end if
     close(unit)
@@ -581,7 +581,7 @@ contains
           expected = "a quoted string"
         case ("real_list", "real3")
           rl = 0
-          read(v, *, iostat=ios) rl(1:count_items(v))
+          read(v, *, iostat=ios) rl(1:min(max(count_values(v), 1), size(rl)))
           expected = "a list of real numbers"
         case default
           ios = 0
@@ -762,19 +762,6 @@ contains
     end do
   end subroutine next_item
 
-  !> Number of items of a list (1 to 1000, for reading it back in `diagnose`).
-  pure integer function count_items(v)
-    character(len=*), intent(in) :: v
-    integer :: first, last
-    count_items = 0
-    call next_item(v, 1, first, last)
-    do while (first > 0)
-      count_items = count_items + 1
-      call next_item(v, last + 1, first, last)
-    end do
-    count_items = min(max(count_items, 1), 1000)
-  end function count_items
-
   !> Number of values of a list, repeat counts included ("3*0.0" and "2*" are 3
   !> and 2 values).
   integer function count_values(v) result(n)
@@ -795,7 +782,7 @@ contains
   end function count_values
 
   !> Every value of a list has the form of a number (repeat counts `k*v` and
-  !> null values `k*` allowed; NaN and infinity are left to `all_finite`).
+  !> null values `k*` allowed; called after `all_finite`, so no NaN or Inf).
   logical function all_numbers(v) result(ok)
     character(len=*), intent(in) :: v
     integer :: first, last, star
@@ -805,17 +792,10 @@ contains
     do while (first > 0)
       star = index(v(first:last), "*")
       x = v(first+star:last)
-      if (len(x) > 0) ok = ok .and. (is_number(x) .or. is_word(x))
+      if (len(x) > 0) ok = ok .and. is_number(x)
       call next_item(v, last + 1, first, last)
     end do
   end function all_numbers
-
-  !> NaN, Inf, Infinity with a sign or not (reported by `all_finite`).
-  pure logical function is_word(x)
-    character(len=*), intent(in) :: x
-    is_word = any(lower(adjustl(x)) == [character(len=9) :: "nan", "inf", "+inf", "-inf", "infinity", &
-      "+infinity", "-infinity"])
-  end function is_word
 
   !> No value of a list (repeat counts allowed) reads as NaN or infinity;
   !> values that do not read as numbers are left to `diagnose`.

@@ -36,7 +36,7 @@ def test_definition_without_final_newline(tmp_path, last):
     res = _check(definition, tmp_path)
     assert "End of file" not in res.stderr
     assert res.returncode == 0, res.stderr
-    assert "definition ok" in res.stdout or "table" in res.stdout, res.stdout
+    assert f"airlaunch-sweep: {definition}: ok: design lhs, 4 cases" in res.stdout, res.stdout
 
 
 @pytest.mark.parametrize("change,words", [
