@@ -17,8 +17,12 @@
 !>     not (B stays the verdict).
 !> Ends with one line `RESULT {json}`.  Run through `scripts/bench line`
 !> (optional arguments: axial damping c_d [N s] (1000), EA [N] (1e6), mass per
-!> length [kg/m] (0.3)); `bench-line single SCHEME N RTOL|DT [MAX_ORDER [dq]]` runs
-!> one setting and prints its work counters.
+!> length [kg/m] (0.3), the default scheme's mass matrix: lumped (the default)
+!> or mixed); `bench-line single SCHEME N RTOL|DT [MAX_ORDER [dq]]` runs one
+!> setting and prints its work counters (AIRLAUNCH_LINE_MASS=lumped|mixed sets
+!> the cvode run's mass matrix there, lumped by default).  The marching scheme always lumps the
+!> mass (the paper's), so each scheme's same-N reference is its own
+!> semi-discretization.
 !>
 !> Scenario ("paper line", documented in docs/line.md): the 60 m line of the
 !> paper's scene trailing a parachute in the air stream of a carrier at
@@ -42,8 +46,8 @@ program bench_line
   integer, parameter :: ns(3) = [20, 60, 200], n_ref = 400
   !> further segment counts (comparison B: the cheapest run of each scheme, any N,
   !> reaching the paper run's accuracy)
-  integer, parameter :: nx = 10
-  integer, parameter :: ns_extra(nx) = [10, 15, 25, 30, 40, 50, 80, 100, 120, 150]
+  integer, parameter :: nx = 13
+  integer, parameter :: ns_extra(nx) = [5, 6, 8, 10, 15, 25, 30, 40, 50, 80, 100, 120, 150]
   real(dp), parameter :: t_end = 2.0_dp, rho_air = 0.41351_dp, v_air = 194.7_dp
   integer, parameter :: n_rec = 41    ! tip recorded every t_end/40 = 0.05 s
   !> tolerance ladder of the default scheme: 1-2-5 per decade, so that the
@@ -67,11 +71,14 @@ program bench_line
   character(len=:), allocatable :: json, rows
   character(len=32) :: arg
   real(dp) :: c_d, ea, rho
+  real(dp) :: tip_nl(3, n_rec), err_sl(3)
+  character(len=8) :: cvode_mass   ! the default scheme's mass matrix
   integer :: i, j, k
 
   c_d = 1000.0_dp
   ea = 1.0e6_dp
   rho = 0.3_dp
+  cvode_mass = "lumped"
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg)
@@ -90,9 +97,11 @@ program bench_line
       call get_command_argument(3, arg)
       read(arg, *) rho
     end if
+    if (command_argument_count() >= 4) call get_command_argument(4, cvode_mass)
   end if
   print '(a)', "bench line: 60 m line, EA " // str(ea) // " N, " // str(rho) // " kg/m, c_d " // str(c_d) // &
-    " N s, parachute end, nose oscillating, 2 s simulated"
+    " N s, parachute end, nose oscillating, 2 s simulated; cvode with the " // trim(cvode_mass) // &
+    " mass matrix, marching with the lumped one"
   call run("cvode", n_ref, 1.0e-10_dp, 0.0_dp, tip_inf, wall, steps, 1, 5)
   print '(a, i0, a, 3f14.8, a, f8.2, a)', "converged reference: N = ", n_ref, ", cvode BDF5 rtol 1e-10: tip ", &
     tip_inf(:, n_rec), " m at t_end (", wall, " s)"
@@ -102,13 +111,16 @@ program bench_line
   print '(a)', "   N  scheme    setting           wall/sim-s [s]   steps    tip error [m]     tip error [m]"
   print '(a)', "                                                            vs same-N ref     vs converged"
   do i = 1, size(ns)
-    ! same-N reference: the semi-discretization integrated to 1e-11
+    ! same-N references: each scheme's semi-discretization integrated to 1e-11
     call run("cvode", ns(i), 1.0e-11_dp, 0.0_dp, tip_n, wall, steps, 1, 5)
     err_s(i) = max_dist(tip_n, tip_inf)
+    tip_nl = tip_n
+    if (cvode_mass /= "lumped") call run("cvode", ns(i), 1.0e-11_dp, 0.0_dp, tip_nl, wall, steps, 1, 5, "lumped")
+    err_sl(i) = max_dist(tip_nl, tip_inf)
     ! paper scheme at 0.9 of its stability limit (its cheapest setting)
     dt_m(i) = 0.9_dp*stable_dt(ns(i))
     call run("marching", ns(i), 0.0_dp, dt_m(i), tip, wall_m(i), steps_m(i), 3)
-    err_m(i) = max_dist(tip, tip_n)
+    err_m(i) = max_dist(tip, tip_nl)
     err_ms(i) = max_dist(tip, tip_inf)
     print '(i4, 2x, a, es9.2, 9x, es12.4, i10, 2es17.4)', ns(i), "marching  dt = ", dt_m(i), wall_m(i)/t_end, &
       steps_m(i), err_m(i), err_ms(i)
@@ -120,7 +132,8 @@ program bench_line
         merge(" (default)", "          ", rtols(j) == rtol_default), wall_c(j, i)/t_end, steps_c(j, i), &
         err_c(j, i), errt_c(j, i)
     end do
-    print '(a, i0, a, es10.3, a)', "  discretization error of N = ", ns(i), ": ", err_s(i), " m"
+    print '(a, i0, a, es10.3, a, a, es10.3, a)', "  discretization error of N = ", ns(i), ": ", err_s(i), &
+      " m (cvode's " // trim(cvode_mass) // " mass), ", "lumped (marching's) ", err_sl(i), " m"
     print '(a)', ""
   end do
 
@@ -219,9 +232,11 @@ program bench_line
       ', "cvode_rtol_equal_accuracy": ' // jnum(rtols(bj_acc(i))) // &
       ', "speedup_same_N_at_1mm": ' // jnum(sp_mm(i)) // &
       ', "speedup_equal_accuracy_on_fronts": ' // jnum(sp_int(i)) // &
-      ', "discretization_error_m": ' // jnum(err_s(i)) // '}'
+      ', "discretization_error_m": ' // jnum(err_s(i)) // &
+      ', "discretization_error_lumped_m": ' // jnum(err_sl(i)) // '}'
   end do
-  json = '{"bench": "line", "t_sim_s": ' // jnum(t_end) // ', "damping_Ns": ' // jnum(c_d) // &
+  json = '{"bench": "line", "cvode_mass": "' // trim(cvode_mass) // '", "t_sim_s": ' // jnum(t_end) // &
+    ', "damping_Ns": ' // jnum(c_d) // &
     ', "ea_N": ' // jnum(ea) // ', "mass_per_length_kg_m": ' // jnum(rho) // &
     ', "reference_N": ' // str(n_ref) // ', "rows": [' // rows // ']' // &
     ', "min_speedup_same_N_at_paper_error": ' // jnum(minval(sp_same)) // &
@@ -251,7 +266,7 @@ contains
     type(line_scene) :: scene
     type(error_type), allocatable :: error
     character(len=16) :: a
-    integer :: n, mo
+    integer :: n, mo, i
     real(dp) :: x
     call get_command_argument(2, a)
     cfg%integration%scheme = a
@@ -266,8 +281,12 @@ contains
     end if
     block
       type(line_scheme_options) :: opts
+      character(len=8) :: m
+      integer :: st
       opts = cfg%integration
-      cfg = scenario(n)
+      call get_environment_variable("AIRLAUNCH_LINE_MASS", m, status=st)
+      if (st /= 0) m = "lumped"
+      cfg = scenario(n, merge(m, "lumped  ", opts%scheme == "cvode"))
       cfg%integration = opts
     end block
     cfg%integration%rtol = x
@@ -285,6 +304,9 @@ contains
       return
     end if
     print '(a, 3f16.10)', "tip ", scene%tip(:, scene%n_out)
+    do i = 1, scene%n_out   ! the whole tip track, to compare runs
+      print '(a, 3es24.16)', "trk ", scene%tip(:, i)
+    end do
     print '(a, f10.4, a, i0, a, i0, a, i0, a, i0)', "wall ", scene%wall_time, " s; steps ", scene%stats%steps, &
       ", force evaluations ", scene%stats%rhs_evals, ", jacobians ", scene%stats%jac_evals, ", failures ", &
       scene%stats%failures
@@ -296,19 +318,20 @@ contains
     type(line_model) :: model
     type(error_type), allocatable :: error
     type(line_scene_config) :: cfg
-    cfg = scenario(n)
+    cfg = scenario(n, "lumped")
     call model%init(cfg%line, error)
     h = model%stable_step()
   end function stable_dt
 
-  !> The benchmark scenario with N segments.
-  function scenario(n) result(cfg)
+  !> The benchmark scenario with N segments and the mass matrix `mass`.
+  function scenario(n, mass) result(cfg)
     integer, intent(in) :: n
+    character(len=*), intent(in) :: mass
     type(line_scene_config) :: cfg
     real(dp) :: eps0
     cfg%line = line_params(length=60.0_dp, n_seg=n, ea=ea, mass_per_length=rho, damping=c_d, &
       diameter=0.025_dp, cd_normal=1.2_dp, cd_tangential=0.01_dp, gravity=.true., air=.true., &
-      wind=[-v_air, 0.0_dp, 0.0_dp], air_density=rho_air)
+      wind=[-v_air, 0.0_dp, 0.0_dp], air_density=rho_air, mass=mass)
     eps0 = 0.5_dp*rho_air*10.0_dp*v_air**2/cfg%line%ea
     cfg%end_a = line_end(kind=end_prescribed, position=[0.0_dp, 0.0_dp, 0.0_dp], &
       amplitude=[0.0_dp, 1.0_dp, 0.3_dp], frequency=0.5_dp)
@@ -320,10 +343,12 @@ contains
   end function scenario
 
   !> Run the scenario; tip position at t_end and the best wall time of `repeat` runs.
-  subroutine run(scheme, n, rtol, dt, tip_out, wall_out, steps_out, repeat, max_order)
+  !> cvode uses `mass` (default: the benchmark's cvode_mass), marching the lumped mass.
+  subroutine run(scheme, n, rtol, dt, tip_out, wall_out, steps_out, repeat, max_order, mass)
     character(len=*), intent(in) :: scheme
     integer, intent(in) :: n, repeat
     integer, intent(in), optional :: max_order
+    character(len=*), intent(in), optional :: mass
     real(dp), intent(in) :: rtol, dt
     real(dp), intent(out) :: tip_out(:, :), wall_out
     integer(8), intent(out) :: steps_out
@@ -331,7 +356,13 @@ contains
     type(line_scene) :: scene
     type(error_type), allocatable :: error
     integer :: r
-    cfg = scenario(n)
+    if (scheme /= "cvode") then
+      cfg = scenario(n, "lumped")
+    else if (present(mass)) then
+      cfg = scenario(n, mass)
+    else
+      cfg = scenario(n, cvode_mass)
+    end if
     cfg%integration%scheme = scheme
     if (scheme == "cvode") then
       cfg%integration%rtol = rtol

@@ -17,6 +17,15 @@
 !> the node's load (the end body is lumped with the node: the limit the paper's
 !> far-end iteration converges to).
 !>
+!> Mass matrix.  With the lumped mass v_k' = f_k/m_k; with the mixed one
+!> (airlaunch_line_model, "Mass matrix") v' solves M v' = f over the state nodes
+!> (airlaunch_line_mass: LAPACK's tridiagonal L D L^T, factored once), the
+!> kinematic ends' accelerations moved to the right-hand side.  The Jacobian
+!> of v' is then M^-1 df/dy, a full matrix, but the Newton matrix's velocity
+!> rows multiplied by M keep the band (airlaunch_lapack_band, setup_from_blocks),
+!> so the mixed mass needs the analytic node-block Jacobian: CVODE's difference
+!> quotients over the band would be wrong.
+!>
 !> Jacobian.  The system gives CVODE its analytic Jacobian (x' = v: the identity
 !> block; v' = f/m: the blocks of line_model%force_jacobian and of the point
 !> masses' drag, divided by the node masses), so a Jacobian costs about one
@@ -34,6 +43,7 @@ module airlaunch_line_cvode
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
   use airlaunch_line_model, only: line_model, line_energy, node_state_name
+  use airlaunch_line_mass, only: line_mass_matrix
   use airlaunch_line_ends, only: line_end, end_point_mass
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
   implicit none
@@ -71,7 +81,9 @@ module airlaunch_line_cvode
     real(dp), allocatable :: v(:, :)           !< work: velocities (3, 0:N)
     real(dp), allocatable :: f(:, :)           !< work: node forces (3, 0:N)
     real(dp), allocatable :: tension(:)        !< work: segment tensions (N)
-    real(dp), allocatable :: inv_mass(:)       !< 1/(node mass + end point mass), (0:N)
+    real(dp), allocatable :: inv_mass(:)       !< 1/M(k, k): node mass (+ end point mass), (0:N)
+    real(dp), allocatable :: acc(:, :)         !< work: node accelerations (3, 0:N)
+    type(line_mass_matrix) :: mass             !< the mass matrix over the state nodes
     type(line_force_jacobian) :: jac_blocks    !< work: the force Jacobian of the last evaluation
     integer(i8) :: n_forces = 0                !< force evaluations
   contains
@@ -105,11 +117,13 @@ module airlaunch_line_cvode
 contains
 
   !> Build the system for `model` with ends `end_a` (node 0) and `end_b` (node N).
-  subroutine system_setup(self, model, end_a, end_b)
-    class(line_system), intent(inout) :: self   !< system (re-initialised)
-    type(line_model), intent(in) :: model       !< the line
-    type(line_end), intent(in) :: end_a, end_b  !< ends at node 0 and node N
+  subroutine system_setup(self, model, end_a, end_b, error)
+    class(line_system), intent(inout) :: self              !< system (re-initialised)
+    type(line_model), intent(in) :: model                  !< the line
+    type(line_end), intent(in) :: end_a, end_b             !< ends at node 0 and node N
+    type(error_type), allocatable, intent(inout) :: error  !< set if the mass matrix cannot be factored
     integer :: n
+    real(dp), allocatable :: node_mass(:)
     self%model = model
     self%ends = [end_a, end_b]
     n = model%n
@@ -117,14 +131,17 @@ contains
     if (end_a%is_kinematic()) self%first = 1
     self%last = n
     if (end_b%is_kinematic()) self%last = n - 1
-    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass)
-    allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n))
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass, self%acc)
+    allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n), self%acc(3, 0:n))
     call self%jac_blocks%allocate(n)
     self%tension = 0.0_dp
-    self%x = 0.0_dp; self%v = 0.0_dp
-    self%inv_mass = 1.0_dp/model%node_mass
-    if (end_a%kind == end_point_mass) self%inv_mass(0) = 1.0_dp/(model%node_mass(0) + end_a%mass)
-    if (end_b%kind == end_point_mass) self%inv_mass(n) = 1.0_dp/(model%node_mass(n) + end_b%mass)
+    self%x = 0.0_dp; self%v = 0.0_dp; self%acc = 0.0_dp
+    node_mass = model%node_mass
+    if (end_a%kind == end_point_mass) node_mass(0) = node_mass(0) + end_a%mass
+    if (end_b%kind == end_point_mass) node_mass(n) = node_mass(n) + end_b%mass
+    call self%mass%build(node_mass, model%p%mass_per_length*model%l0, model%mass_coupling, self%first, &
+      self%last, error)
+    self%inv_mass = 1.0_dp/self%mass%diagonal
   end subroutine system_setup
 
   !> Number of states: 6 per non-kinematic node.
@@ -171,8 +188,8 @@ contains
     end do
   end subroutine system_unpack
 
-  !> y' = f(t, y): node velocities and accelerations (Eq. (8) lumped).
-  !> No allocation except for the failure message.
+  !> y' = f(t, y): node velocities and accelerations (Eq. (8); M a = f with
+  !> the mixed mass).  No allocation except for the failure message.
   subroutine system_rhs(self, t, y, ydot, status)
     class(line_system), intent(inout) :: self   !< system
     real(dp), intent(in) :: t                   !< time [s]
@@ -195,13 +212,31 @@ contains
     if (self%last == n .and. self%ends(2)%kind == end_point_mass) self%f(:, n) = self%f(:, n) + &
       self%ends(2)%external_load(self%x(:, n), self%v(:, n), self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
+    if (self%mass%is_lumped()) then
+      do k = self%first, self%last
+        self%acc(:, k) = self%f(:, k)*self%inv_mass(k)
+      end do
+    else
+      call self%mass%accelerations(self%f, end_acceleration(self%ends(1), t), end_acceleration(self%ends(2), t), &
+        self%acc)
+    end if
     do k = self%first, self%last
       j = 6*(k - self%first)
       ydot(j+1:j+3) = self%v(:, k)
-      ydot(j+4:j+6) = self%f(:, k)*self%inv_mass(k)
+      ydot(j+4:j+6) = self%acc(:, k)
     end do
     status = rhs_ok
   end subroutine system_rhs
+
+  !> Acceleration of a kinematic end at time t (zero for the others, which are
+  !> states and not asked for) [m/s^2].
+  pure function end_acceleration(e, t) result(a)
+    type(line_end), intent(in) :: e   !< the end
+    real(dp), intent(in) :: t         !< time [s]
+    real(dp) :: a(3), x(3), v(3)
+    a = 0.0_dp
+    if (e%is_kinematic()) call e%motion(t, x, v, a)
+  end function end_acceleration
 
   !> The line has an analytic Jacobian (system_jacobian).
   logical function system_has_jacobian(self)
@@ -221,6 +256,11 @@ contains
     type(band_view), intent(inout) :: jac       !< band matrix, zeroed by CVODE
     integer, intent(out) :: status              !< rhs_ok
     integer :: k, d, j, jj, p
+    if (.not. self%mass%is_lumped()) then   ! M^-1 df/dy is full: no band Jacobian
+      self%failure = "the line's band Jacobian needs the lumped mass (mass = 'lumped')"
+      status = rhs_fatal
+      return
+    end if
     call self%force_blocks(t, y)
     do k = self%first, self%last
       j = 6*(k - self%first)
@@ -275,7 +315,23 @@ contains
     if (.not. fresh) return
     call self%force_blocks(t, y)
     call self%jac_blocks%to_node_blocks(self%inv_mass, self%first, self%last, blk)
+    blk%mass_coupled = .not. self%mass%is_lumped()
+    if (blk%mass_coupled) call mass_blocks(self%mass, self%first, self%last, blk)
   end subroutine system_node_jacobian
+
+  !> The node blocks' scaled mass coupling M(k, k + d)/M(k, k) of the state
+  !> nodes first..last (the force blocks are already over M(k, k): inv_mass).
+  pure subroutine mass_blocks(mass, first, last, blk)
+    type(line_mass_matrix), intent(in) :: mass   !< the mass matrix
+    integer, intent(in) :: first, last           !< state nodes
+    type(node_blocks), intent(inout) :: blk      !< the blocks
+    integer :: k
+    do k = first, last
+      blk%mass(-1, k - first + 1) = mass%scaled_coupling(k, -1)
+      blk%mass(0, k - first + 1) = 1.0_dp
+      blk%mass(1, k - first + 1) = mass%scaled_coupling(k, 1)
+    end do
+  end subroutine mass_blocks
 
   !> Room for the blocks of a line of n segments; nothing formed yet.
   subroutine force_jacobian_allocate(self, n)
@@ -379,8 +435,15 @@ contains
     type(error_type), allocatable, intent(inout) :: error   !< set on failure
     real(dp), allocatable :: y0(:)
     call scheme%free()
+    if (model%mass_coupling > 0.0_dp .and. .not. opts%analytic_jacobian) then
+      call fatal_error(error, "line (cvode): the mixed mass matrix needs the analytic Jacobian (its Newton " // &
+        "matrix is banded only when multiplied by the mass matrix; difference quotients over the band would " // &
+        "be wrong): use mass = 'lumped' or analytic_jacobian = .true.")
+      return
+    end if
     allocate(scheme%sys)
-    call scheme%sys%setup(model, end_a, end_b)
+    call scheme%sys%setup(model, end_a, end_b, error)
+    if (allocated(error)) return
     scheme%t = t0
     scheme%sys%x = x0
     scheme%sys%v = v0

@@ -99,6 +99,11 @@ contains
     integer :: n
     real(dp) :: h_max
     n = model%n
+    if (model%mass_coupling > 0.0_dp) then
+      call fatal_error(error, "line: mass = '" // trim(model%p%mass) // "' is not allowed with scheme = " // &
+        "'marching': the paper's explicit marching needs the lumped (diagonal) mass; use mass = 'lumped'")
+      return
+    end if
     h_max = model%stable_step()
     if (opts%dt > h_max) then
       call fatal_error(error, "line_scene: dt = " // str(opts%dt) // " s is not allowed for the marching " // &

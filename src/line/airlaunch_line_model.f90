@@ -39,6 +39,20 @@
 !> The spatial discretization is second-order accurate in l0 (central differences
 !> of the wave operator with lumped mass); the convergence test shows it.
 !>
+!> Mass matrix (`mass`).  "lumped" (the paper's, and the only one its explicit
+!> marching scheme can use): the diagonal node masses above.  "mixed": each
+!> segment's mass rho*l0 is distributed by the average of the lumped and the
+!> consistent (linear-element) mass matrices,
+!>     M_seg = rho l0 [[1/2 - beta, beta], [beta, 1/2 - beta]] (x) I3,  beta = 1/12,
+!> which keeps the node loads (weight, drag) and the total momentum of the lumped
+!> line (M's column sums are the lumped masses) but makes the dispersion of the
+!> chain's waves fourth-order: for a mode of wavenumber k,
+!>     (w l0/c)^2 = 2 (1 - cos k l0) / (1 - 2 beta (1 - cos k l0))
+!>              = (k l0)^2 + (beta - 1/12) (k l0)^4 + O((k l0)^6),
+!> so the (k l0)^4 term vanishes at beta = 1/12 (lumped: beta = 0, consistent:
+!> 1/6, both second-order).  The accelerations then solve the tridiagonal
+!> system M a = f (airlaunch_line_mass); the kinetic energy is 1/2 v^T M v.
+!>
 !> Use by an outside owner (the full simulation): the end nodes 0 and N are then
 !> kinematic, tied to bodies (node 0: rocket nose, node N: parachute).  The owner
 !> integrates nodes 1..N-1 with a_k = f_k/m_k and applies f(:,0) to the body at
@@ -75,6 +89,7 @@ module airlaunch_line_model
     logical :: air = .false.               !< aerodynamic drag of the line on
     real(dp) :: wind(3) = 0.0_dp           !< uniform air velocity, earth frame [m/s]
     real(dp) :: air_density = 0.0_dp       !< fixed air density [kg/m^3]; 0 = ISA at the altitude y
+    character(len=8) :: mass = "lumped"    !< mass matrix: "lumped" (diagonal) or "mixed" (see the header)
   end type line_params
 
   !> One discretized line (no module state: one object per line).
@@ -83,6 +98,8 @@ module airlaunch_line_model
     integer :: n = 0                         !< number of segments N
     real(dp) :: l0 = 0.0_dp                  !< unstretched segment length L/N [m]
     real(dp), allocatable :: node_mass(:)    !< lumped node masses m_k, k = 0..N [kg]
+    !> beta of the segment mass matrix (0: lumped, 1/12: mixed; see the header)
+    real(dp) :: mass_coupling = 0.0_dp
   contains
     procedure :: init => model_init
     procedure :: forces => model_forces
@@ -103,6 +120,8 @@ module airlaunch_line_model
 
   !> Segments shorter than this fraction of l0 have no defined tangent.
   real(dp), parameter :: tiny_fraction = 1.0e-12_dp
+  !> beta of the mixed mass matrix: fourth-order wave dispersion (see the header).
+  real(dp), parameter :: mixed_mass_coupling = 1.0_dp/12.0_dp
 
 contains
 
@@ -126,6 +145,8 @@ contains
     end do
     self%node_mass(0) = 0.5_dp*self%node_mass(0)
     self%node_mass(self%n) = 0.5_dp*self%node_mass(self%n)
+    self%mass_coupling = 0.0_dp
+    if (params%mass == "mixed") self%mass_coupling = mixed_mass_coupling
   end subroutine model_init
 
   !> Validate the line parameters.
@@ -162,6 +183,8 @@ contains
         "must be > 0, or 0 for the ISA density at the line's altitude")
     else if (any(p%wind /= p%wind)) then
       call fatal_error(error, "line: wind has a NaN component: must be finite [m/s]")
+    else if (p%mass /= "lumped" .and. p%mass /= "mixed") then
+      call fatal_error(error, "line: mass = '" // trim(p%mass) // "' is not allowed: use 'lumped' or 'mixed'")
     end if
   end subroutine check_params
 
@@ -425,6 +448,9 @@ contains
     do k = 1, self%n
       eps = norm2(x(:, k) - x(:, k-1))/self%l0 - 1.0_dp
       if (eps > 0.0_dp) e%elastic = e%elastic + 0.5_dp*self%p%ea*self%l0*eps**2
+      ! 1/2 v^T M v of the mixed mass: the lumped sum less beta rho l0 |dv|^2 / 2 per segment
+      if (self%mass_coupling > 0.0_dp) e%kinetic = e%kinetic - 0.5_dp*self%mass_coupling* &
+        self%p%mass_per_length*self%l0*sum((v(:, k) - v(:, k-1))**2)
     end do
   end function model_energy
 

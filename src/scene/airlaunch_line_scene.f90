@@ -261,6 +261,7 @@ contains
     real(dp) :: wind(3), air_density
     integer :: n_seg
     logical :: gravity, air
+    character(len=8) :: mass
     ! &line_scene
     character(len=16) :: a_kind, b_kind, initial_shape, scheme
     real(dp) :: a_position(3), a_velocity(3), a_amplitude(3), a_frequency, a_phase_deg, a_t_start, a_mass
@@ -269,15 +270,15 @@ contains
     integer :: max_iterations
     logical :: record_tensions
     namelist /line/ length, n_seg, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, &
-      cd_tangential, gravity, air, wind, air_density
+      cd_tangential, gravity, air, wind, air_density, mass
     namelist /line_scene/ a_kind, a_position, a_velocity, a_amplitude, a_frequency, a_phase_deg, a_t_start, &
       a_mass, a_drag_area, b_kind, b_position, b_velocity, b_amplitude, b_frequency, b_phase_deg, b_t_start, &
       b_mass, b_drag_area, initial_shape, initial_sag, scheme, dt, force_tol, max_iterations, record_tensions
-    type(nml_var), parameter :: line_vars(13) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
+    type(nml_var), parameter :: line_vars(14) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
       nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
       nml_var("settling_damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
       nml_var("cd_tangential", "real"), nml_var("gravity", "logical"), nml_var("air", "logical"), &
-      nml_var("wind", "real3"), nml_var("air_density", "real")]
+      nml_var("wind", "real3"), nml_var("air_density", "real"), nml_var("mass", "string", length=8)]
     type(nml_var), parameter :: scene_vars(25) = [nml_var("a_kind", "string"), &
       nml_var("a_position", "real3"), nml_var("a_velocity", "real3"), &
       nml_var("a_amplitude", "real3"), nml_var("a_frequency", "real"), nml_var("a_phase_deg", "real"), &
@@ -300,6 +301,7 @@ contains
     damping = d%line%damping; settling_damping = d%line%settling_damping; diameter = d%line%diameter
     cd_normal = d%line%cd_normal; cd_tangential = d%line%cd_tangential; gravity = d%line%gravity
     air = d%line%air; wind = d%line%wind; air_density = d%line%air_density
+    mass = d%line%mass
     a_kind = "fixed"; a_position = [0.0_dp, 0.0_dp, 0.0_dp]; a_velocity = 0; a_amplitude = 0
     a_frequency = 0; a_phase_deg = 0; a_t_start = 0; a_mass = 0; a_drag_area = 0
     b_kind = "free"; b_position = [length, 0.0_dp, 0.0_dp]; b_velocity = 0; b_amplitude = 0
@@ -354,6 +356,10 @@ contains
       [character(len=16) :: "straight", "sag"], error)
     call require_nonnegative(f, "line_scene", "initial_sag", initial_sag, "m", error)
     call require_choice(f, "line_scene", "scheme", scheme, [character(len=16) :: "cvode", "marching"], error)
+    call require_choice(f, "line", "mass", mass, [character(len=16) :: "lumped", "mixed"], error)
+    if (trim(scheme) == "marching" .and. trim(mass) == "mixed" .and. .not. allocated(error)) call fatal_error( &
+      error, f%path // ": &line: mass = 'mixed' is not allowed with scheme = 'marching': the paper's " // &
+      "explicit marching needs the lumped (diagonal) mass; use mass = 'lumped' (the default)")
     if (trim(scheme) == "marching") then
       call require_positive(f, "line_scene", "dt", dt, "s", error)
       call require_positive(f, "line_scene", "force_tol", force_tol, "N", error)
@@ -363,7 +369,7 @@ contains
 
     cfg%line = line_params(length=length, n_seg=n_seg, ea=ea, mass_per_length=mass_per_length, &
       damping=damping, settling_damping=settling_damping, diameter=diameter, cd_normal=cd_normal, &
-      cd_tangential=cd_tangential, gravity=gravity, air=air, wind=wind, air_density=air_density)
+      cd_tangential=cd_tangential, gravity=gravity, air=air, wind=wind, air_density=air_density, mass=mass)
     cfg%end_a = line_end(kind=end_kind_code(a_kind), position=a_position, velocity=a_velocity, &
       amplitude=a_amplitude, frequency=a_frequency, phase_deg=a_phase_deg, t_start=a_t_start, mass=a_mass, &
       drag_area=a_drag_area)

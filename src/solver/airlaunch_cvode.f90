@@ -244,7 +244,7 @@ contains
       ! and scaled at every setup) and lets the system keep valid blocks
       allocate(self%cb%blocks)
       allocate(self%cb%blocks%ax(3, 3, -1:1, int(neq)/6), self%cb%blocks%av(3, 3, -1:1, int(neq)/6), &
-        source=0.0_dp)
+        self%cb%blocks%mass(-1:1, int(neq)/6), source=0.0_dp)
       call use_node_blocks(self%ls, self%cb%blocks)
       ierr = FCVodeSetLinSysFn(self%mem, c_funloc(linsys_callback))
       if (failed(ierr, "cannot install the linear-system function", error)) return

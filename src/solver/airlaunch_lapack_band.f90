@@ -382,6 +382,12 @@ contains
 
   !> The reduced matrix S = I - gamma av - gamma^2 ax and M_vx = -gamma ax from the
   !> node blocks (the same matrices reduced_setup reads from M = I - gamma J).
+  !> With a mass matrix (b%mass_coupled) the velocity rows are multiplied by
+  !> D^-1 M (D its diagonal; ax, av are then D^-1 df/dx, D^-1 df/dv):
+  !> Newton's velocity rows -gamma M^-1 A dx + (I - gamma M^-1 B) dv = r_v
+  !> become -gamma D^-1 A dx + D^-1 (M - gamma B) dv = D^-1 M r_v, so S gains
+  !> D^-1 M - I = b%mass off the diagonal, and reduced_solve multiplies r_v by
+  !> D^-1 M.  Every block stays tridiagonal (M^-1 A itself is full).
   subroutine setup_from_blocks(c, b)
     type(band_content), intent(inout) :: c   !< s, mvx, gamma out
     type(node_blocks), intent(in) :: b       !< the Jacobian's blocks and gamma
@@ -401,6 +407,15 @@ contains
       end do
     end do
     c%s(2*kr + 1, 1:3*c%nodes) = c%s(2*kr + 1, 1:3*c%nodes) + 1.0_c_double   ! the identity: the diagonal row
+    if (.not. b%mass_coupled) return
+    do j = 1, c%nodes
+      do k = max(1, j - 1), min(c%nodes, j + 1)
+        if (k == j) cycle
+        do p = 1, 3
+          c%s(2*kr + 1 + 3*(j - k), 3*(k - 1) + p) = c%s(2*kr + 1 + 3*(j - k), 3*(k - 1) + p) + b%mass(k - j, j)
+        end do
+      end do
+    end do
   end subroutine setup_from_blocks
 
   !> x = M^-1 b through the velocity system.
@@ -413,14 +428,25 @@ contains
     real(c_double), pointer :: xd(:), bd(:)
     integer :: j, k, p, q, i0, info
     real(c_double) :: r(3)
+    logical :: coupled
     call c_f_pointer(s%content, c)
     xd => FN_VGetArrayPointer(x)
     bd => FN_VGetArrayPointer(b)
+    coupled = .false.
+    if (associated(c%blocks)) coupled = c%blocks%mass_coupled
     ! r = r_v - M_vx r_x (explicit loops: no temporaries in the solve; the three
     ! rows of a node together, p innermost along the contiguous M_vx columns)
     do j = 1, c%nodes
       i0 = 6*(j - 1)
       r = bd(i0 + 4:i0 + 6)
+      if (coupled) then   ! D^-1 M r_v (setup_from_blocks)
+        do k = max(1, j - 1), min(c%nodes, j + 1)
+          if (k == j) cycle
+          do p = 1, 3
+            r(p) = r(p) + c%blocks%mass(k - j, j)*bd(6*(k - 1) + 3 + p)
+          end do
+        end do
+      end if
       do k = max(1, j - 1), min(c%nodes, j + 1)
         do q = 1, 3
           do p = 1, 3

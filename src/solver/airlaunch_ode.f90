@@ -33,6 +33,14 @@ module airlaunch_ode
     real(dp), allocatable :: ax(:, :, :, :)   !< (3, 3, -1:1, nodes) d a_j / d x_(j+d) [1/s^2]
     real(dp), allocatable :: av(:, :, :, :)   !< (3, 3, -1:1, nodes) d a_j / d v_(j+d) [1/s]
     real(dp) :: gamma = 0.0_dp                !< of the Newton matrix I - gamma J [s]
+    !> A non-diagonal mass matrix M (the accelerations solve M a = f, f the
+    !> forces): then ax, av are the force blocks over M's diagonal, D^-1 df/dx
+    !> and D^-1 df/dv, and mass(d, j) = M(j, j + d)/M(j, j) (times I3, d = -1, 1;
+    !> 0 where j + d is not a state node) - the Newton matrix's velocity rows
+    !> scaled by D^-1 M (docs/line.md section 2).  Not coupled: M diagonal, and
+    !> ax, av are the accelerations' derivatives.
+    logical :: mass_coupled = .false.
+    real(dp), allocatable :: mass(:, :)       !< (-1:1, nodes) M(j, j + d)/M(j, j)
   end type node_blocks
 
   !> A first-order system y' = f(t, y) with optional event functions g(t, y).

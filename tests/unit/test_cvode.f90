@@ -110,6 +110,7 @@ program test_cvode
   use airlaunch_lapack_band, only: new_lapack_band_solver, new_second_order_band_solver, band_data, &
     use_node_blocks, new_position_reduced_solver, partners_ok
   use airlaunch_ode, only: node_blocks
+  use airlaunch_linalg, only: solve_general
   use testing
   implicit none
   type(oscillator), target :: osc
@@ -238,6 +239,95 @@ program test_cvode
       call FN_VDestroy(nx3)
       deallocate(blk)
     end block blocks_path
+    ! a non-diagonal (tridiagonal, symmetric positive definite) mass matrix M:
+    ! the accelerations' Jacobian is M^-1 [A, B], a full matrix, and the solver
+    ! gets D^-1 A, D^-1 B and D^-1 M's off-diagonal (D = diag M); its solution
+    ! must satisfy the full Newton system (I - gamma J) x = b with J formed
+    ! densely (M^-1 by LAPACK's dgesv), to round-off
+    mass_path: block
+      type(node_blocks), pointer :: blk
+      type(SUNMatrix), pointer :: m_unused
+      type(SUNLinearSolver), pointer :: ls_blk
+      type(N_Vector), pointer :: nx3
+      real(c_double), pointer :: x3(:)
+      real(dp) :: mm(nn, nn), minv(nn, nn), a_blk(3*nn, 3*nn), b_blk(3*nn, 3*nn), newton(n, n), off
+      integer :: d, i
+      mm = 0.0_dp
+      do j = 1, nn
+        call random_number(r)
+        mm(j, j) = 1.0_dp + r
+      end do
+      do j = 1, nn - 1
+        call random_number(r)
+        off = (0.05_dp + 0.1_dp*r)*min(mm(j, j), mm(j + 1, j + 1))
+        mm(j, j + 1) = off
+        mm(j + 1, j) = off
+      end do
+      allocate(blk)
+      allocate(blk%ax(3, 3, -1:1, nn), blk%av(3, 3, -1:1, nn), blk%mass(-1:1, nn), source=0.0_dp)
+      blk%gamma = g
+      blk%mass_coupled = .true.
+      a_blk = 0.0_dp
+      b_blk = 0.0_dp
+      do j = 1, nn
+        do d = -1, 1
+          k = j + d
+          if (k < 1 .or. k > nn) cycle
+          blk%mass(d, j) = mm(j, k)/mm(j, j)
+          do q = 1, 3
+            do p = 1, 3
+              call random_number(r)
+              a_blk(3*j-3+p, 3*k-3+q) = 50*(2*r - 1)
+              call random_number(r)
+              b_blk(3*j-3+p, 3*k-3+q) = 5*(2*r - 1)
+              blk%ax(p, q, d, j) = a_blk(3*j-3+p, 3*k-3+q)/mm(j, j)
+              blk%av(p, q, d, j) = b_blk(3*j-3+p, 3*k-3+q)/mm(j, j)
+            end do
+          end do
+        end do
+      end do
+      ! J's velocity rows: (M (x) I3)^-1 [A, B], node by node and per component
+      minv = 0.0_dp
+      do j = 1, nn
+        minv(j, j) = 1.0_dp
+      end do
+      block
+        real(dp) :: mcopy(nn, nn)
+        mcopy = mm
+        call solve_general(mcopy, minv, error, "mass matrix")
+      end block
+      call check(.not. allocated(error), "mass matrix inverted")
+      newton = 0.0_dp
+      do j = 1, nn
+        do p = 1, 3
+          newton(6*j-6+p, 6*j-6+p) = 1.0_dp
+          newton(6*j-6+p, 6*j-3+p) = -g
+          newton(6*j-3+p, 6*j-3+p) = 1.0_dp
+          do k = 1, nn
+            do q = 1, 3
+              do i = 1, nn
+                newton(6*j-3+p, 6*k-6+q) = newton(6*j-3+p, 6*k-6+q) - g*minv(j, i)*a_blk(3*i-3+p, 3*k-3+q)
+                newton(6*j-3+p, 6*k-3+q) = newton(6*j-3+p, 6*k-3+q) - g*minv(j, i)*b_blk(3*i-3+p, 3*k-3+q)
+              end do
+            end do
+          end do
+        end do
+      end do
+      m_unused => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)   ! never filled
+      ls_blk => new_second_order_band_solver(m_unused, ctx)
+      call use_node_blocks(ls_blk, blk)
+      nx3 => FN_VNew_Serial(int(n, c_long), ctx)
+      x3 => FN_VGetArrayPointer(nx3)
+      ierr = FSUNLinSolSetup(ls_blk, m_unused)
+      ierr = ierr + FSUNLinSolSolve(ls_blk, m_unused, nx3, nb, 0.0_c_double)
+      call check(ierr == 0, "mass-coupled node blocks: setup and solve succeed")
+      call check_close(maxval(abs(matmul(newton, x3) - bd)), 0.0_dp, "mass-coupled node blocks: residual of " // &
+        "the full Newton system with J = M^-1 [A, B]", abs=1e-11_dp*maxval(abs(bd)))
+      ierr = FSUNLinSolFree(ls_blk)
+      call FSUNMatDestroy(m_unused)
+      call FN_VDestroy(nx3)
+      deallocate(blk)
+    end block mass_path
     ierr = FSUNLinSolFree(ls_full)
     ierr = FSUNLinSolFree(ls_red)
     call FSUNMatDestroy(m_full)

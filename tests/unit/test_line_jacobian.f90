@@ -143,6 +143,7 @@ contains
     type(line_model) :: model
     type(line_system) :: sys
     type(band_view) :: jac
+    type(error_type), allocatable :: error
     real(dp) :: x(3, 0:n), v(3, 0:n)
     real(dp), allocatable, target :: ab(:)
     real(dp), allocatable :: y(:), yp(:), fp(:), fm(:)
@@ -151,7 +152,8 @@ contains
     call section("band Jacobian of the line system (fixed end, point mass with drag) against central differences")
     call test_line(model, x, v)
     call sys%setup(model, line_end(kind=end_fixed, position=x(:, 0)), &
-      line_end(kind=end_point_mass, mass=5.0_dp, drag_area=0.8_dp, position=x(:, n)))
+      line_end(kind=end_point_mass, mass=5.0_dp, drag_area=0.8_dp, position=x(:, n)), error)
+    call check(.not. allocated(error), "the lumped line system is built")
     ns = sys%n_state()
     call check(ns == 6*n, "states: the fixed end is not one (" // str(ns) // ")")
     allocate(y(ns), yp(ns), fp(ns), fm(ns))

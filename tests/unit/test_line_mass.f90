@@ -1,0 +1,216 @@
+!> The line's mass matrices (airlaunch_line_model, "Mass matrix"; airlaunch_line_mass).
+!>
+!> 1. Dispersion.  A taut line (pre-strain 1 %, no gravity, no air, no damping)
+!>    between two fixed ends is released from its first axial mode shape,
+!>    u_j = A sin(pi j/N).  The chain is linear (every segment stays taut) and
+!>    M and K share the sampled sines as eigenvectors, so the mid node moves
+!>    as A cos(w t) with the discrete frequency
+!>        (w l0/c)^2 = 2 (1 - cos theta) / (1 - 2 beta (1 - cos theta)),  theta = pi/N
+!>    (beta = 0 lumped, 1/12 mixed), against the continuum's w = pi c/L.  The
+!>    period is measured from the mid node's zero crossings over three periods
+!>    (CVODE BDF5 at rtol 1e-10, outputs every T/400: linear interpolation of a
+!>    crossing errs by ~(2 pi/400)^3 of a step, 1e-7 of T) and must match the
+!>    discrete formula to 1e-6 relative - the mass matrix is assembled and solved
+!>    as stated.  The continuum period error must fall with N at order 2 for the
+!>    lumped and at order 4 for the mixed mass (N = 8 -> 16: log2 ratio within
+!>    0.15 of 2 and of 4; the next terms of the expansions are (pi/N)^2 smaller,
+!>    4 % at N = 8).
+!> 2. Newton's law of the semi-discrete line.  For a line with a prescribed end
+!>    (node 0, sinusoid) and a point mass (node N), at an arbitrary state, the
+!>    accelerations of the right-hand side must satisfy M a = f, with M
+!>    assembled here from the segment matrices rho l0 [[1/2 - beta, beta],
+!>    [beta, 1/2 - beta]] (and the point mass), a_0 the prescribed end's
+!>    analytic acceleration and f the line's forces plus the point mass's
+!>    weight: to 1e-12 of the largest force (round-off of a tridiagonal solve).
+!> 3. Bad input: the mixed mass with the paper's marching scheme or with
+!>    difference-quotient Jacobians is refused with one line.
+program test_line_mass
+  use airlaunch_kinds, only: dp, g0, pi
+  use airlaunch_error, only: error_type
+  use airlaunch_strings, only: str
+  use airlaunch_line
+  use testing
+  implicit none
+  real(dp), parameter :: length = 10.0_dp, ea = 1.0e5_dp, rho = 1.0_dp, eps0 = 0.01_dp
+  real(dp), parameter :: beta_mixed = 1.0_dp/12.0_dp
+  real(dp) :: c, t_cont, err(2, 2), order
+  integer :: im, in
+  character(len=6), parameter :: masses(2) = ["lumped", "mixed "]
+  integer, parameter :: ns(2) = [8, 16]
+
+  c = sqrt(ea/rho)
+  t_cont = 2.0_dp*length/c
+  do im = 1, 2
+    call section("first axial mode of a fixed-fixed line, " // trim(masses(im)) // " mass, continuum period " // &
+      str(t_cont) // " s")
+    do in = 1, 2
+      err(in, im) = mode_period(ns(in), masses(im))/t_cont - 1.0_dp
+    end do
+    order = log(abs(err(1, im))/abs(err(2, im)))/log(2.0_dp)
+    print '(a, 2es12.4, a, f7.3)', "  relative period errors N = 8, 16:", err(:, im), "; order", order
+    call check_close(order, merge(2.0_dp, 4.0_dp, im == 1), trim(masses(im)) // " mass: order of the " // &
+      "period error in N", abs=0.15_dp)
+  end do
+  call newtons_law()
+  call refusals()
+  call finish()
+
+contains
+
+  !> Discrete period of the first mode of N segments with coupling beta [s].
+  pure real(dp) function discrete_period(n, beta) result(t)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: beta
+    real(dp) :: q, w
+    q = 1.0_dp - cos(pi/n)
+    w = c/(length/n)*sqrt(2.0_dp*q/(1.0_dp - 2.0_dp*beta*q))
+    t = 2.0_dp*pi/w
+  end function discrete_period
+
+  !> Measured period of the mid node [s]; checked against the discrete formula.
+  real(dp) function mode_period(n, mass) result(period)
+    integer, intent(in) :: n
+    character(len=*), intent(in) :: mass
+    type(line_model) :: model
+    class(line_scheme), allocatable :: scheme
+    type(line_scheme_options) :: opts
+    type(error_type), allocatable :: error
+    real(dp) :: x(3, 0:n), v(3, 0:n), t_d, dt, u_prev, u, t_prev, t_first, t_last, l0, amp
+    integer :: j, i, crossings, n_out
+    call model%init(line_params(length=length, n_seg=n, ea=ea, mass_per_length=rho, gravity=.false., &
+      air=.false., mass=mass), error)
+    call check(.not. allocated(error), "line model, N = " // str(n))
+    l0 = length/n
+    amp = 0.02_dp*eps0*length   ! peak strain change pi amp/L = 6e-4 < eps0: always taut
+    do j = 0, n
+      x(:, j) = [j*l0*(1 + eps0) + amp*sin(pi*j/n), 0.0_dp, 0.0_dp]
+    end do
+    v = 0.0_dp
+    opts%rtol = 1.0e-10_dp
+    opts%atol = 1.0e-12_dp
+    opts%max_order = 5
+    call new_line_scheme(scheme, model, line_end(kind=end_fixed, position=x(:, 0)), &
+      line_end(kind=end_fixed, position=x(:, n)), x, v, 0.0_dp, opts, error)
+    call check(.not. allocated(error), "scheme, N = " // str(n))
+    if (allocated(error)) then
+      period = 0
+      return
+    end if
+    t_d = discrete_period(n, merge(beta_mixed, 0.0_dp, mass == "mixed"))
+    dt = t_d/400
+    n_out = 1200   ! three periods
+    u_prev = amp
+    t_prev = 0.0_dp
+    crossings = 0
+    t_first = 0.0_dp
+    t_last = 0.0_dp
+    do i = 1, n_out
+      call scheme%advance(i*dt, error)
+      if (allocated(error)) exit
+      call scheme%get_state(x, v)
+      u = x(1, n/2) - (n/2)*l0*(1 + eps0)
+      if ((u_prev > 0.0_dp) .neqv. (u > 0.0_dp)) then
+        crossings = crossings + 1
+        t_last = t_prev + u_prev/(u_prev - u)*(i*dt - t_prev)
+        if (crossings == 1) t_first = t_last
+      end if
+      u_prev = u
+      t_prev = i*dt
+    end do
+    call check(.not. allocated(error) .and. crossings == 6, "N = " // str(n) // ": three periods, " // &
+      str(crossings) // " zero crossings")
+    period = 2.0_dp*(t_last - t_first)/(crossings - 1)
+    call check_close(period, t_d, "N = " // str(n) // ": measured period [s] against the discrete formula", &
+      rel=1.0e-6_dp)
+    call scheme%free()
+  end function mode_period
+
+  !> Part 2: M a = f at an arbitrary state, M assembled here.
+  subroutine newtons_law()
+    integer, parameter :: n = 6
+    real(dp), parameter :: m_end = 3.0_dp, t = 0.37_dp
+    type(line_model) :: model
+    type(line_system) :: sys
+    type(line_end) :: end_a, end_b
+    type(error_type), allocatable :: error
+    real(dp) :: x(3, 0:n), v(3, 0:n), f(3, 0:n), tension(n), mm(0:n, 0:n), acc(3, 0:n), r(3)
+    real(dp) :: xa(3), va(3), aa(3), me, worst, scale
+    real(dp), allocatable :: y(:), ydot(:)
+    integer :: j, k, st
+    call section("Newton's law of the mixed-mass line: M a = f (prescribed end, point mass, 6 segments)")
+    call model%init(line_params(length=length, n_seg=n, ea=ea, mass_per_length=rho, damping=30.0_dp, &
+      gravity=.true., air=.false., mass="mixed"), error)
+    end_a = line_end(kind=end_prescribed, position=[0.0_dp, 0.0_dp, 0.0_dp], amplitude=[0.3_dp, 0.5_dp, 0.2_dp], &
+      frequency=1.3_dp, phase_deg=20.0_dp)
+    end_b = line_end(kind=end_point_mass, mass=m_end, position=[length, 0.0_dp, 0.0_dp])
+    call sys%setup(model, end_a, end_b, error)
+    call check(.not. allocated(error), "system built")
+    call end_a%motion(t, xa, va, aa)
+    do j = 0, n
+      call random_number(r)
+      x(:, j) = [j*length*1.01_dp/n, 0.1_dp*sin(1.0_dp*j), 0.0_dp] + 0.05_dp*(r - 0.5_dp)
+      call random_number(r)
+      v(:, j) = 2.0_dp*(r - 0.5_dp)
+    end do
+    x(:, 0) = xa
+    v(:, 0) = va
+    allocate(y(sys%n_state()), ydot(sys%n_state()))
+    call sys%pack(x, v, y)
+    call sys%rhs(t, y, ydot, st)
+    call check(st == 0, "right-hand side evaluated")
+    acc(:, 0) = aa
+    do k = 1, n
+      acc(:, k) = ydot(6*(k - 1) + 4:6*(k - 1) + 6)
+    end do
+    call model%forces(x, v, f, tension, st)
+    f(2, n) = f(2, n) - m_end*g0
+    me = rho*length/n
+    mm = 0.0_dp
+    do k = 1, n   ! segment k joins nodes k - 1 and k
+      mm(k - 1, k - 1) = mm(k - 1, k - 1) + me*(0.5_dp - beta_mixed)
+      mm(k, k) = mm(k, k) + me*(0.5_dp - beta_mixed)
+      mm(k - 1, k) = mm(k - 1, k) + me*beta_mixed
+      mm(k, k - 1) = mm(k, k - 1) + me*beta_mixed
+    end do
+    mm(n, n) = mm(n, n) + m_end
+    worst = 0.0_dp
+    scale = maxval(abs(f(:, 1:n)))
+    do k = 1, n
+      worst = max(worst, maxval(abs(matmul(acc, mm(:, k)) - f(:, k))))
+    end do
+    call check_close(worst, 0.0_dp, "largest |(M a)_k - f_k| over the state nodes [N]", abs=1.0e-12_dp*scale)
+  end subroutine newtons_law
+
+  !> Part 3: the combinations the mixed mass cannot take.
+  subroutine refusals()
+    type(line_model) :: model
+    class(line_scheme), allocatable :: scheme
+    type(line_scheme_options) :: opts
+    type(error_type), allocatable :: error
+    real(dp) :: x(3, 0:4), v(3, 0:4)
+    integer :: j
+    call section("the mixed mass is refused where it cannot work")
+    call model%init(line_params(length=length, n_seg=4, ea=ea, mass_per_length=rho, mass="mixed"), error)
+    do j = 0, 4
+      x(:, j) = [j*length/4, 0.0_dp, 0.0_dp]
+    end do
+    v = 0.0_dp
+    opts%scheme = "marching"
+    opts%dt = 1.0e-5_dp
+    call new_line_scheme(scheme, model, line_end(kind=end_fixed, position=x(:, 0)), &
+      line_end(kind=end_free, position=x(:, 4)), x, v, 0.0_dp, opts, error)
+    call check(allocated(error), "marching scheme refused")
+    if (allocated(error)) call check(index(error%message, "mass = 'mixed'") > 0 .and. &
+      index(error%message, "lumped") > 0, "message names mass and the remedy: " // error%message)
+    deallocate(error)
+    opts%scheme = "cvode"
+    opts%analytic_jacobian = .false.
+    call new_line_scheme(scheme, model, line_end(kind=end_fixed, position=x(:, 0)), &
+      line_end(kind=end_free, position=x(:, 4)), x, v, 0.0_dp, opts, error)
+    call check(allocated(error), "difference-quotient Jacobian refused")
+    if (allocated(error)) call check(index(error%message, "analytic Jacobian") > 0, "message: " // error%message)
+    call model%init(line_params(length=length, n_seg=4, ea=ea, mass_per_length=rho, mass="consist"), error)
+    call check(allocated(error), "unknown mass matrix refused")
+    if (allocated(error)) call check(index(error%message, "mass = 'consist'") > 0, "message: " // error%message)
+  end subroutine refusals
+end program test_line_mass
