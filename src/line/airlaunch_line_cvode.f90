@@ -83,6 +83,7 @@ module airlaunch_line_cvode
     real(dp), allocatable :: tension(:)        !< work: segment tensions (N)
     real(dp), allocatable :: inv_mass(:)       !< 1/M(k, k): node mass (+ end point mass), (0:N)
     real(dp), allocatable :: acc(:, :)         !< work: node accelerations (3, 0:N)
+    real(dp) :: end_acc(3, 2) = 0.0_dp         !< work: kinematic ends' accelerations (node 0, node N)
     type(line_mass_matrix) :: mass             !< the mass matrix over the state nodes
     type(line_force_jacobian) :: jac_blocks    !< work: the force Jacobian of the last evaluation
     integer(i8) :: n_forces = 0                !< force evaluations
@@ -172,15 +173,15 @@ contains
   end function system_state_name
 
   !> Fill the work arrays x, v from the state y at time t (kinematic ends from
-  !> their motion).
+  !> their motion, with their accelerations in end_acc).
   subroutine system_unpack(self, t, y)
     class(line_system), intent(inout) :: self   !< system
     real(dp), intent(in) :: t                   !< time [s]
     real(dp), intent(in) :: y(:)                !< state
     integer :: k, j, n
     n = self%model%n
-    if (self%first == 1) call self%ends(1)%motion(t, self%x(:, 0), self%v(:, 0))
-    if (self%last == n - 1) call self%ends(2)%motion(t, self%x(:, n), self%v(:, n))
+    if (self%first == 1) call self%ends(1)%motion(t, self%x(:, 0), self%v(:, 0), self%end_acc(:, 1))
+    if (self%last == n - 1) call self%ends(2)%motion(t, self%x(:, n), self%v(:, n), self%end_acc(:, 2))
     do k = self%first, self%last
       j = 6*(k - self%first)
       self%x(:, k) = y(j+1:j+3)
@@ -217,8 +218,7 @@ contains
         self%acc(:, k) = self%f(:, k)*self%inv_mass(k)
       end do
     else
-      call self%mass%accelerations(self%f, end_acceleration(self%ends(1), t), end_acceleration(self%ends(2), t), &
-        self%acc)
+      call self%mass%accelerations(self%f, self%end_acc(:, 1), self%end_acc(:, 2), self%acc)
     end if
     do k = self%first, self%last
       j = 6*(k - self%first)
@@ -228,15 +228,6 @@ contains
     status = rhs_ok
   end subroutine system_rhs
 
-  !> Acceleration of a kinematic end at time t (zero for the others, which are
-  !> states and not asked for) [m/s^2].
-  pure function end_acceleration(e, t) result(a)
-    type(line_end), intent(in) :: e   !< the end
-    real(dp), intent(in) :: t         !< time [s]
-    real(dp) :: a(3), x(3), v(3)
-    a = 0.0_dp
-    if (e%is_kinematic()) call e%motion(t, x, v, a)
-  end function end_acceleration
 
   !> The line has an analytic Jacobian (system_jacobian).
   logical function system_has_jacobian(self)
