@@ -4,7 +4,7 @@ default (CVODE BDF <= 2, band) over a tolerance ladder (1-2-5 per decade, 1e-2 .
 1e-6, and 1e-7), the paper's explicit
 marching (Eqs. (12)-(17)) over a step ladder, at N = 15 ... 240 segments.
 
-    bench_workprecision_pendulum.py [--quick] [--cases undamped,material]
+    bench_workprecision_pendulum.py [--quick] [--cases undamped,material] [--mass lumped|mixed]
                                     [--figure output/workprecision_pendulum.png]
 
 The pendulum (issue 7): a 60 m line, EA 2 MN, 0.5 kg/m, fixed at one end, a 50 kg
@@ -14,8 +14,10 @@ no air.  The issue gives no axial damping; two cases are run:
   material  5 % of critical on the first axial mode of the line with its end mass
             (c_d = 2 zeta EA / w1, w1 = 23.50 rad/s, as in bench_moordyn.py):
             a real line's damping, independent of N.
+--mass: the default scheme's mass matrix (`&line mass`; lumped, the default, or
+mixed); the marching scheme and the references always lump it.
 Errors against a converged reference of each case (CVODE, N = 240, rtol = atol
-= 1e-8; its own discretization error is printed as |N 120 - N 240|):
+= 1e-8, lumped mass; its own discretization error is printed as |N 120 - N 240|):
   end mass  the largest distance of the end mass from the reference's over the
             run (outputs every 0.01 s) [m] - the error the Pareto front uses;
   tension   the relative error of the peak end tension (over the same outputs).
@@ -64,25 +66,25 @@ def stable_step(n, cd):
     return 2.0 / w * (math.sqrt(1.0 + zeta**2) - zeta)
 
 
-def namelist(n, cd, scheme, rtol, dt, out):
+def namelist(n, cd, scheme, rtol, dt, out, mass="lumped"):
     return f"""&run scene = 'line', t_end = {T_END}, output_dt = {DT_OUT}, output = '{out}',
   rtol = {rtol:.3e}, atol = {rtol:.3e}, max_steps = 0 /
 &line length = {L}, n_seg = {n}, ea = {EA}, mass_per_length = {RHO}, damping = {cd!r},
-  gravity = .true., air = .false. /
+  gravity = .true., air = .false., mass = '{mass}' /
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0,
   b_kind = 'point_mass', b_mass = {M}, b_position = {L}, 0.0, 0.0,
   scheme = '{scheme}', dt = {dt:.6e} /
 """
 
 
-def run(n, cd, scheme, rtol=DEFAULT_RTOL, dt=1e-4, repeats=3):
+def run(n, cd, scheme, rtol=DEFAULT_RTOL, dt=1e-4, repeats=3, mass="lumped"):
     """End-mass track, peak end tension, walls (process, integration), steps; None on failure
-    or after RUN_TIMEOUT."""
+    or after RUN_TIMEOUT.  `mass`: the mass matrix of a cvode run (marching: lumped)."""
     import xarray as xr
     with tempfile.TemporaryDirectory() as tmp:
         out = pathlib.Path(tmp) / "p.nc"
         nml = pathlib.Path(tmp) / "p.nml"
-        nml.write_text(namelist(n, cd, scheme, rtol, dt, out))
+        nml.write_text(namelist(n, cd, scheme, rtol, dt, out, mass if scheme == "cvode" else "lumped"))
         cmd = [str(EXE), str(nml)]
         if shutil.which("taskset"):
             cmd = ["taskset", "-c", os.environ.get("AIRLAUNCH_BENCH_CORE", "0")] + cmd
@@ -113,7 +115,7 @@ def errors(r, ref):
             abs(r["peak_tension"] - ref["peak_tension"]) / ref["peak_tension"])
 
 
-def ladder(case, cd, ns, rtols, ref):
+def ladder(case, cd, ns, rtols, ref, mass="lumped"):
     rows = []
     for n in ns:
         settings = [("cvode", rtol, None) for rtol in rtols]
@@ -122,7 +124,7 @@ def ladder(case, cd, ns, rtols, ref):
         for scheme, rtol, dt in settings:
             if scheme in over:
                 continue
-            r = run(n, cd, scheme, rtol or DEFAULT_RTOL, dt or 1e-4)
+            r = run(n, cd, scheme, rtol or DEFAULT_RTOL, dt or 1e-4, mass=mass)
             if r is None:
                 print(f"  {case:9s} {n:4d} {scheme:9s} {(rtol or dt):9.2e} failed or over {RUN_TIMEOUT:.0f} s",
                       flush=True)
@@ -197,16 +199,19 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="N = 15, 30, 60, short ladders, reference N = 120")
     ap.add_argument("--cases", default="undamped,material")
+    ap.add_argument("--mass", default="lumped", choices=["lumped", "mixed"],
+                    help="the default scheme's mass matrix (marching and references: lumped)")
     ap.add_argument("--figure", default=str(ROOT / "output" / "workprecision_pendulum.png"))
     args = ap.parse_args()
     ns = [15, 30, 60] if args.quick else [15, 30, 60, 120, 240]
     rtols = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6] if args.quick else RTOLS_125 + [1e-7]
     n_ref = 120 if args.quick else 240
-    result = {"bench": "workprecision_pendulum", "quick": args.quick, "cases": {}}
+    result = {"bench": "workprecision_pendulum", "quick": args.quick, "mass": args.mass, "cases": {}}
     all_rows = []
     for case in args.cases.split(","):
         cd = CASES[case]
-        print(f"{case}: c_d = {cd:.1f} N s; reference CVODE N = {n_ref}, rtol 1e-8 ...", flush=True)
+        print(f"{case}: c_d = {cd:.1f} N s; default scheme with the {args.mass} mass; reference CVODE N = {n_ref}, "
+              "rtol 1e-8, lumped ...", flush=True)
         ref = run(n_ref, cd, "cvode", 1e-8, repeats=1)
         coarse = run(n_ref // 2, cd, "cvode", 1e-8, repeats=1)
         if ref is None or coarse is None:
@@ -216,7 +221,7 @@ def main():
               f"|N {n_ref // 2} - N {n_ref}| = {ref_err[0]:.2e} m (end mass), {ref_err[1]:.1e} (peak tension)")
         print(f"  {'case':9s} {'N':>4s} {'scheme':9s} {'rtol|dt':>9s} {'steps':>8s} {'wall [s]':>9s} "
               f"{'integr [s]':>9s} {'end mass [m]':>10s} {'tension':>10s}")
-        rows = ladder(case, cd, ns, rtols, ref)
+        rows = ladder(case, cd, ns, rtols, ref, args.mass)
         front = set(pareto([(r["wall"], r["error_m"]) for r in rows]))
         for i, r in enumerate(rows):
             r["front"] = i in front
