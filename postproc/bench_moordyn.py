@@ -39,7 +39,8 @@ airlaunch run at least as accurate as MoorDyn's, by process wall (its start-up
 charged), the same with the start-up of a tiny run subtracted, read off
 airlaunch's work-precision front at MoorDyn's error
 (bench_workprecision.wall_at_error), and with both codes timed alike - the cost
-exponents in N, and ends with `RESULT {json}`.  --quick: N up to 60, short
+exponents in N, and ends with `RESULT {json}`.  --mass=mixed: airlaunch's ladder with
+the mixed mass matrix (`&line mass`; its references stay lumped).  --quick: N up to 60, short
 ladders, coarser references."""
 import json
 import math
@@ -67,6 +68,7 @@ RUN_TIMEOUT = 300.0                          # s, one airlaunch run
 #: equal-error rule jump by up to 10x in cost when a run missed by millimetres)
 RTOLS_125 = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6]
 SAG = 0.0   # midspan sag of the initial line, set from MoorDyn's initial profile in main()
+LINE_MASS = "lumped"   # airlaunch's `&line mass` for its ladder runs (--mass=mixed); references lumped
 
 
 def first_axial_frequency():
@@ -108,19 +110,20 @@ def moordyn_step(cd, n):
     return 0.5 * min((L / n) / C, 2.0 / lam)
 
 
-def airlaunch_run(n, rtol, cd, tmp, reps=3, timeout=RUN_TIMEOUT, t_end=T_END, tag=""):
+def airlaunch_run(n, rtol, cd, tmp, reps=3, timeout=RUN_TIMEOUT, t_end=T_END, tag="", mass=None):
     """End-mass track (n_out, 3) in airlaunch's frame (y up), wall time [s] of the
     process (best of `reps` when below 1 s), steps, and the integration's own wall
     (the program's clock: no start-up, input or netCDF output; best of the same
     runs); (None, wall, reason, None) on failure or timeout."""
     import xarray as xr
-    name = f"al{tag}_{n}_{rtol:.0e}_{cd:.0f}"
+    mass = mass or LINE_MASS
+    name = f"al{tag}_{n}_{rtol:.0e}_{cd:.0f}_{mass}"
     out = tmp / f"{name}.nc"
     nml = tmp / f"{name}.nml"
     nml.write_text(f"""&run scene = 'line', t_end = {t_end}, output_dt = {DT_OUT}, output = '{out}',
   rtol = {rtol:.1e}, atol = {rtol:.1e}, max_steps = 0 /
 &line length = {L}, n_seg = {n}, ea = {EA}, mass_per_length = {RHO}, damping = {cd!r},
-  gravity = .true., air = .false. /
+  gravity = .true., air = .false., mass = '{mass}' /
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0,
   b_kind = 'point_mass', b_mass = {M}, b_position = {L}, 0.0, 0.0,
   initial_shape = '{"sag" if SAG > 0 else "straight"}', initial_sag = {SAG},
@@ -278,7 +281,8 @@ def run_case(case, cfg, tmp, startup):
     al_ref = None
     if case != "undamped":
         n_al, r_al = cfg["al_ref_n"], cfg["al_ref_rtol"]
-        al_ref, w, st, _ = airlaunch_run(n_al, r_al, damping(case, n_al), tmp, reps=1, timeout=3600, tag="ref")
+        al_ref, w, st, _ = airlaunch_run(n_al, r_al, damping(case, n_al), tmp, reps=1, timeout=3600, tag="ref",
+                                         mass="lumped")
         if al_ref is None:
             sys.exit(f"bench moordyn: airlaunch's reference run ({case}) failed: {st}")
         refs["airlaunch"] = {"code": "airlaunch", "n": n_al, "rtol": r_al, "wall": w, "steps": st}
@@ -302,7 +306,8 @@ def run_case(case, cfg, tmp, startup):
         tr_al = {n_al: al_ref}
         for k in (2, 4):
             n = n_al // k
-            tr_al[n], _, _, _ = airlaunch_run(n, r_al, damping(case, n), tmp, reps=1, timeout=3600, tag="ref")
+            tr_al[n], _, _, _ = airlaunch_run(n, r_al, damping(case, n), tmp, reps=1, timeout=3600, tag="ref",
+                                              mass="lumped")
         conv["airlaunch"] = [{"n_fine": n, "n_coarse": n // 2, "distance": err(tr_al[n // 2], tr_al[n])}
                              for n in (n_al, n_al // 2)]
     for code, rows in conv.items():
@@ -425,7 +430,9 @@ def run_case(case, cfg, tmp, startup):
 
 
 def main():
+    global LINE_MASS
     quick = "--quick" in sys.argv
+    LINE_MASS = next((a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--mass=")), "lumped")
     cases = [a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--case=")] or \
         ["undamped", "segment", "material"]
     if quick:
@@ -448,7 +455,8 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
         SAG, _ = moordyn_run(120, 0.0, tmp, initial_sag_only=True)
-        say(f"initial line: MoorDyn's profile, midspan sag {SAG:.4f} m (used for both codes)")
+        say(f"initial line: MoorDyn's profile, midspan sag {SAG:.4f} m (used for both codes); airlaunch's "
+            f"ladder with the {LINE_MASS} mass matrix, its references lumped")
         say(f"first axial mode (fixed bar + end mass): w1 = {W1:.3f} rad/s; material c_d = "
             f"{damping('material', 1):.1f} N s")
         startup, startup_min = startup_time(tmp)
@@ -474,7 +482,7 @@ def main():
                                  f"(timed alike: {min(v['ratios_integration'], default=None)}.."
                                  f"{max(v['ratios_integration'], default=None)}, 3x met "
                                  f"{v['target_3x_met_timed_alike']})" for k, v in summary.items()))
-    say("RESULT " + json.dumps({"bench": "moordyn_pendulum", "quick": quick, "startup_s": startup,
+    say("RESULT " + json.dumps({"bench": "moordyn_pendulum", "quick": quick, "mass": LINE_MASS, "startup_s": startup,
                                 "w1": W1, "sag": SAG, "summary": summary, "cases": results}))
 
 

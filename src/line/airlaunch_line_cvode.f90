@@ -142,7 +142,7 @@ contains
     if (end_b%kind == end_point_mass) node_mass(n) = node_mass(n) + end_b%mass
     call self%mass%build(node_mass, model%p%mass_per_length*model%l0, model%mass_coupling, self%first, &
       self%last, error)
-    self%inv_mass = 1.0_dp/self%mass%diagonal
+    self%inv_mass = self%mass%inv_diagonal
   end subroutine system_setup
 
   !> Number of states: 6 per non-kinematic node.
@@ -213,13 +213,7 @@ contains
     if (self%last == n .and. self%ends(2)%kind == end_point_mass) self%f(:, n) = self%f(:, n) + &
       self%ends(2)%external_load(self%x(:, n), self%v(:, n), self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
-    if (self%mass%is_lumped()) then
-      do k = self%first, self%last
-        self%acc(:, k) = self%f(:, k)*self%inv_mass(k)
-      end do
-    else
-      call self%mass%accelerations(self%f, self%end_acc(:, 1), self%end_acc(:, 2), self%acc)
-    end if
+    call self%mass%accelerations(self%f, self%end_acc(:, 1), self%end_acc(:, 2), self%acc)
     do k = self%first, self%last
       j = 6*(k - self%first)
       ydot(j+1:j+3) = self%v(:, k)
@@ -227,7 +221,6 @@ contains
     end do
     status = rhs_ok
   end subroutine system_rhs
-
 
   !> The line has an analytic Jacobian (system_jacobian).
   logical function system_has_jacobian(self)

@@ -25,6 +25,7 @@ module airlaunch_line_mass
     integer :: last = -1                     !< last state node
     real(dp) :: coupling = 0.0_dp            !< M(k, k +- 1) = beta rho l0 [kg] (0: lumped)
     real(dp), allocatable :: diagonal(:)     !< M(k, k), k = 0..N [kg] (point-mass ends included)
+    real(dp), allocatable :: inv_diagonal(:) !< 1/M(k, k) [1/kg]
     real(dp), allocatable :: d(:), e(:)      !< dpttrf's factors of M over first..last
     real(dp), allocatable :: work(:, :)      !< right-hand sides (nodes, 3)
   contains
@@ -66,13 +67,15 @@ contains
     self%first = first
     self%last = last
     self%coupling = beta*segment_mass
-    if (allocated(self%diagonal)) deallocate(self%diagonal, self%d, self%e, self%work)
+    if (allocated(self%diagonal)) deallocate(self%diagonal, self%inv_diagonal, self%d, self%e, self%work)
     m = max(0, last - first + 1)
-    allocate(self%diagonal(0:size(node_mass) - 1), self%d(m), self%e(max(m - 1, 1)), self%work(max(m, 1), 3))
+    allocate(self%diagonal(0:size(node_mass) - 1), self%inv_diagonal(0:size(node_mass) - 1), self%d(m), &
+      self%e(max(m - 1, 1)), self%work(max(m, 1), 3))
     ! each segment moves beta rho l0 from each end's diagonal to the coupling
     self%diagonal = node_mass - 2.0_dp*self%coupling
     self%diagonal(0) = self%diagonal(0) + self%coupling
     self%diagonal(ubound(node_mass, 1)) = self%diagonal(ubound(node_mass, 1)) + self%coupling
+    self%inv_diagonal = 1.0_dp/self%diagonal
     if (self%is_lumped() .or. m == 0) return
     do k = first, last
       self%d(k - first + 1) = self%diagonal(k)
@@ -100,7 +103,7 @@ contains
     integer :: k, m, info
     if (self%is_lumped()) then
       do k = self%first, self%last
-        a(:, k) = f(:, k)/self%diagonal(k)
+        a(:, k) = f(:, k)*self%inv_diagonal(k)
       end do
       return
     end if
