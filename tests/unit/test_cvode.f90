@@ -204,10 +204,7 @@ program test_cvode
     ! (CVODE's linear-system hook): ax = -M_vx/gamma, av = (I - M_vv)/gamma
     blocks_path: block
       type(node_blocks), pointer :: blk
-      type(SUNMatrix), pointer :: m_unused
-      type(SUNLinearSolver), pointer :: ls_blk
-      type(N_Vector), pointer :: nx3
-      real(c_double), pointer :: x3(:)
+      real(dp) :: x3(n)
       integer :: d
       allocate(blk)
       allocate(blk%ax(3, 3, -1:1, nn), blk%av(3, 3, -1:1, nn), source=0.0_dp)
@@ -224,19 +221,10 @@ program test_cvode
           end do
         end do
       end do
-      m_unused => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)   ! never filled
-      ls_blk => new_second_order_band_solver(m_unused, ctx)
-      call use_node_blocks(ls_blk, blk)
-      nx3 => FN_VNew_Serial(int(n, c_long), ctx)
-      x3 => FN_VGetArrayPointer(nx3)
-      ierr = FSUNLinSolSetup(ls_blk, m_unused)
-      ierr = ierr + FSUNLinSolSolve(ls_blk, m_unused, nx3, nb, 0.0_c_double)
+      call solve_from_blocks(blk, n, ctx, nb, x3, ierr)
       call check(ierr == 0, "node blocks: setup and solve succeed")
       call check_close(maxval(abs(x1 - x3)), 0.0_dp, "node blocks: the full band LU's solution", &
         abs=1e-12_dp*maxval(abs(x1)))
-      ierr = FSUNLinSolFree(ls_blk)
-      call FSUNMatDestroy(m_unused)
-      call FN_VDestroy(nx3)
       deallocate(blk)
     end block blocks_path
     ! a non-diagonal (tridiagonal, symmetric positive definite) mass matrix M:
@@ -246,10 +234,7 @@ program test_cvode
     ! densely (M^-1 by LAPACK's dgesv), to round-off
     mass_path: block
       type(node_blocks), pointer :: blk
-      type(SUNMatrix), pointer :: m_unused
-      type(SUNLinearSolver), pointer :: ls_blk
-      type(N_Vector), pointer :: nx3
-      real(c_double), pointer :: x3(:)
+      real(dp) :: x3(n)
       real(dp) :: mm(nn, nn), minv(nn, nn), a_blk(3*nn, 3*nn), b_blk(3*nn, 3*nn), newton(n, n), off
       integer :: d, i
       mm = 0.0_dp
@@ -313,19 +298,10 @@ program test_cvode
           end do
         end do
       end do
-      m_unused => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)   ! never filled
-      ls_blk => new_second_order_band_solver(m_unused, ctx)
-      call use_node_blocks(ls_blk, blk)
-      nx3 => FN_VNew_Serial(int(n, c_long), ctx)
-      x3 => FN_VGetArrayPointer(nx3)
-      ierr = FSUNLinSolSetup(ls_blk, m_unused)
-      ierr = ierr + FSUNLinSolSolve(ls_blk, m_unused, nx3, nb, 0.0_c_double)
+      call solve_from_blocks(blk, n, ctx, nb, x3, ierr)
       call check(ierr == 0, "mass-coupled node blocks: setup and solve succeed")
       call check_close(maxval(abs(matmul(newton, x3) - bd)), 0.0_dp, "mass-coupled node blocks: residual of " // &
         "the full Newton system with J = M^-1 [A, B]", abs=1e-11_dp*maxval(abs(bd)))
-      ierr = FSUNLinSolFree(ls_blk)
-      call FSUNMatDestroy(m_unused)
-      call FN_VDestroy(nx3)
       deallocate(blk)
     end block mass_path
     ierr = FSUNLinSolFree(ls_full)
@@ -537,6 +513,33 @@ program test_cvode
   call solver%free()
   call finish()
 contains
+
+  !> x = M^-1 b by the velocity-reduced solver fed the node blocks `blk` (CVODE's
+  !> linear-system hook: its band matrix is never filled); ierr: the sum of the
+  !> SUNDIALS return codes.
+  subroutine solve_from_blocks(blk, n, ctx, nb, x, ierr)
+    type(node_blocks), pointer, intent(in) :: blk
+    integer, intent(in) :: n
+    type(c_ptr), intent(in) :: ctx
+    type(N_Vector), intent(inout) :: nb
+    real(dp), intent(out) :: x(n)
+    integer, intent(out) :: ierr
+    type(SUNMatrix), pointer :: m_unused
+    type(SUNLinearSolver), pointer :: ls_blk
+    type(N_Vector), pointer :: nx
+    real(c_double), pointer :: xd(:)
+    m_unused => FSUNBandMatrix(int(n, c_long), 8_c_long, 11_c_long, ctx)
+    ls_blk => new_second_order_band_solver(m_unused, ctx)
+    call use_node_blocks(ls_blk, blk)
+    nx => FN_VNew_Serial(int(n, c_long), ctx)
+    xd => FN_VGetArrayPointer(nx)
+    ierr = FSUNLinSolSetup(ls_blk, m_unused)
+    ierr = ierr + FSUNLinSolSolve(ls_blk, m_unused, nx, nb, 0.0_c_double)
+    x = xd
+    ierr = ierr + FSUNLinSolFree(ls_blk)
+    call FSUNMatDestroy(m_unused)
+    call FN_VDestroy(nx)
+  end subroutine solve_from_blocks
   !> The band (mu above, ml below the diagonal) of the square `dense` into m.
   subroutine fill_band(m, dense, mu, ml)
     type(SUNMatrix), intent(inout) :: m
