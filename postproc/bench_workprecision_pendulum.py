@@ -165,7 +165,7 @@ def speedups(rows):
     return out
 
 
-def figure(all_rows, path):
+def figure(all_rows, path, mass="lumped"):
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -185,7 +185,7 @@ def figure(all_rows, path):
         dflt = [(r["wall"], r["error_m"]) for r in rows if r["scheme"] == "cvode" and r["rtol"] == DEFAULT_RTOL]
         if dflt:
             ax.loglog(*zip(*dflt), "k*", ms=12, label="default rtol 1e-5")
-        ax.set_title(f"cable pendulum, {case}")
+        ax.set_title(f"cable pendulum, {case}" + (f" (default scheme: {mass} mass)" if mass != "lumped" else ""))
         ax.set_xlabel("wall time per run [s] (one core, whole process)")
         ax.set_ylabel("end-mass position error [m]")
         ax.grid(True, which="both", alpha=0.3)
@@ -251,7 +251,7 @@ def main():
             "speedups_any_n_interpolated": [s["any_n"]["speedup_interpolated"] for s in sp if s["any_n"]],
             "runs": [{k: (float(f"{v:.4g}") if isinstance(v, float) else v) for k, v in r.items()} for r in rows]}
         all_rows += rows
-    figure(all_rows, args.figure)
+    figure(all_rows, args.figure, args.mass)
     print("RESULT " + json.dumps(result))
 
 
