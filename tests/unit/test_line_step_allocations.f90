@@ -4,7 +4,8 @@
 !> setup and solve).
 !>
 !> Issue 7's cable pendulum (60 m, EA 2 MN, 0.5 kg/m, 50 kg end mass, released
-!> horizontal; N = 20, with and without air) is advanced
+!> horizontal; N = 20, with and without air, and with the mixed mass matrix:
+!> its tridiagonal solve in every right-hand side) is advanced
 !> by the default scheme to t = 0.5 s (set-up and first Jacobians), the process's
 !> heap allocations are counted (tests/unit/malloc_counter.c replaces malloc,
 !> calloc and realloc), the line advanced to t = 2 s (hundreds of steps, each
@@ -23,14 +24,16 @@ program test_line_step_allocations
 
   call check_counter_sees_allocation()
 
-  call steps_allocate_nothing(.false.)
-  call steps_allocate_nothing(.true.)
+  call steps_allocate_nothing(.false., "lumped")
+  call steps_allocate_nothing(.true., "lumped")
+  call steps_allocate_nothing(.true., "mixed")
   call finish()
 
 contains
 
-  subroutine steps_allocate_nothing(air)
+  subroutine steps_allocate_nothing(air, mass)
     logical, intent(in) :: air                      !< drag on (wind 30 m/s across the line)
+    character(len=*), intent(in) :: mass            !< mass matrix
     integer, parameter :: n = 20
     real(dp), parameter :: length = 60.0_dp
     type(line_model) :: model
@@ -42,9 +45,10 @@ contains
     integer(c_int64_t) :: count0, count1
     integer :: k
 
-    call section("pendulum N = " // str(n) // merge(", air   ", ", no air", air))
+    call section("pendulum N = " // str(n) // merge(", air   ", ", no air", air) // ", " // mass // " mass")
     call model%init(line_params(length=length, n_seg=n, ea=2.0e6_dp, mass_per_length=0.5_dp, damping=0.0_dp, &
-      gravity=.true., air=air, air_density=merge(1.2_dp, 0.0_dp, air), wind=[0.0_dp, 0.0_dp, 30.0_dp]), error)
+      gravity=.true., air=air, air_density=merge(1.2_dp, 0.0_dp, air), wind=[0.0_dp, 0.0_dp, 30.0_dp], &
+      mass=mass), error)
     call check(.not. allocated(error), "line model")
     if (allocated(error)) return
     do k = 0, n
