@@ -247,6 +247,32 @@ def _count_values(v):
     return n, bad
 
 
+def _has_null_value(v):
+    """A null value in the value text v (one separator after the last value
+    already dropped), as the Fortran reader's has_null_value: a comma with no
+    value before it, a trailing comma, or a repeat count without a value;
+    quotes respected."""
+    seen, quote, i = False, "", 0
+    while i < len(v):
+        c = v[i]
+        if quote:
+            if c == quote:
+                quote = ""
+        elif c in "'\"":
+            quote, seen = c, True
+        elif c == ",":
+            if not seen:
+                return True
+            seen = False
+        elif c == "*":
+            if i + 1 == len(v) or v[i + 1] in ", ":
+                return True
+        elif c != " ":
+            seen = True
+        i += 1
+    return not seen
+
+
 def _int_fits(text):
     """An integer literal that fits a default (32-bit) integer."""
     digits = text.lstrip("+-").lstrip("0")
@@ -262,6 +288,13 @@ def _check_form(path, item, kind, length, encoding):
     group, name, idx, line, v = item
     where = f"{path}:{line}: &{group}: "
     shown = shown_text(v)
+    if not v.strip():
+        raise DefinitionError(f"{where}'{name}{idx}' has no value (a namelist read would keep its default "
+                              "silently): give a value, or leave the variable out")
+    if _has_null_value(v):
+        raise DefinitionError(f"{where}'{name}{idx}' = {shown} is not allowed: it has a null value (nothing "
+                              "between separators, or a repeat count without a value), which a namelist read "
+                              "skips, keeping the default silently; give every value")
     if kind in ("real_list", "integer_list"):
         n, bad = _count_values(v)
         what = "a list of real numbers" if kind == "real_list" else "a list of integers"

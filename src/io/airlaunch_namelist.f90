@@ -433,13 +433,25 @@ contains
     !> - lists: no longer than the reader's array ("Cannot match namelist object
     !>   name" otherwise);
     !> - a whole 3-vector: three values (Fortran's read would keep the old value
-    !>   of a missing component, or stop at an extra one).
+    !>   of a missing component, or stop at an extra one);
+    !> - no null value (`t_end = ,`, `1.0,,2.0`, `2*`): Fortran's read keeps the
+    !>   variable's default for it, silently.
     subroutine check_form(item, var)
       type(nml_assignment), intent(in) :: item
       type(nml_var), intent(in) :: var
       integer :: n
       character(len=:), allocatable :: v
       v = item%value
+      if (len_trim(v) == 0) then
+        call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' has no value (a " // &
+          "namelist read would keep its default silently): give a value, or leave the variable out")
+        return
+      else if (has_null_value(v)) then
+        call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // v // &
+          " is not allowed: it has a null value (nothing between separators, or a repeat count without a " // &
+          "value), which a namelist read skips, keeping the default silently; give every value")
+        return
+      end if
       select case (var%kind)
       case ("real", "real_list", "real3")
         if (.not. all_finite(v)) then
@@ -738,6 +750,43 @@ contains
       scan(v, "0123456789") > 0
   end function is_number
 
+
+  !> True if the value text v (the scanner has dropped one separator after the
+  !> last value) has a null value: no value at all, a comma with no value
+  !> before it (`, 1.0`, `1.0,,2.0`, a trailing `1.0,` after the dropped one),
+  !> or a repeat count without a value (`2*`).  Quotes are respected.
+  pure logical function has_null_value(v) result(null)
+    character(len=*), intent(in) :: v
+    integer :: i
+    logical :: in_quote, seen_value
+    character :: q
+    null = .true.
+    in_quote = .false.
+    seen_value = .false.   ! a value since the last comma
+    q = " "
+    do i = 1, len(v)
+      if (in_quote) then
+        if (v(i:i) == q) in_quote = .false.
+        cycle
+      end if
+      select case (v(i:i))
+      case ("'", '"')
+        in_quote = .true.
+        q = v(i:i)
+        seen_value = .true.
+      case (",")
+        if (.not. seen_value) return
+        seen_value = .false.
+      case (" ")
+      case ("*")
+        if (i == len(v)) return
+        if (v(i+1:i+1) == "," .or. v(i+1:i+1) == " ") return
+      case default
+        seen_value = .true.
+      end select
+    end do
+    null = .not. seen_value
+  end function has_null_value
 
   !> Bounds first:last of the next item of the list v at or after position pos
   !> (blanks and commas separate items); first = 0 when there is none.

@@ -294,3 +294,25 @@ def test_a_run_failing_before_its_first_record_leaves_no_old_file(airlaunch_exe,
     assert "airlaunch: no output written (the run failed before its first record)" in res.stderr
     assert "output so far" not in res.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize("value,fragment", [
+    (",", "'t_end' has no value (a namelist read would keep its default silently)"),
+    ("1.0,,", "'t_end' = 1.0, is not allowed: it has a null value"),
+    (", 1.0", "'t_end' = , 1.0 is not allowed: it has a null value"),
+    ("2*", "'t_end' = 2* is not allowed: it has a null value"),
+])
+def test_a_null_value_is_an_input_error(airlaunch_exe, tmp_path, value, fragment):
+    """Fortran's namelist read skips a null value (`t_end = ,`, `1.0,,`, `2*`) and
+    keeps the variable's default without a word (tenth session: `t_end = ,` ran the
+    scene's default end time); each is one line naming the variable. One separator after the
+    last value is not a null value: `t_end = 0.5,` runs (0.5 s)."""
+    out = tmp_path / "drop.nc"
+    text = f"&run scene = 'drop', output_dt = 0.05, output = '{out}'\n  t_end = VALUE\n/\n&store mass = 28000.0 /\n"
+    nml = write(tmp_path / "null.nml", text.replace("VALUE", value))
+    assert_input_error(run_airlaunch(airlaunch_exe, nml), fragment, out)
+    nml.write_text(text.replace("VALUE", "0.5,"))
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert float(ds["time"].values[-1]) == pytest.approx(0.5)

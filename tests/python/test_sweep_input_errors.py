@@ -437,3 +437,29 @@ def test_unquoted_string_and_control_character(tmp_path):
     d = definition(tmp_path, name="vt.nml", text=lambda t: t.replace("name = 'small'", "name = \v'small'"))
     assert_error(table(tmp_path, d), "&sweep: variable 'name' = \\x0b'small' is not a quoted string",
                  tmp_path=tmp_path)
+
+
+@pytest.mark.parametrize("value,words", [
+    (",", ("&sweep", "'n_cases' has no value")),
+    ("6,,", ("&sweep", "'n_cases' = 6, is not allowed: it has a null value")),
+    ("2*", ("&sweep", "'n_cases' = 2* is not allowed: it has a null value")),
+])
+def test_null_value_in_the_definition(tmp_path, value, words):
+    """A null value (`n_cases = ,`, `6,,`, `2*`) is skipped by a namelist read,
+    which keeps the default without a word (tenth session); both steps refuse it
+    with one line."""
+    d = definition(tmp_path, text=lambda t: t.replace("  n_cases = 6\n", f"  n_cases = {value}\n"))
+    assert_error(table(tmp_path, d), *words, tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+def test_null_fixed_value_is_refused_by_the_check(tmp_path):
+    """`&fixed value = ','` puts a null value into every case's namelist: the check
+    step names it (the table step does not read the base scenario's variables)."""
+    d = definition(tmp_path, fixed="&fixed name = 'run%max_steps', value = ',' /")
+    if not SWEEP_EXE.exists():
+        pytest.skip("airlaunch-sweep not built")
+    res = run_sweep(d, tmp_path, None, "--check")
+    assert res.returncode == 2, res.stdout + res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "&run: 'max_steps' has no value" in lines[0], res.stderr
