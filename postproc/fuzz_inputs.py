@@ -10,7 +10,9 @@ project's rule for bad input and numerical failure (README, docs/input.md):
   and names the time (`t = `), the output so far (if any) holds no NaN and has
   `status = failed`;
 - anything else -- a signal, a Fortran runtime error, a multi-line input error,
-  a run longer than the time limit -- is a finding.
+  a run longer than the time limit -- is a finding; and so is a null value
+  (`,` or `2*`, which a namelist read skips, keeping the default) that does not
+  give an input error.
 
 Usage: scripts/fuzz [--files input/a.nml,...] [--values 0.0,-1.0,...] [--jobs 2]
 [--timeout 600] [--quick].  Prints one line per finding, a table per file and a
@@ -34,7 +36,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXE = pathlib.Path(os.environ.get("AIRLAUNCH_EXE", ROOT / "build" / "release" / "bin" / "airlaunch"))
 FILES = ["airlaunch_paper", "airlaunch_gravity_drop", "drop_demo", "line_pendulum", "line_catenary",
          "line_parachute"]
-VALUES = ["0.0", "-1.0", "1.0e30", "1e-30", "nan", "-inf", "1.0, 2.0", "'abc'", ".true."]
+VALUES = ["0.0", "-1.0", "1.0e30", "1e-30", "nan", "-inf", "1.0, 2.0", "'abc'", ".true.", ",", "2*"]
+#: values a namelist read skips (keeping the default): each must be an input error
+NULL_VALUES = (",", "2*")
 QUICK_VALUES = ["-1.0", "1.0e30", "nan"]
 ASSIGNMENT = re.compile(r"^(\s*)([a-z_][a-z_0-9]*)(\s*=\s*)([^!]*?)(\s*(!.*)?)$", re.I)
 
@@ -93,6 +97,8 @@ def run_one(job):
     err = res.stderr.strip().splitlines()
     first = err[0] if err else ""
     try:
+        if value in NULL_VALUES and res.returncode != 2:
+            return base, name, value, "finding", f"null value not refused: exit {res.returncode}", wall
         if res.returncode == 0:
             ok, why = output_ok(out, failed=False)
             return base, name, value, ("completed" if ok else "finding"), why, wall
