@@ -448,7 +448,7 @@ contains
     if (run%trajectory) call write_output(scene, run%output, echo, run_error, error)
     i_max = maxloc(scene%end_tension(:, 1:m))
     summary = "line: " // str(cfg%line%length) // " m, " // str(cfg%line%n_seg) // " segments, scheme " // &
-      trim(cfg%integration%scheme) // nl // &
+      trim(cfg%integration%scheme) // ", " // trim(cfg%line%mass) // " mass" // nl // &
       "end of run at t = " // str(scene%time(m)) // " s (" // merge("completed", "failed   ", scene%completed) // &
       "), " // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
@@ -537,6 +537,7 @@ contains
       "deformation velocity V_eps (earth frame), Eq. (25)", error)
     call write_run_metadata(w, "line", "airlaunch: standalone flexible line", echo, error)
     call w%add_text_att("/", "scheme", trim(scene%cfg%integration%scheme), error)
+    call w%add_text_att("/", "mass_matrix", trim(scene%cfg%line%mass), error)
     call w%add_real_att("/", "wall_time_s", scene%wall_time, error)
     call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
     call w%add_text_att("/", "status", merge("completed", "failed   ", scene%completed), error)

@@ -16,6 +16,8 @@ def test_line_examples_run(airlaunch_exe, tmp_path, name):
     assert res.returncode == 0, res.stderr
     with xr.open_dataset(out) as ds:
         assert ds.attrs["scene"] == "line"
+        # the towed parachute line takes the mixed mass matrix (&line mass), the others the default
+        assert ds.attrs["mass_matrix"] == ("mixed" if name == "line_parachute" else "lumped")
         for v in list(ds.data_vars) + list(ds.coords):
             assert ds[v].attrs.get("units"), f"{v} has no units"
         assert not np.isnan(ds["line_node_position"].values).any()
