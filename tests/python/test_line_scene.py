@@ -32,15 +32,17 @@ def test_line_examples_run(airlaunch_exe, tmp_path, name):
             assert 0.0 <= ds.attrs["max_energy_rise_J"] <= 1e-6 * scale
 
 
-def pendulum_nml(tmp_path, tag, n, rtol, damping=0.0, ea=2.0e6, rho=0.5, mass=50.0, t_end=6.0):
+def pendulum_nml(tmp_path, tag, n, rtol, damping=0.0, ea=2.0e6, rho=0.5, mass=50.0, t_end=6.0,
+                 mass_matrix="lumped"):
     """Issue 7's cable pendulum (60 m, fixed end, end mass, released horizontal from the
-    straight line, no air; by default EA 2 MN, 0.5 kg/m, 50 kg, 6 s): (namelist, output)."""
+    straight line, no air; by default EA 2 MN, 0.5 kg/m, 50 kg, 6 s, the default lumped
+    mass matrix): (namelist, output)."""
     out = tmp_path / f"{tag}.nc"
     nml = tmp_path / f"{tag}.nml"
     nml.write_text(f"""&run scene = 'line', t_end = {t_end}, output_dt = 0.01, output = '{out}',
   rtol = {rtol:.1e}, atol = {rtol:.1e} /
 &line length = 60.0, n_seg = {n}, ea = {ea}, mass_per_length = {rho}, damping = {damping},
-  gravity = .true., air = .false. /
+  gravity = .true., air = .false., mass = '{mass_matrix}' /
 &line_scene a_kind = 'fixed', b_kind = 'point_mass', b_mass = {mass}, b_position = 60.0, 0.0, 0.0,
   record_tensions = .true. /
 """)
@@ -94,10 +96,12 @@ LINE_STRESS = {
 }
 
 
+@pytest.mark.parametrize("mass_matrix", ["lumped", "mixed"])
 @pytest.mark.parametrize("name", list(LINE_STRESS))
-def test_line_stress(airlaunch_exe, tmp_path, name):
+def test_line_stress(airlaunch_exe, tmp_path, name, mass_matrix):
     n, ea, rho, mass, rtol, t_end = LINE_STRESS[name]
-    nml, out = pendulum_nml(tmp_path, "s", n, rtol, ea=ea, rho=rho, mass=mass, t_end=t_end)
+    nml, out = pendulum_nml(tmp_path, "s", n, rtol, ea=ea, rho=rho, mass=mass, t_end=t_end,
+                            mass_matrix=mass_matrix)
     res = run_airlaunch(airlaunch_exe, nml)
     # success with the invariants checked, or a numerical failure that names time and quantity
     assert res.returncode in (0, 3), f"{name}: status {res.returncode}: {res.stderr[-500:]}"
