@@ -108,6 +108,7 @@ contains
       return
     end if
     m = self%last - self%first + 1
+    if (m < 1) return   ! one segment between two kinematic ends: no state node
     do k = self%first, self%last
       self%work(k - self%first + 1, :) = f(:, k)
     end do

@@ -16,12 +16,16 @@
 !>    0.15 of 2 and of 4; the next terms of the expansions are (pi/N)^2 smaller,
 !>    4 % at N = 8).
 !> 2. Newton's law of the semi-discrete line.  For a line with a prescribed end
-!>    (node 0, sinusoid) and a point mass (node N), at an arbitrary state, the
+!>    (sinusoid) at node 0 and a point mass at node N, and the other way round,
+!>    at an arbitrary state, the
 !>    accelerations of the right-hand side must satisfy M a = f, with M
 !>    assembled here from the segment matrices rho l0 [[1/2 - beta, beta],
 !>    [beta, 1/2 - beta]] (and the point mass), a_0 the prescribed end's
 !>    analytic acceleration and f the line's forces plus the point mass's
 !>    weight: to 1e-12 of the largest force (round-off of a tridiagonal solve).
+!>    And the node blocks handed to the Newton solve: D^-1 M (D = diag M) times
+!>    the central-difference Jacobian of the right-hand side equals the blocks,
+!>    and the blocks' mass coupling is M(j, j+1)/M(j, j) (newton_blocks).
 !> 3. Bad input: the mixed mass with the paper's marching scheme or with
 !>    difference-quotient Jacobians is refused with one line.
 program test_line_mass
@@ -29,6 +33,7 @@ program test_line_mass
   use airlaunch_error, only: error_type
   use airlaunch_strings, only: str
   use airlaunch_line
+  use airlaunch_ode, only: node_blocks
   use testing
   implicit none
   real(dp), parameter :: length = 10.0_dp, ea = 1.0e5_dp, rho = 1.0_dp, eps0 = 0.01_dp
@@ -51,7 +56,8 @@ program test_line_mass
     call check_close(order, merge(2.0_dp, 4.0_dp, im == 1), trim(masses(im)) // " mass: order of the " // &
       "period error in N", abs=0.15_dp)
   end do
-  call newtons_law()
+  call newtons_law(0)
+  call newtons_law(6)
   call refusals()
   call finish()
 
@@ -125,45 +131,52 @@ contains
     call scheme%free()
   end function mode_period
 
-  !> Part 2: M a = f at an arbitrary state, M assembled here.
-  subroutine newtons_law()
+  !> Part 2: M a = f at an arbitrary state, M assembled here, with the prescribed
+  !> end at node `moving` (0 or N) and the point mass at the other; and the node
+  !> blocks of the Newton matrix against central differences of the right-hand side.
+  subroutine newtons_law(moving)
+    integer, intent(in) :: moving
     integer, parameter :: n = 6
     real(dp), parameter :: m_end = 3.0_dp, t = 0.37_dp
     type(line_model) :: model
     type(line_system) :: sys
-    type(line_end) :: end_a, end_b
+    type(line_end) :: ends(2)
     type(error_type), allocatable :: error
     real(dp) :: x(3, 0:n), v(3, 0:n), f(3, 0:n), tension(n), mm(0:n, 0:n), acc(3, 0:n), r(3)
-    real(dp) :: xa(3), va(3), aa(3), me, worst, scale
+    real(dp) :: xe(3), ve(3), ae(3), me, worst, scale
     real(dp), allocatable :: y(:), ydot(:)
-    integer :: j, k, st
-    call section("Newton's law of the mixed-mass line: M a = f (prescribed end, point mass, 6 segments)")
+    integer :: j, k, st, fixed_node, mass_node, first
+    fixed_node = moving
+    mass_node = n - moving
+    call section("Newton's law of the mixed-mass line: M a = f (prescribed end at node " // str(fixed_node) // &
+      ", point mass at node " // str(mass_node) // ", 6 segments)")
     call model%init(line_params(length=length, n_seg=n, ea=ea, mass_per_length=rho, damping=30.0_dp, &
       gravity=.true., air=.false., mass="mixed"), error)
-    end_a = line_end(kind=end_prescribed, position=[0.0_dp, 0.0_dp, 0.0_dp], amplitude=[0.3_dp, 0.5_dp, 0.2_dp], &
-      frequency=1.3_dp, phase_deg=20.0_dp)
-    end_b = line_end(kind=end_point_mass, mass=m_end, position=[length, 0.0_dp, 0.0_dp])
-    call sys%setup(model, end_a, end_b, error)
+    ends(1 + fixed_node/n) = line_end(kind=end_prescribed, position=[fixed_node*length/n, 0.0_dp, 0.0_dp], &
+      amplitude=[0.3_dp, 0.5_dp, 0.2_dp], frequency=1.3_dp, phase_deg=20.0_dp)
+    ends(1 + mass_node/n) = line_end(kind=end_point_mass, mass=m_end, position=[mass_node*length/n, 0.0_dp, 0.0_dp])
+    call sys%setup(model, ends(1), ends(2), error)
     call check(.not. allocated(error), "system built")
-    call end_a%motion(t, xa, va, aa)
+    call ends(1 + fixed_node/n)%motion(t, xe, ve, ae)
     do j = 0, n
       call random_number(r)
       x(:, j) = [j*length*1.01_dp/n, 0.1_dp*sin(1.0_dp*j), 0.0_dp] + 0.05_dp*(r - 0.5_dp)
       call random_number(r)
       v(:, j) = 2.0_dp*(r - 0.5_dp)
     end do
-    x(:, 0) = xa
-    v(:, 0) = va
+    x(:, fixed_node) = xe
+    v(:, fixed_node) = ve
     allocate(y(sys%n_state()), ydot(sys%n_state()))
     call sys%pack(x, v, y)
     call sys%rhs(t, y, ydot, st)
     call check(st == 0, "right-hand side evaluated")
-    acc(:, 0) = aa
-    do k = 1, n
-      acc(:, k) = ydot(6*(k - 1) + 4:6*(k - 1) + 6)
+    first = merge(1, 0, fixed_node == 0)
+    acc(:, fixed_node) = ae
+    do k = first, first + n - 1
+      acc(:, k) = ydot(6*(k - first) + 4:6*(k - first) + 6)
     end do
     call model%forces(x, v, f, tension, st)
-    f(2, n) = f(2, n) - m_end*g0
+    f(2, mass_node) = f(2, mass_node) - m_end*g0
     me = rho*length/n
     mm = 0.0_dp
     do k = 1, n   ! segment k joins nodes k - 1 and k
@@ -172,14 +185,80 @@ contains
       mm(k - 1, k) = mm(k - 1, k) + me*beta_mixed
       mm(k, k - 1) = mm(k, k - 1) + me*beta_mixed
     end do
-    mm(n, n) = mm(n, n) + m_end
+    mm(mass_node, mass_node) = mm(mass_node, mass_node) + m_end
     worst = 0.0_dp
-    scale = maxval(abs(f(:, 1:n)))
-    do k = 1, n
+    scale = maxval(abs(f))
+    do k = first, first + n - 1
       worst = max(worst, maxval(abs(matmul(acc, mm(:, k)) - f(:, k))))
     end do
     call check_close(worst, 0.0_dp, "largest |(M a)_k - f_k| over the state nodes [N]", abs=1.0e-12_dp*scale)
+    call newton_blocks(sys, t, y, mm, first)
   end subroutine newtons_law
+
+  !> The node blocks the system hands the velocity-reduced Newton solve: for
+  !> each state node j, D^-1 M times the central-difference Jacobian of the
+  !> accelerations (a full matrix: M^-1 df/dy) must be block tridiagonal and
+  !> equal [ax, av] of the blocks, and blk%mass(d, j) = M(j, j + d)/M(j, j) -
+  !> with M assembled here (mm, nodes 0..N) and D its diagonal.  Tolerance 1e-7
+  !> of the largest entry: the differences' O(h^2) truncation and round-off (the
+  !> line's own Jacobian test reaches 1e-10 on the forces).
+  subroutine newton_blocks(sys, t, y, mm, first)
+    type(line_system), intent(inout) :: sys
+    real(dp), intent(in) :: t, y(:), mm(0:, 0:)
+    integer, intent(in) :: first
+    type(node_blocks) :: blk
+    real(dp), allocatable :: jac(:, :), yp(:), fp(:), fm(:), ydot(:)
+    real(dp) :: h, big, err, want, got, err_mass
+    integer :: ns, nodes, i, j, k, p, q, d, st, kj
+    logical :: fresh
+    ns = size(y)
+    nodes = ns/6
+    allocate(jac(ns, ns), yp(ns), fp(ns), fm(ns), ydot(ns))
+    do i = 1, ns
+      h = 1.0e-6_dp*max(1.0_dp, abs(y(i)))
+      yp = y
+      yp(i) = y(i) + h
+      call sys%rhs(t, yp, fp, st)
+      yp(i) = y(i) - h
+      call sys%rhs(t, yp, fm, st)
+      jac(:, i) = (fp - fm)/(2*h)
+    end do
+    call sys%rhs(t, y, ydot, st)   ! the tensions at y, for the blocks' slack/taut pattern
+    allocate(blk%ax(3, 3, -1:1, nodes), blk%av(3, 3, -1:1, nodes), blk%mass(-1:1, nodes), source=0.0_dp)
+    call sys%node_jacobian(t, y, .false., blk, fresh, st)
+    call check(st == 0 .and. fresh .and. blk%mass_coupled, "node blocks formed, mass-coupled")
+    big = maxval(abs(jac))
+    err = 0.0_dp
+    err_mass = 0.0_dp
+    do j = 1, nodes
+      kj = first + j - 1   ! the line node of state node j
+      do d = -1, 1
+        want = 0.0_dp
+        if (j + d >= 1 .and. j + d <= nodes) want = mm(kj, kj + d)/mm(kj, kj)
+        if (d /= 0) err_mass = max(err_mass, abs(blk%mass(d, j) - want))
+      end do
+      do k = 1, nodes
+        do q = 1, 6
+          do p = 1, 3
+            ! row p of node j's velocity rows of D^-1 M J, column q of node k
+            got = 0.0_dp
+            do i = max(1, j - 1), min(nodes, j + 1)
+              got = got + mm(kj, first + i - 1)/mm(kj, kj)*jac(6*(i - 1) + 3 + p, 6*(k - 1) + q)
+            end do
+            want = 0.0_dp
+            if (abs(k - j) <= 1) then
+              if (q <= 3) want = blk%ax(p, q, k - j, j)
+              if (q > 3) want = blk%av(p, q - 3, k - j, j)
+            end if
+            err = max(err, abs(got - want))
+          end do
+        end do
+      end do
+    end do
+    call check_close(err_mass, 0.0_dp, "blocks' mass coupling M(j, j+d)/M(j, j)", abs=1.0e-14_dp)
+    call check_close(err, 0.0_dp, "D^-1 M (central-difference Jacobian) against the blocks [ax, av]", &
+      abs=1.0e-7_dp*big)
+  end subroutine newton_blocks
 
   !> Part 3: the combinations the mixed mass cannot take.
   subroutine refusals()
