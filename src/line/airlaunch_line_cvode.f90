@@ -81,7 +81,6 @@ module airlaunch_line_cvode
     real(dp), allocatable :: v(:, :)           !< work: velocities (3, 0:N)
     real(dp), allocatable :: f(:, :)           !< work: node forces (3, 0:N)
     real(dp), allocatable :: tension(:)        !< work: segment tensions (N)
-    real(dp), allocatable :: inv_mass(:)       !< 1/M(k, k): node mass (+ end point mass), (0:N)
     real(dp), allocatable :: acc(:, :)         !< work: node accelerations (3, 0:N)
     real(dp) :: end_acc(3, 2) = 0.0_dp         !< work: kinematic ends' accelerations (node 0, node N)
     type(line_mass_matrix) :: mass             !< the mass matrix over the state nodes
@@ -132,8 +131,8 @@ contains
     if (end_a%is_kinematic()) self%first = 1
     self%last = n
     if (end_b%is_kinematic()) self%last = n - 1
-    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%inv_mass, self%acc)
-    allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%inv_mass(0:n), self%acc(3, 0:n))
+    if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension, self%acc)
+    allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n), self%acc(3, 0:n))
     call self%jac_blocks%allocate(n)
     self%tension = 0.0_dp
     self%x = 0.0_dp; self%v = 0.0_dp; self%acc = 0.0_dp
@@ -142,7 +141,6 @@ contains
     if (end_b%kind == end_point_mass) node_mass(n) = node_mass(n) + end_b%mass
     call self%mass%build(node_mass, model%p%mass_per_length*model%l0, model%mass_coupling, self%first, &
       self%last, error)
-    self%inv_mass = self%mass%inv_diagonal
   end subroutine system_setup
 
   !> Number of states: 6 per non-kinematic node.
@@ -254,8 +252,8 @@ contains
       do d = -1, 1
         if (k + d < self%first .or. k + d > self%last) cycle
         jj = 6*(k + d - self%first)
-        call jac%set_block(j + 3, jj, self%inv_mass(k), self%jac_blocks%dfdx(:, :, d, k))
-        call jac%set_block(j + 3, jj + 3, self%inv_mass(k), self%jac_blocks%dfdv(:, :, d, k))
+        call jac%set_block(j + 3, jj, self%mass%inv_diagonal(k), self%jac_blocks%dfdx(:, :, d, k))
+        call jac%set_block(j + 3, jj + 3, self%mass%inv_diagonal(k), self%jac_blocks%dfdv(:, :, d, k))
       end do
     end do
     status = rhs_ok
@@ -298,13 +296,13 @@ contains
     fresh = .not. self%jac_blocks%still_valid(reuse_ok, self%tension)
     if (.not. fresh) return
     call self%force_blocks(t, y)
-    call self%jac_blocks%to_node_blocks(self%inv_mass, self%first, self%last, blk)
+    call self%jac_blocks%to_node_blocks(self%mass%inv_diagonal, self%first, self%last, blk)
     blk%mass_coupled = .not. self%mass%is_lumped()
     if (blk%mass_coupled) call mass_blocks(self%mass, self%first, self%last, blk)
   end subroutine system_node_jacobian
 
   !> The node blocks' scaled mass coupling M(k, k + d)/M(k, k) of the state
-  !> nodes first..last (the force blocks are already over M(k, k): inv_mass).
+  !> nodes first..last (the force blocks are already over M(k, k)).
   pure subroutine mass_blocks(mass, first, last, blk)
     type(line_mass_matrix), intent(in) :: mass   !< the mass matrix
     integer, intent(in) :: first, last           !< state nodes
