@@ -22,6 +22,7 @@ module airlaunch_line_ends
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
   private
   public :: line_end, end_kind_code, end_kind_name
@@ -149,11 +150,12 @@ contains
     real(dp) :: h, s, h00, h10, h01, h11, d00, d10, d01, d11, e00, e10, e01, e11
     h = self%body_t(2) - self%body_t(1)
     a = 0.0_dp
-    if (t <= self%body_t(1) .or. h <= 0.0_dp) then
+    ! the samples' own times interpolate (s = 0, 1: x, v exact, a one-sided)
+    if (h <= 0.0_dp .or. t < self%body_t(1)) then
       x = self%body_x(:, 1) + self%body_v(:, 1)*(t - self%body_t(1))
       v = self%body_v(:, 1)
       return
-    else if (t >= self%body_t(2)) then
+    else if (t > self%body_t(2)) then
       x = self%body_x(:, 2) + self%body_v(:, 2)*(t - self%body_t(2))
       v = self%body_v(:, 2)
       return
@@ -247,17 +249,18 @@ contains
     if (self%kind < end_fixed .or. self%kind > end_body) then
       call fatal_error(error, name // ": kind code " // str(self%kind) // " is not allowed: use fixed, " // &
         "prescribed, free, point_mass or body")
-    else if (any(self%position /= self%position) .or. any(self%velocity /= self%velocity)) then
-      call fatal_error(error, name // ": position and velocity must be finite")
-    else if (self%kind == end_point_mass .and. .not. (self%mass > 0.0_dp)) then
+    else if (.not. all(ieee_is_finite([self%position, self%velocity, self%amplitude, self%phase_deg, &
+        self%t_start]))) then
+      call fatal_error(error, name // ": position, velocity, amplitude, phase_deg and t_start must be finite")
+    else if (self%kind == end_point_mass .and. .not. (self%mass > 0.0_dp .and. ieee_is_finite(self%mass))) then
       call fatal_error(error, name // ": mass = " // str(self%mass) // " kg is not allowed for a " // &
-        "point_mass end: must be > 0")
-    else if (.not. (self%drag_area >= 0.0_dp)) then
+        "point_mass end: must be > 0 and finite")
+    else if (.not. (self%drag_area >= 0.0_dp .and. ieee_is_finite(self%drag_area))) then
       call fatal_error(error, name // ": drag_area = " // str(self%drag_area) // " m^2 is not allowed: " // &
-        "must be >= 0")
-    else if (.not. (self%frequency >= 0.0_dp)) then
+        "must be >= 0 and finite")
+    else if (.not. (self%frequency >= 0.0_dp .and. ieee_is_finite(self%frequency))) then
       call fatal_error(error, name // ": frequency = " // str(self%frequency) // " Hz is not allowed: " // &
-        "must be >= 0")
+        "must be >= 0 and finite")
     end if
   end subroutine end_check
 end module airlaunch_line_ends

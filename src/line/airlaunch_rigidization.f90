@@ -18,7 +18,8 @@
 !>       deformed element ds1; the unstretched L is `length0`);
 !>  (19) r = sum ell_k t_k = x_N - x_0 (B^-1 l_s = t, integrated over the deformed arc);
 !>  (20) d_rigid = |r|;  (21) r_o = r d_rigid/(2 d) (= r/2 for a straight line);
-!>  (24) theta = acos(r_z/|r|), phi = atan2(r_x, -r_y): the exact inverse of
+!>  (24) theta = acos(r_z/|r|) (computed as atan2(|r_xy|, r_z): acos loses
+!>       half the digits near 0 and pi), phi = atan2(r_x, -r_y): the exact inverse of
 !>       (22)–(23); the printed phi = -acos(r_y/sqrt(r_x^2+r_y^2)) loses the sign
 !>       of r_x and flips the cosine;
 !>  (25) V_eps = sum epsdot_k l0 t_k (integral over the unstretched s, so that
@@ -37,8 +38,14 @@
 !>       kinetic energy, which Eq. (32) counts again for the rotation, so for a
 !>       line rotating about an end it gives 4/3 of the line mass.  We therefore
 !>       take the translational part: m_rigid = sum m_k |u_k|^2 / |V_rigid|^2 with
-!>       u_k = v_k - omega x (x_k - x_c), which equals the line mass for any rigid
-!>       motion and (31)-with-the-fix for a pure translation.  The printed form
+!>       u_k = v_k - omega_t x (x_k - x_c), omega_t = omega without the frame
+!>       spin omega_z of (27) (the chord's rotation, the part of a rotation the
+!>       end velocities (26)-(28) determine; omega_z = omega_y cot(theta) moves
+!>       no mass and grows without bound as theta -> 0), which equals the line
+!>       mass for any rigid motion whose rotation is across the chord, bent line
+!>       or straight, and (31)-with-the-fix for a pure translation (a bent
+!>       line's spin about its chord is not seen by (26)-(28) and counts as
+!>       translation).  The printed form
 !>       with the fix is kept as `m_rigid_eq31`.  If |V_rigid| is ~0 (below
 !>       1e-9 of the largest node speed, or below 1 um/s) m_rigid falls back to
 !>       the line mass.  Near that limit (31) is ill-conditioned by nature: a
@@ -47,9 +54,13 @@
 !>  (32) J_i = sum m_k d_ki^2 w_ki^2 / omega_i^2, d_ki the distance of node k from
 !>       body axis i through the centre, w_k = r_k x (v_k - V_rigid)/|r_k|^2 the
 !>       node's angular velocity about the centre (body components); a rate
-!>       omega_i ~ 0 (below 1e-9 of the largest rate, or below 1 urad/s) falls
-!>       back to the geometric J_i = sum m_k d_ki^2 (the inertia of the mass
-!>       distribution about that axis).
+!>       omega_i ~ 0 (below 1e-9 of the rate scale - the chord's rate or the
+!>       nodes' largest speed relative to V_rigid over their largest distance
+!>       from the centre - or below 1 urad/s) falls back to the geometric
+!>       J_i = sum m_k d_ki^2 (the inertia of the mass distribution about that
+!>       axis).  About the chord (z) the rate of (27) is the frame's spin, not
+!>       a rotation of the mass, so J_z is always the geometric value (zero for
+!>       a straight line).
 module airlaunch_rigidization
   use airlaunch_kinds, only: dp
   use airlaunch_rotation, only: cross
@@ -81,7 +92,7 @@ module airlaunch_rigidization
     real(dp) :: line_mass = 0.0_dp         !< sum of the node masses [kg]
     logical :: degenerate = .false.        !< the ends coincide: no axis
     logical :: m_fallback = .false.        !< |V_rigid| ~ 0: m_rigid = line mass
-    logical :: j_fallback(3) = .false.     !< omega_i ~ 0: geometric J_i
+    logical :: j_fallback(3) = .false.     !< omega_i ~ 0 (always for i = 3, the chord): geometric J_i
     logical :: spin_fallback = .false.     !< sin(theta) ~ 0: omega_z = 0
   end type rigid_equivalent
 
@@ -103,7 +114,7 @@ contains
     type(rigid_equivalent) :: q
     integer :: k, n, i
     real(dp) :: dx(3), ell, t(3), epsdot, w_half, rxy, dvb(3), dv(3), vmax, u(3), rk(3), rkb(3)
-    real(dp) :: wk(3), wkb(3), ke, ke_t, jnum(3), jgeo(3), wmax, r2, s_lo
+    real(dp) :: wk(3), wkb(3), ke, ke_t, jnum(3), jgeo(3), wmax, r2, s_lo, w_chord(3), dv_max, r_max
 
     n = model%n
     q%length0 = model%p%length
@@ -136,8 +147,8 @@ contains
       q%theta = 0.0_dp
       q%phi = 0.0_dp
     else
-      q%theta = acos(max(-1.0_dp, min(1.0_dp, q%r(3)/q%d_rigid)))
       rxy = hypot(q%r(1), q%r(2))
+      q%theta = atan2(rxy, q%r(3))   ! = acos(r_z/|r|), without acos's loss of digits near 0 and pi
       q%phi = 0.0_dp
       if (rxy > 1.0e-12_dp*q%d_rigid) q%phi = atan2(q%r(1), -q%r(2))
     end if
@@ -163,14 +174,16 @@ contains
     ! (29)
     q%v_rigid = v(:, 0) + q%v_o_eps + cross(q%omega, q%r_o)
 
-    ! (31) kinetic-energy equivalence
+    ! (31) kinetic-energy equivalence; the rotation taken out is the chord's,
+    ! omega without the frame spin omega_z of (27) (no motion of the mass)
+    w_chord = matmul(transpose(q%b), [q%omega_body(1), q%omega_body(2), 0.0_dp])
     vmax = 0.0_dp
     ke = 0.0_dp
     ke_t = 0.0_dp
     do k = 0, n
       vmax = max(vmax, norm2(v(:, k)))
       ke = ke + model%node_mass(k)*dot_product(v(:, k), v(:, k))
-      u = v(:, k) - cross(q%omega, x(:, k) - q%centre)
+      u = v(:, k) - cross(w_chord, x(:, k) - q%centre)
       ke_t = ke_t + model%node_mass(k)*dot_product(u, u)
     end do
     q%m_fallback = norm2(q%v_rigid) <= max(rate_tol*vmax, speed_floor)
@@ -182,10 +195,14 @@ contains
       q%m_rigid_eq31 = ke/dot_product(q%v_rigid, q%v_rigid)
     end if
 
-    ! (32) moments of inertia about the body axes through the centre
+    ! (32) moments of inertia about the body axes through the centre; the rate
+    ! scale is the chord's rate or the nodes' largest speed relative to the
+    ! centre over their largest distance from it (not a node's own rate, which
+    ! a node next to the centre makes arbitrarily large)
     jnum = 0.0_dp
     jgeo = 0.0_dp
-    wmax = norm2(q%omega_body)
+    dv_max = 0.0_dp
+    r_max = 0.0_dp
     do k = 0, n
       rk = x(:, k) - q%centre
       r2 = dot_product(rk, rk)
@@ -193,16 +210,21 @@ contains
       do i = 1, 3
         jgeo(i) = jgeo(i) + model%node_mass(k)*(r2 - rkb(i)**2)
       end do
+      r_max = max(r_max, sqrt(r2))
+      dv_max = max(dv_max, norm2(v(:, k) - q%v_rigid))
       if (r2 <= (1.0e-12_dp*q%length0)**2) cycle
       wk = cross(rk, v(:, k) - q%v_rigid)/r2
       wkb = matmul(q%b, wk)
-      wmax = max(wmax, norm2(wk))
       do i = 1, 3
         jnum(i) = jnum(i) + model%node_mass(k)*(r2 - rkb(i)**2)*wkb(i)**2
       end do
     end do
+    wmax = norm2(q%omega_body(1:2))
+    if (r_max > 0.0_dp) wmax = max(wmax, dv_max/r_max)
     do i = 1, 3
-      q%j_fallback(i) = abs(q%omega_body(i)) <= max(rate_tol*wmax, rate_floor)
+      ! about the chord (i = 3) the rate of (27) is the frame's spin, not a
+      ! rotation of the mass: J_z is always the geometric value
+      q%j_fallback(i) = i == 3 .or. abs(q%omega_body(i)) <= max(rate_tol*wmax, rate_floor)
       if (q%j_fallback(i)) then
         q%j_rigid(i) = jgeo(i)
       else

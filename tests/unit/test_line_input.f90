@@ -40,6 +40,23 @@ program test_line_input
   cfg = good
   cfg%end_b = line_end(kind=end_point_mass, mass=0.0_dp, position=[10.0_dp, 0.0_dp, 0.0_dp])
   call expect_scene(cfg, "end_b: mass = 0.0 kg")
+  block   ! non-finite values (the library's own check: namelists already refuse them)
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf, ieee_negative_inf
+    real(dp) :: inf
+    inf = ieee_value(1.0_dp, ieee_positive_inf)
+    cfg = good
+    cfg%end_b = line_end(kind=end_point_mass, mass=inf, position=[10.0_dp, 0.0_dp, 0.0_dp])
+    call expect_scene(cfg, "end_b: mass = Infinity kg")
+    cfg = good
+    cfg%end_a = line_end(kind=end_prescribed, amplitude=[0.0_dp, inf, 0.0_dp], frequency=1.0_dp)
+    call expect_scene(cfg, "end_a: position, velocity, amplitude, phase_deg and t_start must be finite")
+    cfg = good
+    cfg%end_a%velocity(1) = ieee_value(1.0_dp, ieee_negative_inf)
+    call expect_scene(cfg, "end_a: position, velocity, amplitude, phase_deg and t_start must be finite")
+    cfg = good
+    cfg%end_b%drag_area = inf
+    call expect_scene(cfg, "end_b: drag_area = Infinity m^2")
+  end block
   cfg = good
   cfg%t_end = 0.0_dp
   call expect_scene(cfg, "t_end = 0.0 s")

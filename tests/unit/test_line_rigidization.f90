@@ -14,6 +14,11 @@
 !>     geometric value.
 !>  4. A bent line (d > d_rigid) and a line rotating about its centre
 !>     (V_rigid = 0: m_rigid falls back to the line mass without dividing by 0).
+!>  5. A bent line in rigid motion across its chord, the chord down to 0.001
+!>     deg from earth z: m_rigid = line mass (the frame spin of (27) is not a
+!>     motion of the mass), J_z = the inertia about the chord.
+!>  6. A node next to the centre does not make (32) fall back (J_y continuous
+!>     in its distance from the centre).
 !> Tolerances: 1e-12 relative (exact arithmetic identities, rounding only).
 program test_line_rigidization
   use airlaunch_kinds, only: dp, pi, deg2rad
@@ -116,6 +121,74 @@ program test_line_rigidization
   call check_close(q%d_rigid, 2*length/pi, "chord of the half circle [m]", rel=1.0e-12_dp)
   call check(q%m_fallback .and. all(q%j_fallback), "at rest: geometric fallbacks, no division by zero")
   call check_close(q%m_rigid, rho*length, "at rest: m_rigid = line mass [kg]", rel=tol)
+
+  call section("5. a bent line in rigid motion, rotating across its chord")
+  ! A parabola of 1.5 m sag across its chord, the chord tilted theta from
+  ! earth z (down to 0.001 deg, where (27)'s frame spin omega_y cot(theta) is
+  ! 5.7e4 times omega_y), translating and rotating about an axis across the
+  ! chord.  The translational kinetic-energy mass is the line mass whatever
+  ! the shape; J_z is the geometric inertia about the chord.
+  block
+    real(dp) :: thetas(3), s_k, ee(3), en(3), jz
+    integer :: it
+    thetas = [30.0_dp, 5.0_dp, 1.0e-3_dp]*deg2rad
+    do it = 1, size(thetas)
+      b = b23(thetas(it), 0.4_dp)
+      ee = b(3, :)                                ! chord direction
+      en = b(1, :)                                ! across the chord
+      w = 0.8_dp*b(1, :) - 0.5_dp*b(2, :)          ! rotation across the chord [rad/s]
+      centre = [3.0_dp, 100.0_dp, -2.0_dp]
+      do k = 0, n
+        s_k = real(k, dp)/n - 0.5_dp
+        x(:, k) = centre + s_k*length*ee + 1.5_dp*(1.0_dp - 4.0_dp*s_k**2)*en
+        v(:, k) = v0 + cross(w, x(:, k) - centre)
+      end do
+      q = rigidize(model, x, v)
+      call check(q%d > q%d_rigid, "the line is bent")
+      call check_close(q%theta, thetas(it), "theta [rad]", rel=1.0e-9_dp)
+      call check_close(q%m_rigid, rho*length, "theta = " // str(thetas(it)/deg2rad) // &
+        " deg: m_rigid (31) = line mass [kg]", rel=tol)
+      jz = 0
+      do k = 0, n
+        jz = jz + model%node_mass(k)*(sum((x(:, k) - q%centre)**2) - dot_product(x(:, k) - q%centre, ee)**2)
+      end do
+      call check_close(q%j_rigid(3), jz, "J_z = the inertia about the chord [kg m^2]", rel=1.0e-12_dp)
+      call check(.not. q%m_fallback .and. .not. any(q%j_fallback(1:2)) .and. q%j_fallback(3), &
+        "no fallback across the chord, the geometric J_z")
+    end do
+  end block
+
+  call section("6. a node next to the centre does not set the rate scale of (32)")
+  ! The straight line of section 1 rotating at 0.3 rad/s about body y, with a
+  ! bending velocity 0.2 sin(pi k/N) m/s along body x (so that (32) differs from
+  ! the geometric J_y, by 1.8 %); the middle node (at the centre) is moved
+  ! 1e-4 m, then 1e-9 m, off the chord along body x and given 0.5 m/s along
+  ! body y.  J_y (32) is continuous in that offset: the kink's strain rate moves
+  ! it by ~48 delta^2 kg m^2 (5e-7 at 1e-4 m; tolerance 1e-6 relative); it
+  ! must not fall back to the geometric value because the node's own rate
+  ! |dv|/|r_k| grows without bound.
+  block
+    real(dp) :: jy(2), offs(2)
+    integer :: io
+    offs = [1.0e-4_dp, 1.0e-9_dp]
+    b = b23(th, ph)
+    e = b(3, :)
+    w = 0.3_dp*b(2, :)
+    do io = 1, 2
+      do k = 0, n
+        x(:, k) = centre + (k*model%l0 - 0.5_dp*length)*e
+        v(:, k) = v0 + cross(w, x(:, k) - centre) + 0.2_dp*sin(pi*k/n)*b(1, :)
+      end do
+      x(:, n/2) = x(:, n/2) + offs(io)*b(1, :)
+      v(:, n/2) = v(:, n/2) + 0.5_dp*b(2, :)
+      q = rigidize(model, x, v)
+      call check(.not. q%j_fallback(2), "offset " // str(offs(io)) // " m: J_y from (32), no fallback")
+      jy(io) = q%j_rigid(2)
+    end do
+    call check_close(jy(2), jy(1), "J_y at offsets 1e-9 and 1e-4 m [kg m^2]", rel=1.0e-6_dp)
+    call check(abs(jy(2) - jgeo) > 0.01_dp*jgeo, "J_y (32) = " // str(jy(2)) // " differs from the geometric " // &
+      str(jgeo) // " kg m^2 (the test can tell a fallback)")
+  end block
   call finish()
 
 contains
