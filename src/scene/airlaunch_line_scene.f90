@@ -519,7 +519,8 @@ contains
       r3(:, i) = scene%rigid(i)%j_rigid
     end do
     call w%add_var_2d("rigid_inertia", ["xyz ", "time"], r3, "kg m2", &
-      "equivalent moments of inertia about the virtual body's axes, Eq. (32)", error)
+      "equivalent moments of inertia about the virtual body's axes, Eq. (32) (z, along the line: " // &
+      "the geometric inertia about the chord)", error)
     do i = 1, m
       r3(:, i) = scene%rigid(i)%omega_body
     end do
