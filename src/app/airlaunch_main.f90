@@ -10,7 +10,7 @@ program airlaunch
   use airlaunch_error, only: error_type
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_namelist, only: nml_file
-  use airlaunch_run_config, only: run_config, read_run_config, require_output_directory
+  use airlaunch_run_config, only: run_config, read_run_config, run_echo, require_output_directory
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
@@ -23,7 +23,7 @@ program airlaunch
   type(error_type), allocatable :: error
   character(len=:), allocatable :: path, echo, summary, output_override
   character(len=1024) :: arg
-  integer :: i, nargs
+  integer :: i, nargs, n_run_echo
   logical :: written
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
@@ -62,6 +62,8 @@ program airlaunch
   if (.not. allocated(error)) call read_run_config(f, run, echo, error)
   if (allocated(error)) call fail_input(error%message)
   if (len(output_override) > 0) run%output = output_override
+  n_run_echo = 0
+  if (allocated(echo)) n_run_echo = len(echo)
 
   select case (trim(run%scene))
   case ("drop")
@@ -79,6 +81,10 @@ program airlaunch
       call f%check_groups([character(len=16) :: "run", "line", "line_scene"], error)
       if (.not. allocated(error)) call read_line_scene_config(f, run, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
+      ! the line scheme's own defaults where &run does not set them (line.md §4)
+      run%rtol = cfg%integration%rtol
+      run%atol = cfg%integration%atol
+      run%max_order = cfg%integration%max_order
       call prepare_output_file()
       call run_line_scene(run, cfg, echo, summary, error)
     end block
@@ -114,14 +120,16 @@ program airlaunch
 
 contains
 
-  !> The output file's directory must exist: checked once the whole input is
-  !> read (its own errors first), before the run; an old file of the same
+  !> The output file must be one that can be written: checked once the whole
+  !> input is read (its own errors first), before the run; an old file of the same
   !> name is removed then: the run replaces it in any case (completed, or
   !> failed with what it computed), and one that fails before its first record
   !> must not leave an older result that passes for its own.
   subroutine prepare_output_file()
     type(error_type), allocatable :: out_error
     integer :: u, ios
+    ! the resolved input records the settings the run uses (--output, a scene's defaults)
+    echo = run_echo(run) // echo(n_run_echo + 1:)
     if (.not. run%trajectory) return
     if (len(output_override) > 0) then
       call require_output_directory("--output", run%output, out_error)

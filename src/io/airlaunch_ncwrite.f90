@@ -57,7 +57,7 @@ contains
     class(nc_writer), intent(inout) :: self
     character(len=*), intent(in) :: path                  !< final file name
     type(error_type), allocatable, intent(inout) :: error !< set on failure
-    integer :: hdferr
+    integer :: hdferr, create_err
     integer(hid_t) :: fcpl
     self%path = trim(path)
     self%tmp_path = trim(path) // ".part"
@@ -70,9 +70,9 @@ contains
     call h5pcreate_f(H5P_FILE_CREATE_F, fcpl, hdferr)
     call h5pset_link_creation_order_f(fcpl, ior(H5P_CRT_ORDER_TRACKED_F, H5P_CRT_ORDER_INDEXED_F), hdferr)
     call h5pset_attr_creation_order_f(fcpl, ior(H5P_CRT_ORDER_TRACKED_F, H5P_CRT_ORDER_INDEXED_F), hdferr)
-    call h5fcreate_f(self%tmp_path, H5F_ACC_TRUNC_F, self%fid, hdferr, creation_prp=fcpl)
+    call h5fcreate_f(self%tmp_path, H5F_ACC_TRUNC_F, self%fid, create_err, creation_prp=fcpl)
     call h5pclose_f(fcpl, hdferr)
-    if (hdferr /= 0) then
+    if (create_err /= 0) then
       call fatal_error(error, self%tmp_path // ": cannot create the output file (directory missing or not writable?)")
       self%fid = -1
     end if
@@ -191,8 +191,14 @@ contains
       call fatal_error(error, self%tmp_path // ": cannot close the output file")
       return
     end if
-    if (c_rename(self%tmp_path // c_null_char, self%path // c_null_char) /= 0) &
+    if (c_rename(self%tmp_path // c_null_char, self%path // c_null_char) /= 0) then
       call fatal_error(error, self%path // ": cannot rename " // self%tmp_path // " to it")
+      block   ! no .part left behind: the run reports the failure, the file is not its result
+        integer :: unit, ios
+        open(newunit=unit, file=self%tmp_path, status="old", iostat=ios)
+        if (ios == 0) close(unit, status="delete")
+      end block
+    end if
   end subroutine nc_commit
 
   !> End of writing: commit the file if every write succeeded (error not

@@ -7,7 +7,7 @@ module airlaunch_run_config
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: run_config, read_run_config, echo_namelist_unit, scene_names, require_output_directory
+  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -94,28 +94,77 @@ contains
 
     cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, &
       max_steps)
-    block
-      integer :: u
-      open(newunit=u, status="scratch", action="readwrite")
-      write(u, nml=run)
-      call echo_namelist_unit(u, echo)
-    end block
+    if (.not. allocated(echo)) echo = ""
+    echo = echo // run_echo(cfg)
   end subroutine read_run_config
 
-  !> The directory of the output file must exist: checked before the run (by
-  !> the program, after any command-line override), not found missing after it.
-  !> `what` names where the value came from, e.g. "case.nml: &run: output".
+  !> The &run group of `cfg` as namelist text (the resolved input's first
+  !> group; the program writes it again from the settings the run really
+  !> uses: a command-line output, a scene's own default tolerances).
+  function run_echo(cfg) result(text)
+    type(run_config), intent(in) :: cfg   !< settings
+    character(len=:), allocatable :: text
+    character(len=16) :: scene
+    real(dp) :: t_end, output_dt, rtol, atol
+    character(len=256) :: output
+    logical :: trajectory, stop_when_final
+    integer :: max_order, max_steps, u
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps
+    scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
+    rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
+    stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps
+    text = ""
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=run)
+    call echo_namelist_unit(u, text)
+  end function run_echo
+
+  !> The output file must be one that can be created: not a directory, in an
+  !> existing directory where a file can be written.  Checked before the run
+  !> (by the program, after any command-line override), not found missing
+  !> after it: a probe file `output`.part (the name the writer uses until the
+  !> run ends) is created and removed.  `what` names where the value came
+  !> from, e.g. "case.nml: &run: output".
   subroutine require_output_directory(what, output, error)
     character(len=*), intent(in) :: what                  !< origin of the value, for the message
     character(len=*), intent(in) :: output                !< output file name
-    type(error_type), allocatable, intent(inout) :: error !< set if the directory is missing
-    integer :: slash
+    type(error_type), allocatable, intent(inout) :: error !< set if no file can be written there
+    character(len=:), allocatable :: name, dir
+    character(len=256) :: msg
+    integer :: slash, u, ios
     logical :: exists
-    slash = index(trim(output), "/", back=.true.)
-    if (slash <= 1) return   ! the working directory, or the root
-    inquire(file=output(1:slash-1), exist=exists)
-    if (.not. exists) call fatal_error(error, what // " = '" // trim(output) // &
-      "' is not allowed: its directory '" // output(1:slash-1) // "' does not exist (create it, or choose another path)")
+    name = trim(output)
+    slash = index(name, "/", back=.true.)
+    inquire(file=name // "/.", exist=exists)
+    if (slash == len(name) .or. exists) then
+      dir = name
+      if (slash /= len(name)) dir = name // "/"
+      call fatal_error(error, what // " = '" // name // "' is not allowed: it names a directory (give a " // &
+        "file name, e.g. '" // dir // "run.nc')")
+      return
+    end if
+    if (slash > 1) then
+      dir = name(1:slash-1)
+      inquire(file=dir // "/.", exist=exists)
+      if (.not. exists) then
+        inquire(file=dir, exist=exists)
+        if (exists) then
+          call fatal_error(error, what // " = '" // name // "' is not allowed: '" // dir // &
+            "' is not a directory (choose another path)")
+        else
+          call fatal_error(error, what // " = '" // name // "' is not allowed: its directory '" // dir // &
+            "' does not exist (create it, or choose another path)")
+        end if
+        return
+      end if
+    end if
+    open(newunit=u, file=name // ".part", status="replace", action="write", iostat=ios, iomsg=msg)
+    if (ios /= 0) then
+      call fatal_error(error, what // " = '" // name // "' is not allowed: no file can be written there (" // &
+        trim(msg) // ")")
+      return
+    end if
+    close(u, status="delete")
   end subroutine require_output_directory
 
   !> Append the text written to scratch unit `u` to `echo`, and close `u`.

@@ -161,6 +161,53 @@ def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
     assert "HDF5" not in res.stderr
 
 
+@pytest.mark.parametrize("kind", ["directory", "directory/", "file as directory", "unwritable"])
+def test_an_output_that_cannot_be_written_is_an_input_error(airlaunch_exe, tmp_path, kind):
+    """An output naming a directory, inside a regular file or where no file can
+    be created is refused before the run (exit 2, one line), not after the
+    whole integration with exit 3, a vague HDF5 message and a stray .part file.
+    /proc takes no new files even for root (CI runs as root, so a chmod'ed
+    directory would not test this)."""
+    nml, _ = drop_nml(tmp_path)
+    out, fragment = {
+        "directory": (tmp_path, "it names a directory"),
+        "directory/": (f"{tmp_path}/", "it names a directory"),
+        "file as directory": (nml / "x.nc", f"'{nml}' is not a directory"),
+        "unwritable": ("/proc/airlaunch_test.nc", "no file can be written there"),
+    }[kind]
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert_input_error(res, fragment, tmp_path / "drop.nc")
+    assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".part"))
+
+
+def test_resolved_input_records_the_settings_used(airlaunch_exe, tmp_path):
+    """The input echoed into the file is the one the run used: with --output
+    the file's own name, and for the line scene the line scheme's default
+    tolerances where &run does not set them (line.md section 4).  Run again
+    from the echo, the line scene takes the same steps."""
+    nml, _ = drop_nml(tmp_path, t_end=2.0)
+    out = tmp_path / "elsewhere.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert f'OUTPUT="{out}"' in ds.attrs["input_namelist"]
+    line_nml = tmp_path / "line.nml"
+    line_nml.write_text((ROOT / "input" / "line_catenary.nml").read_text().replace(
+        "output = 'output/line_catenary.nc'", f"output = '{tmp_path / 'a.nc'}'"))
+    assert "rtol" not in line_nml.read_text().split("&line")[0]
+    res = run_airlaunch(airlaunch_exe, line_nml)
+    assert res.returncode == 0, res.stderr
+    steps = [l for l in res.stdout.splitlines() if l.startswith("end of run")][0].split(",")[1]
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        echo = ds.attrs["input_namelist"]
+    assert "RTOL=  1.0000000000000001E-005" in echo and "MAX_ORDER=2" in echo, echo[:400]
+    again = tmp_path / "again.nml"
+    again.write_text(echo.replace(str(tmp_path / "a.nc"), str(tmp_path / "b.nc")))
+    res = run_airlaunch(airlaunch_exe, again)
+    assert res.returncode == 0, res.stderr
+    assert [l for l in res.stdout.splitlines() if l.startswith("end of run")][0].split(",")[1] == steps
+
+
 def test_file_without_final_newline_reads_like_one_with_it(airlaunch_exe, tmp_path):
     """gfortran's namelist read meets the end of the file at a last group's '/'
     with no newline after it (iostat -1, "End of file") although every value
