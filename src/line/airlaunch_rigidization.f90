@@ -114,7 +114,7 @@ contains
     type(rigid_equivalent) :: q
     integer :: k, n, i
     real(dp) :: dx(3), ell, t(3), epsdot, w_half, rxy, dvb(3), dv(3), vmax, u(3), rk(3), rkb(3)
-    real(dp) :: wk(3), wkb(3), ke, ke_t, jnum(3), jgeo(3), wmax, r2, s_lo, w_chord(3), dv_max, r_max
+    real(dp) :: wk(3), wkb(3), ke, ke_t, jnum(3), jgeo(3), wmax, r2, s_lo, w_chord(3), dv_max, r_max, d2(3)
 
     n = model%n
     q%length0 = model%p%length
@@ -207,8 +207,11 @@ contains
       rk = x(:, k) - q%centre
       r2 = dot_product(rk, rk)
       rkb = matmul(q%b, rk)
+      ! squared distances from the body axes, as sums of squares (r2 - rkb(i)**2
+      ! rounds to -1e-20 about the axis of a straight line)
+      d2 = [rkb(2)**2 + rkb(3)**2, rkb(1)**2 + rkb(3)**2, rkb(1)**2 + rkb(2)**2]
       do i = 1, 3
-        jgeo(i) = jgeo(i) + model%node_mass(k)*(r2 - rkb(i)**2)
+        jgeo(i) = jgeo(i) + model%node_mass(k)*d2(i)
       end do
       r_max = max(r_max, sqrt(r2))
       dv_max = max(dv_max, norm2(v(:, k) - q%v_rigid))
@@ -216,7 +219,7 @@ contains
       wk = cross(rk, v(:, k) - q%v_rigid)/r2
       wkb = matmul(q%b, wk)
       do i = 1, 3
-        jnum(i) = jnum(i) + model%node_mass(k)*(r2 - rkb(i)**2)*wkb(i)**2
+        jnum(i) = jnum(i) + model%node_mass(k)*d2(i)*wkb(i)**2
       end do
     end do
     wmax = norm2(q%omega_body(1:2))

@@ -80,7 +80,8 @@ module airlaunch_separation
     real(dp) :: rh_force(3) = 0.0_dp          !< R_H force on the rocket, earth [N]
     real(dp) :: rh_moment(3) = 0.0_dp         !< R_H moment on the rocket about its CG, rocket axes [N m]
     real(dp) :: normal_force = 0.0_dp         !< contact normal force (> 0 pushing) [N]
-    real(dp) :: friction_force = 0.0_dp       !< friction along the exit direction on the rocket [N]
+    real(dp) :: friction_force = 0.0_dp       !< friction along the exit direction on the rocket [N] (0 in Case 0)
+    real(dp) :: lock_force = 0.0_dp           !< Case 0: the lock's force along the exit direction on the rocket [N]
     logical :: stick = .false.                !< the slide sticks
     real(dp) :: a0(3) = 0.0_dp                !< aircraft CG acceleration, earth [m/s^2]
     real(dp) :: wdot0(3) = 0.0_dp             !< aircraft angular acceleration, body [rad/s^2]
@@ -373,9 +374,16 @@ contains
     end do
     self%normal_force = 0.0_dp
     self%friction_force = 0.0_dp
+    self%lock_force = 0.0_dp
     if (nc > 0) then
       self%normal_force = self%lambda(2)
-      self%friction_force = self%lambda(1)
+      ! Case 0: the first multiplier is the lock's reaction along the rail (the
+      ! rail's static friction is inside it, not separable), not sliding friction
+      if (self%phase == phase_preparation) then
+        self%lock_force = self%lambda(1)
+      else
+        self%friction_force = self%lambda(1)
+      end if
     end if
     nrm = norm2(self%udot)
     if (.not. ieee_is_finite(nrm)) call fail("accelerations are not finite numbers")

@@ -890,6 +890,7 @@ contains
 
   !> The rigidized coupling's attributes (over all its stints).
   subroutine write_rigidized_attributes(r, w, werr)
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     type(coupled_run), intent(in) :: r
     type(nc_writer), intent(inout) :: w
     type(error_type), allocatable, intent(inout) :: werr
@@ -898,7 +899,9 @@ contains
     call w%add_real_att("/", "refreshes", real(r%n_refresh, dp), werr)
     call w%add_real_att("/", "guarded_mass_refreshes", real(r%n_guard_mass, dp), werr)
     call w%add_real_att("/", "guarded_inertia_refreshes", real(r%n_guard_inertia, dp), werr)
-    call w%add_real_att("/", "min_rigid_line_tension_N", r%min_rigid_tension, werr)
+    ! NaN when no record came from the rigidized engine ('auto' that never switched)
+    call w%add_real_att("/", "min_rigid_line_tension_N", merge(r%min_rigid_tension, &
+      ieee_value(1.0_dp, ieee_quiet_nan), r%min_rigid_tension < huge(1.0_dp)), werr)
     call w%add_real_att("/", "max_line_end_mismatch_m", r%max_mismatch, werr)
   end subroutine write_rigidized_attributes
 

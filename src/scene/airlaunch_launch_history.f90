@@ -57,7 +57,7 @@ module airlaunch_launch_history
     logical :: has_line = .true.   !< false: no line and no parachute (their variables are left out)
     real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
       load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
-      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), clearance(:), residual(:), &
+      t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), lock(:), clearance(:), residual(:), &
       edge_clearance(:)
   contains
     procedure :: init => history_init
@@ -79,7 +79,7 @@ contains
     allocate(self%time(nmax), self%phase(nmax), self%ac_pos(3, nmax), self%ac_eul(3, nmax), self%ac_alpha(nmax), &
       self%ac_q(nmax), self%elev(nmax), self%load_factor(nmax), self%rk_pos(3, nmax), self%rk_vel(3, nmax), &
       self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%cforce(6, nmax), self%normal(nmax), &
-      self%friction(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax))
+      self%friction(nmax), self%lock(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax))
     if (self%has_line) allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), &
       self%nodes(3, 0:n, nmax))
   end subroutine history_init
@@ -224,6 +224,7 @@ contains
     self%cforce(4:6, k) = sep%rh_moment
     self%normal(k) = sep%normal_force
     self%friction(k) = sep%friction_force
+    self%lock(k) = sep%lock_force
     self%clearance(k) = s%clearance
     self%edge_clearance(k) = s%edge_clearance
     self%residual(k) = sep%js%res_position
@@ -284,7 +285,9 @@ contains
       call w%add_var_1d("edge_normal_force_N", ["time"], self%normal(1:nrec), "N", &
         "contact normal force of the rail / ramp edge on the rocket", werr)
       call w%add_var_1d("friction_force_N", ["time"], self%friction(1:nrec), "N", &
-        "friction on the rocket along the exit direction", werr)
+        "friction on the rocket along the exit direction (0 in Case 0: see lock_force_N)", werr)
+      call w%add_var_1d("lock_force_N", ["time"], self%lock(1:nrec), "N", &
+        "Case 0: force of the lock (tie-down) on the rocket along the exit direction (0 after release)", werr)
       call w%add_var_1d("clearance_m", ["time"], self%clearance(1:nrec), "m", &
         "distance from the rocket's surface to the aircraft's empennage (&bay tail_x, tail_y)", werr)
       call w%add_var_1d("edge_clearance_m", ["time"], self%edge_clearance(1:nrec), "m", &
@@ -295,9 +298,12 @@ contains
 
   !> The milestones as global attributes.
   subroutine write_milestones(w, res, error)
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     type(nc_writer), intent(inout) :: w
     type(launch_result), intent(in) :: res
     type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: nan
+    nan = ieee_value(1.0_dp, ieee_quiet_nan)
     call w%add_text_att("/", "status", trim(res%status), error)
     if (allocated(res%failure)) call w%add_text_att("/", "failure", res%failure, error)
     call w%add_real_att("/", "trim_alpha_deg", res%trim_alpha_deg, error)
@@ -310,11 +316,15 @@ contains
     call w%add_real_att("/", "separation_time_s", res%separation_time, error)
     call w%add_text_att("/", "early_separation", merge("true ", "false", res%early_separation), error)
     call w%add_real_att("/", "edge_pull_time_s", res%edge_pull_time, error)
-    call w%add_real_att("/", "pitch_at_separation_deg", res%pitch_at_separation_deg, error)
-    call w%add_real_att("/", "pitch_rate_at_separation_deg_s", res%pitch_rate_at_separation_deg_s, error)
+    ! the angles of an event that did not happen: NaN (a -1 deg pitch is a value)
+    call w%add_real_att("/", "pitch_at_separation_deg", &
+      merge(res%pitch_at_separation_deg, nan, res%separation_time >= 0.0_dp), error)
+    call w%add_real_att("/", "pitch_rate_at_separation_deg_s", &
+      merge(res%pitch_rate_at_separation_deg_s, nan, res%separation_time >= 0.0_dp), error)
     call w%add_real_att("/", "pitch_max_time_s", res%pitch_max_time, error)
-    call w%add_real_att("/", "pitch_max_deg", res%pitch_max_deg, error)
-    call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", res%nose_elevation_at_max_deg, error)
+    call w%add_real_att("/", "pitch_max_deg", merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), error)
+    call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", &
+      merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), error)
     call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
     call w%add_text_att("/", "line_enabled", trim(merge("true ", "false", res%has_line)), error)
     if (res%has_line) then

@@ -221,3 +221,39 @@ def test_weak_pull_line_settles_at_fine_resolution(airlaunch_exe, tmp_path, n_se
         assert ds["time"].values[-1] == pytest.approx(1.1)
         tension0 = float(ds["line_tension_parachute_end_N"].values[0])
     assert tension0 == pytest.approx(np.hypot(q * 0.05, 1.798 * 9.80665), rel=1e-2)
+
+
+def test_rail_forces_obey_coulomb_and_the_lock(paper_run):
+    """Coulomb's law on the rail and the edge: |friction| <= mu |N| at every record
+    (mu = the paper's 0.005; 1e-9 of N for rounding), friction 0 while the lock
+    holds the rocket (Case 0), where the along-rail reaction is the lock's force
+    (more than friction could hold: the rocket sits on a nose-up deck pulled by
+    the line) and the lock carries nothing after the release."""
+    ds, _ = paper_run
+    mu = float(re.search(r"^\s*friction\s*=\s*(\S+)", PAPER.read_text(), flags=re.M).group(1))
+    phase = ds["phase"].values
+    normal = ds["edge_normal_force_N"].values
+    friction = ds["friction_force_N"].values
+    lock = ds["lock_force_N"].values
+    attached = (phase >= 1) & (phase <= 2)
+    assert attached.any() and (phase == 0).any()
+    assert np.all(np.abs(friction[attached]) <= mu * np.abs(normal[attached]) * (1 + 1e-9))
+    assert np.all(friction[phase == 0] == 0.0)
+    # more than the rail's friction could hold (84.6 kN against mu N = 1.4 kN): the lock is needed
+    assert np.all(np.abs(lock[phase == 0]) > mu * np.abs(normal[phase == 0]))
+    assert np.all(lock[phase >= 1] == 0.0)
+
+
+def test_milestones_of_events_not_reached(airlaunch_exe, tmp_path):
+    """A run that ends before the separation (t_end = 2 s): the event times are
+    -1 and the angles measured at those events NaN (output.md), not 0 - a 0 deg
+    pitch would pass for a value."""
+    nml = nml_variant(tmp_path, edits=[(r"^  t_end = 15.0 .*$", "  t_end = 2.0")])
+    out = tmp_path / "short.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["separation_time_s"] == -1.0 and ds.attrs["pitch_max_time_s"] == -1.0
+        for key in ("pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", "pitch_max_deg",
+                    "nose_elevation_at_pitch_max_deg"):
+            assert np.isnan(ds.attrs[key]), key

@@ -182,6 +182,8 @@ def test_auto_keeps_the_direct_coupling_where_it_is_cheaper(airlaunch_exe, tmp_p
     auto = run(airlaunch_exe, tmp_path, "auto", ("  coupling = 'auto'",))
     with direct, auto:
         assert auto.attrs["coupling_switches"] == 0 and auto.attrs["auto_min_steps"] == 8.0
+        # no rigidized record: its smallest rigid-line force is not defined (was huge(), 1.8e308)
+        assert np.isnan(auto.attrs["min_rigid_line_tension_N"])
         busy = auto["line_steps_per_outer_step"].values >= 8.0
         dwell = int(round(auto.attrs["auto_dwell_s"] / auto.attrs["outer_dt_s"])) + 1
         assert not any(busy[i:i + dwell].all() for i in range(len(busy) - dwell + 1))

@@ -47,7 +47,7 @@ def test_output_without_line(example_run):
     of the contract is there and finite.  Independent check: in the trimmed
     Case 0 the locked rocket rests on the 7 deg deck, so the joint carries its
     weight's components: normal m g cos 7 deg, along the rail -m g sin 7 deg
-    (the trim converges to 1e-10 of the weight; 1e-6 relative allowed)."""
+    (the lock's force; friction_force_N is 0 until the release; the trim converges to 1e-10 of the weight; 1e-6 relative allowed)."""
     ds, stdout = example_run
     for name in LINE_VARS:
         assert name not in ds, name
@@ -60,7 +60,7 @@ def test_output_without_line(example_run):
     assert "&parachute" not in echo and "enabled=f" in echo.replace(" ", "")
     for name in ["phase", "aircraft_position", "aircraft_euler_deg", "rocket_position", "rocket_velocity",
                  "rocket_euler_deg", "constraint_force", "edge_normal_force_N", "friction_force_N",
-                 "clearance_m"]:
+                 "lock_force_N", "clearance_m"]:
         assert name in ds, name
         assert np.all(np.isfinite(ds[name].values)), name
     for name, value in ds.attrs.items():
@@ -68,7 +68,11 @@ def test_output_without_line(example_run):
             assert math.isfinite(value), name
     weight = M_ROCKET * G0
     assert ds["edge_normal_force_N"].values[0] == pytest.approx(weight * math.cos(DECK), rel=1e-6)
-    assert ds["friction_force_N"].values[0] == pytest.approx(-weight * math.sin(DECK), rel=1e-6)
+    # the along-rail component is the lock's reaction, not friction (output.md)
+    assert ds["lock_force_N"].values[0] == pytest.approx(-weight * math.sin(DECK), rel=1e-6)
+    assert ds["friction_force_N"].values[0] == 0.0
+    released = ds["phase"].values >= 1
+    assert np.all(ds["lock_force_N"].values[released] == 0.0)
 
 
 def test_rail_phase_against_analytic(airlaunch_exe, tmp_path):

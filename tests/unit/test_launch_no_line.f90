@@ -63,8 +63,9 @@ program test_launch_no_line
     call check_close(ydot(16+i), 0.0_dp, "rocket acceleration " // char(ichar("w") + i), abs=1.0e-9_dp*g0)
   end do
   call check_close(sys%sep%normal_force, weight*cos(theta), "locked: normal force = m g cos(theta)", rel=1.0e-9_dp)
-  call check_close(abs(sys%sep%friction_force), weight*sin(theta), "locked: rail force = m g sin(theta)", &
+  call check_close(abs(sys%sep%lock_force), weight*sin(theta), "locked: the lock's rail force = m g sin(theta)", &
     rel=1.0e-9_dp)
+  call check(sys%sep%friction_force == 0.0_dp, "locked: no sliding friction (the lock holds the rocket)")
 
   call section("release: a block on a plane inclined by theta")
   call sys%prepare(0.0_dp, y0, status)
