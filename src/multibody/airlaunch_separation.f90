@@ -275,6 +275,9 @@ contains
       self%event_time(3) = t
       self%early_separation = .true.
       call self%evaluate(t, y, error)
+    else if (self%phase == phase_rotation .and. self%normal_force <= 0.0_dp .and. self%edge_pull_time < 0.0_dp) then
+      ! a bilateral edge that pulls from the start (as at the Case 1 -> 2 event)
+      self%edge_pull_time = t
     end if
   end subroutine sep_start
 

@@ -183,11 +183,13 @@ contains
     end do
     call solver%free()
     call write_output()
+    summary = "release: altitude " // str(cfg%altitude) // " m, speed " // str(v0) // " m/s" // new_line("a")
     if (allocated(run_error)) then
       call fatal_error(error, "drop scene: " // run_error%message)
+      ! the summary so far (output.md): the last record
+      summary = summary // "last record at t = " // str(time(n)) // " s, altitude " // str(pos(2, n)) // " m"
       return
     end if
-    summary = "release: altitude " // str(cfg%altitude) // " m, speed " // str(v0) // " m/s" // new_line("a")
     if (t_impact >= 0.0_dp) then
       summary = summary // "fell " // str(cfg%fall_height) // " m at t = " // str(t_impact) // " s, " // &
         "forward travel " // str(pos(1, n)) // " m, speed " // str(norm2(vel(:, n))) // " m/s"

@@ -62,6 +62,7 @@ module airlaunch_line_scene
     real(dp) :: wall_time = 0.0_dp                   !< wall-clock time of `run` [s]
     type(line_scheme_stats) :: stats                 !< integrator work
     logical :: completed = .false.                   !< reached t_end
+    real(dp) :: t_reached = 0.0_dp                   !< time the integration reached (a failure's time) [s]
     logical :: ready = .false.                       !< init succeeded
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
@@ -175,6 +176,7 @@ contains
       call record(self, error)
     end do
     self%completed = .not. allocated(error)
+    self%t_reached = self%scheme%t
     self%stats = self%scheme%stats()
     call system_clock(c1)
     self%wall_time = real(c1 - c0, dp)/real(rate, dp)
@@ -449,8 +451,7 @@ contains
     i_max = maxloc(scene%end_tension(:, 1:m))
     summary = "line: " // str(cfg%line%length) // " m, " // str(cfg%line%n_seg) // " segments, scheme " // &
       trim(cfg%integration%scheme) // ", " // trim(cfg%line%mass) // " mass" // nl // &
-      "end of run at t = " // str(scene%time(m)) // " s (" // merge("completed", "failed   ", scene%completed) // &
-      "), " // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
+      end_note(scene) // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
       str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
@@ -464,6 +465,19 @@ contains
     end if
     call scene%free()
   end subroutine run_line_scene
+
+  !> "end of run at t = ... s (completed), " or, after a failure, the time the
+  !> integration reached and the last record's.
+  function end_note(scene) result(s)
+    type(line_scene), intent(in) :: scene   !< the run
+    character(len=:), allocatable :: s
+    if (scene%completed) then
+      s = "end of run at t = " // str(scene%time(scene%n_out)) // " s (completed), "
+    else
+      s = "end of run at t = " // str(scene%t_reached) // " s (failed; last record at t = " // &
+        str(scene%time(scene%n_out)) // " s), "
+    end if
+  end function end_note
 
   !> Write the records of `scene` as netCDF-4 (docs/line.md, "Output").
   subroutine write_output(scene, path, echo, run_error, error)
@@ -541,7 +555,7 @@ contains
     call w%add_text_att("/", "mass_matrix", trim(scene%cfg%line%mass), error)
     call w%add_real_att("/", "wall_time_s", scene%wall_time, error)
     call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
-    call w%add_text_att("/", "status", merge("completed", "failed   ", scene%completed), error)
+    call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)
     call w%finish(error)

@@ -1,6 +1,7 @@
 """Foundation end to end: the demo scene runs, its output opens in xarray with
 units on every variable and the resolved input echoed, and bad input gives one
 clear line and a nonzero status without leaving an output file."""
+import re
 import subprocess
 import sys
 
@@ -363,3 +364,19 @@ def test_a_null_value_is_an_input_error(airlaunch_exe, tmp_path, value, fragment
     assert res.returncode == 0, res.stderr
     with xr.open_dataset(out) as ds:
         assert float(ds["time"].values[-1]) == pytest.approx(0.5)
+
+
+def test_a_failed_drop_prints_its_summary_so_far(airlaunch_exe, tmp_path):
+    """output.md: a failed run prints the summary so far after its error line (the
+    drop scene printed none): the release and the last record, whose time and
+    altitude are the file's last."""
+    nml, out = drop_nml(tmp_path, run_extra=", max_steps = 20")
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 3, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert "step budget" in lines[0] and lines[1].startswith("release: altitude")
+    last = re.search(r"last record at t = ([0-9.]+) s, altitude ([0-9.]+) m", res.stderr)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "failed"
+        assert float(last.group(1)) == pytest.approx(float(ds["time"].values[-1]), abs=1e-9)
+        assert float(last.group(2)) == pytest.approx(float(ds["store_position"].values[-1, 1]), rel=1e-9)

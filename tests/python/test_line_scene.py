@@ -2,6 +2,8 @@
 the output opens in xarray with units on every variable, and the pendulum's
 swing period matches 2 pi sqrt(L/g) for the small amplitude of
 input/line_pendulum.nml (the Fortran suite checks the physics in depth)."""
+import re
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -164,3 +166,20 @@ def test_mass_matrix_input_errors(airlaunch_exe, tmp_path):
     line = assert_input_error(run_airlaunch(airlaunch_exe, nml), "&line: mass = 'mixed' is not allowed with " +
                               "scheme = 'marching'", out)
     assert "mass = 'lumped'" in line
+
+
+def test_a_failed_run_reports_its_failure_time(airlaunch_exe, tmp_path):
+    """A line run stopped by its step budget: exit 3; the file keeps the records so
+    far with status exactly "failed" (it was padded to "failed   "); the summary
+    gives the time the integration reached - the error line's time - besides the
+    last record's (it printed the last record's time as the end of the run)."""
+    nml, out = pendulum_nml(tmp_path, "budget", 30, 1e-6)
+    nml.write_text(nml.read_text().replace("atol = 1.0e-06 /", "atol = 1.0e-06, max_steps = 200 /"))
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 3, res.stderr
+    t_fail = float(re.search(r"failed at t = ([0-9.]+) s", res.stderr).group(1))
+    end = [line for line in res.stderr.splitlines() if line.startswith("end of run")][0]
+    assert end.startswith(f"end of run at t = {t_fail} s (failed; last record at t = "), end
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "failed"
+        assert 0 <= ds["time"].values[-1] <= t_fail

@@ -8,6 +8,8 @@
 !> reached at T = sqrt(I_P / (2 m g d)) * int_0^{pi/2} sin^{-1/2} = sqrt(I_P/(2 m g d))
 !> * sqrt(pi)/2 Gamma(1/4)/Gamma(3/4): the early-separation event must fire there.
 !> Tolerances: rate 1e-7 relative (CVODE rtol 1e-11 over ~100 steps); event 1e-8 s (issue).
+!> Also: an edge that must pull from the start - one-sided, the rocket is free at
+!> t0; bilateral, it stays and edge_pull_time records t0 (exact: the start time).
 program test_multibody_tipping
   use airlaunch_kinds, only: dp, g0, pi
   use airlaunch_error, only: error_type
@@ -20,6 +22,7 @@ program test_multibody_tipping
 
   call rate_against_energy(0.5_dp)
   call separation_at_ninety()
+  call pulled_from_the_start()
   call finish()
 
 contains
@@ -29,13 +32,41 @@ contains
     write(fmt, '(es14.6)') x
   end function fmt
 
-  subroutine make_scene(sys, h, y, error)
+  !> A plank on the edge lifted by twice its weight (rocket axes, up): the
+  !> edge must pull (N = -m g < 0 at the start).  One-sided, it is free at
+  !> once (early separation at t0); bilateral, it stays on the edge and
+  !> `edge_pull_time` records t0 (as the Case 1 -> 2 event does).
+  subroutine pulled_from_the_start()
+    type(separation_system), target :: sys
+    type(error_type), allocatable :: error
+    real(dp), allocatable :: y(:)
+    integer :: bilateral
+    call section("7. an edge that must pull from the start")
+    do bilateral = 0, 1
+      call make_scene(sys, 0.0_dp, y, error, lift=2.0_dp*m*g0, bilateral=bilateral == 1)
+      call check(.not. allocated(error), "start on the edge")
+      if (allocated(error)) return
+      call check(sys%normal_force < 0.0_dp .or. sys%phase == phase_free, "the edge would have to pull")
+      if (bilateral == 1) then
+        call check(sys%phase == phase_rotation .and. sys%edge_pull_time == 0.0_dp, &
+          "bilateral: stays in Case 2, edge_pull_time = t0 = 0")
+      else
+        call check(sys%phase == phase_free .and. sys%early_separation .and. sys%event_time(3) == 0.0_dp, &
+          "one-sided: free at t0, early separation")
+      end if
+    end do
+  end subroutine pulled_from_the_start
+
+  subroutine make_scene(sys, h, y, error, lift, bilateral)
     type(separation_system), intent(inout) :: sys
     real(dp), intent(in) :: h
     real(dp), allocatable, intent(out) :: y(:)
     type(error_type), allocatable, intent(inout) :: error
+    real(dp), intent(in), optional :: lift          !< upward force on the rocket [N]
+    logical, intent(in), optional :: bilateral      !< the edge may pull
     type(rigid_body) :: aircraft, rocket
     type(cut_joint_geometry) :: geo
+    type(constant_load_source) :: pull
     type(cut_joint_options) :: opt
     real(dp) :: j(3, 3)
     j = 0.0_dp
@@ -55,6 +86,12 @@ contains
     if (allocated(error)) return
     call sys%joint%place_on_edge(sys%bodies(0), d, 0.0_dp, 0.0_dp, 0.0_dp, sys%bodies(1))
     call sys%add_source(gravity_source())
+    if (present(lift)) then
+      pull%body = 1
+      pull%force = [0.0_dp, lift, 0.0_dp]
+      call sys%add_source(pull)
+    end if
+    if (present(bilateral)) sys%edge_bilateral = bilateral
     allocate(y(sys%state_size()))
     call sys%pack_state(y)
     call sys%start(0.0_dp, y, phase_rotation, error)
