@@ -56,6 +56,7 @@ def test_stress(airlaunch_exe, tmp_path, name):
             assert ds.attrs["max_quaternion_norm_error"] < 20 * rtol + 1e-13, name
             # momentum bookkeeping of the trim: aircraft starts at the trim angle of attack
             assert math.isclose(ds["aircraft_alpha_deg"].values[0], ds.attrs["trim_alpha_deg"], abs_tol=1e-3)
+            check_phase_machine(ds, name)
         else:
             assert ds.attrs["status"] == "failed"
 
@@ -73,3 +74,34 @@ def test_snatch_load_exceeds_the_steady_pull(airlaunch_exe, tmp_path):
         t = ds["line_tension_rocket_end_N"].values
         assert t[ds["time"].values < 1.0].max() < 5e3      # slack-ish before inflation
         assert ds.attrs["peak_line_tension_N"] > 78.4e3
+
+
+def check_phase_machine(ds, name):
+    """The phases only advance (Case 0 -> 1 -> 2 -> 3, the edge may be skipped by an
+    early separation at it); each recorded event time lies between the last record
+    before its phase and the first record in it; on the rail and the edge
+    |friction| <= mu |N| (Coulomb, N the resultant normal force; 1e-9 of N for
+    rounding: measured 2e-18; mu from the input), no
+    friction while the lock holds and no lock force after the release."""
+    t = ds["time"].values
+    phase = ds["phase"].values
+    assert np.all(np.diff(phase) >= 0), f"{name}: the phase went back"
+    for k, key in ((1, "release_time_s"), (2, "edge_time_s"), (3, "separation_time_s")):
+        te = ds.attrs[key]
+        reached = np.nonzero(phase >= k)[0]
+        if te < 0:
+            assert reached.size == 0, f"{name}: phase {k} recorded without {key}"
+            continue
+        assert reached.size > 0, f"{name}: {key} = {te} but phase {k} never recorded"
+        i = reached[0]
+        assert te <= t[i] + 1e-9 and (i == 0 or te >= t[i - 1] - 1e-9), f"{name}: {key} = {te} s, records {t[i]}"
+    mu = float(re.search(r"^\s*friction\s*=\s*(\S+)", ds.attrs["input_namelist"].replace(",", " "),
+                         flags=re.M | re.I).group(1))
+    on_rail = (phase >= 1) & (phase <= 2)
+    friction = ds["friction_force_N"].values
+    # the normal force is the resultant of the joint force across the rail (the
+    # edge's normal and the lateral one): |R_force|^2 = friction^2 + normal^2
+    r_force = ds["constraint_force"].values[:, 0:3]
+    normal = np.sqrt(np.maximum((r_force ** 2).sum(axis=1) - friction ** 2, 0.0))
+    assert np.all(np.abs(friction[on_rail]) <= mu * normal[on_rail] * (1 + 1e-9) + 1e-9), name
+    assert np.all(friction[phase == 0] == 0.0) and np.all(ds["lock_force_N"].values[phase >= 1] == 0.0), name
