@@ -11,7 +11,7 @@ import argparse
 import pathlib
 import sys
 
-from .definition import DefinitionError, read_definition
+from .definition import DefinitionError, check_base, read_definition
 
 
 def cmd_table(args) -> int:
@@ -19,6 +19,7 @@ def cmd_table(args) -> int:
     from .table import check_table, output_dir_error, write_table
 
     defn = read_definition(args.definition)
+    check_base(defn)
     if args.check:
         check_table(defn)
         print(f"table: {defn.table_path} is the table of {defn.path}")

@@ -693,6 +693,23 @@ def parse_definition(text, path="<sweep>"):
                            progress_interval=progress, fixed=fixed)
 
 
+def check_base(defn):
+    """The base scenario must be an existing regular file (docs/sweep.md: "an
+    existing, valid scenario"; whether it is valid, airlaunch-sweep --check
+    decides). A relative path is taken from the current directory, as
+    airlaunch-sweep takes it (src/sweep/airlaunch_sweep_definition.f90)."""
+    base = pathlib.Path(defn.base)
+    try:
+        why = None if base.is_file() else ("is a directory" if base.is_dir() else
+                                            "is not a regular file" if base.exists() else "does not exist")
+    except OSError as exc:
+        why = f"cannot be read ({exc.strerror or exc})"
+    if why:
+        raise DefinitionError(f"{defn.path}: &sweep: base = '{shown_text(defn.base)}' is not allowed: the file "
+                              f"{why} (allowed: an existing regular file, the base scenario; a relative path is "
+                              "taken from the current directory)")
+
+
 def _first_line(exc):
     """The first line of an exception's message (messages must be one line)."""
     lines = str(exc).strip().splitlines()

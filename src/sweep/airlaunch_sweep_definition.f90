@@ -203,7 +203,7 @@ contains
     integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_ids
     integer(int64) :: n_grid
     real(dp) :: t_end, progress_interval
-    logical :: keep_failed, present
+    logical :: keep_failed, present, exists, is_dir
     character(len=512) :: msg
     character(len=:), allocatable :: where
     namelist /sweep/ name, base, output_dir, design, n_cases, seed, t_end, keep_failed, keep_worst, &
@@ -243,6 +243,17 @@ contains
       return
     end if
     def%base = trim(base)
+    ! an existing regular file, as the table step requires (check_base in
+    ! postproc/sweep/definition.py); a relative path is taken from the current
+    ! directory.  Its content is read and checked by load_base_scenario.
+    inquire(file=def%base, exist=exists)
+    inquire(file=def%base // "/.", exist=is_dir)
+    if (.not. exists .or. is_dir) then
+      call fatal_error(error, where // "base = '" // def%base // "' is not allowed: the file " // &
+        trim(merge("is a directory", "does not exist", is_dir)) // " (allowed: an existing regular file, " // &
+        "the base scenario; a relative path is taken from the current directory)")
+      return
+    end if
     def%name = trim(name)
     if (len(def%name) == 0) def%name = stem(f%path)
     def%output_dir = trim(output_dir)

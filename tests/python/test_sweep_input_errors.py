@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from test_sweep_support import SWEEP_EXE, run_python, run_sweep, small_definition
+from test_sweep_support import PAPER, SWEEP_EXE, run_python, run_sweep, small_definition
 
 ONE_INPUT = "&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0 /\n"
 BIG = "1" + "0" * 400
@@ -463,3 +463,36 @@ def test_null_fixed_value_is_refused_by_the_check(tmp_path):
     assert res.returncode == 2, res.stdout + res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "&run: 'max_steps' has no value" in lines[0], res.stderr
+
+
+# 12. the base scenario: an existing regular file, for both steps -------------
+
+@pytest.mark.parametrize("base,why", [("nope.nml", "does not exist"), ("adir", "is a directory")],
+                         ids=["missing", "directory"])
+def test_base_that_is_not_a_file(tmp_path, base, why):
+    """A missing base or a directory passed the table step (exit 0, table.nc
+    written) and the check step named neither the definition nor &sweep base.
+    Both steps now refuse it with the same line; relative paths are taken from
+    the current directory by both."""
+    (tmp_path / "adir").mkdir()
+    d = definition(tmp_path, text=lambda t: t.replace(f"base = '{PAPER}'", f"base = '{base}'"))
+    assert f"base = '{base}'" in d.read_text()
+    words = (f"{d}: &sweep: base = '{base}' is not allowed: the file {why} (allowed: an existing regular file, "
+             "the base scenario; a relative path is taken from the current directory)")
+    line = assert_error(table(tmp_path, d), words, tmp_path=tmp_path)
+    assert line == "sweep: error: " + words
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 2, res.stdout + res.stderr
+        assert res.stderr.strip().splitlines() == ["airlaunch-sweep: error: " + words], res.stderr
+
+
+def test_relative_base_is_taken_from_the_current_directory(tmp_path):
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "b.nml").write_bytes(PAPER.read_bytes())
+    d = definition(tmp_path, text=lambda t: t.replace(f"base = '{PAPER}'", "base = 'sub/b.nml'"))
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 0, res.stdout + res.stderr

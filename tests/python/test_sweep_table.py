@@ -9,12 +9,13 @@ import pytest
 import scipy.stats as st
 import xarray as xr
 
-from test_sweep_support import ROOT, run_python  # noqa: F401  (ROOT puts the repository on sys.path)
+from test_sweep_support import ROOT, run_python  # ROOT also puts the repository on sys.path
 
 from postproc.sweep.definition import DefinitionError, parse_definition
 from postproc.sweep.table import check_table, make_table, write_table
 
-BASE = "&sweep base = 'input/airlaunch_paper.nml', output_dir = '{out}', design = '{design}', n_cases = {n}, seed = {seed} /\n"
+# the base must exist for the table step (it runs in tmp_path): an absolute path
+BASE = "&sweep base = '" + str(ROOT / "input" / "airlaunch_paper.nml") + "', output_dir = '{out}', design = '{design}', n_cases = {n}, seed = {seed} /\n"
 
 
 def definition(tmp_path, inputs, design="lhs", n=64, seed=11):
