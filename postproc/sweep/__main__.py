@@ -35,6 +35,45 @@ def cmd_table(args) -> int:
     return 0
 
 
+def check_summary_belongs(defn, summary, summary_path) -> None:
+    """Raise DefinitionError unless the summary is that of the definition's
+    current table: same design, seed and case count as the definition, and the
+    same input values, case by case, as OUTPUT_DIR/table.nc (or, without that
+    file, as the table the definition draws).  A summary left by an earlier
+    sweep in the same output_dir (a rerun killed before its new summary) is
+    refused, not evaluated."""
+    import numpy as np
+
+    from .table import make_table, open_netcdf
+
+    where = f"{summary_path}: the summary is not that of {defn.path}"
+    again = "a summary left by an earlier sweep? run airlaunch-sweep to make this sweep's"
+    for key, want in (("design", defn.design), ("seed", defn.seed), ("n_cases", defn.n_cases)):
+        have = summary.attrs.get(key)
+        if isinstance(have, np.ndarray) and have.size == 1:
+            have = have.item()
+        if isinstance(have, (np.integer, np.str_)):
+            have = have.item()
+        if have != want:
+            raise DefinitionError(f"{where} ({key} is {have!r} in the summary, {want!r} in the definition): {again}")
+    n = summary.sizes.get("case")
+    if n != defn.n_cases:
+        raise DefinitionError(f"{where} (it has {n} cases, the definition {defn.n_cases}): {again}")
+    table_path = defn.table_path
+    if table_path.is_file():
+        table = open_netcdf(table_path, "case table", "run the table step again")
+        source = str(table_path)
+    else:
+        table, source = make_table(defn), f"the table that {defn.path} draws"
+    for s in defn.inputs:
+        if s.name not in table.variables or table[s.name].shape != (n,):
+            raise DefinitionError(f"{table_path}: the case table does not match {defn.path} (run the table step "
+                                  "again)")
+        have = summary[s.name].values if s.name in summary.variables else None
+        if have is None or have.shape != (n,) or not np.array_equal(have, table[s.name].values):
+            raise DefinitionError(f"{where} (its values of {s.name} are not those of {source}): {again}")
+
+
 def cmd_envelope(args) -> int:
     """Evaluate the criteria on the summary; write the envelope and the figures."""
     from .criteria import read_criteria
@@ -65,6 +104,7 @@ def cmd_envelope(args) -> int:
         if summary[var].dims != ("case",) or summary[var].dtype.kind not in "biuf":
             raise DefinitionError(f"{summary_path}: not a sweep summary: variable '{var}' is not a number per case "
                                   f"(dimensions {summary[var].dims}, type {summary[var].dtype}) ({hint})")
+    check_summary_belongs(defn, summary, summary_path)
     env = evaluate(summary, criteria)
     env.attrs["criteria_file"] = str(criteria_path)
     env.attrs["summary"] = str(summary_path)

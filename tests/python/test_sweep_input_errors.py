@@ -132,13 +132,17 @@ def test_check_of_a_table_that_is_not_netcdf(tmp_path, content):
     assert_error(table(tmp_path, d, "--check"), "table.nc", "cannot read the case table", "not a netCDF file")
 
 
-def summary_file(path, drop=()):
-    """A small summary-shaped file with the definition's one input."""
-    n = 4
-    ds = xr.Dataset({"bay%release_time": ("case", np.linspace(0.4, 1.0, n)),
-                     "status": ("case", np.zeros(n, dtype=np.int32)),
-                     "min_clearance_m": ("case", np.full(n, 5.0))}, coords={"case": np.arange(n)})
-    ds.attrs["inputs"] = "bay%release_time"
+def summary_file(path, table_path, drop=()):
+    """A small summary-shaped file of the table at table_path (its one input,
+    design, seed and case count: the envelope step checks that the summary is
+    that of the current table)."""
+    with xr.open_dataset(table_path) as t:
+        n = t.sizes["case"]
+        ds = xr.Dataset({"bay%release_time": ("case", t["bay%release_time"].values),
+                         "status": ("case", np.zeros(n, dtype=np.int32)),
+                         "min_clearance_m": ("case", np.full(n, 5.0))}, coords={"case": np.arange(n)})
+        ds.attrs.update(inputs="bay%release_time", design=t.attrs["design"], seed=t.attrs["seed"],
+                        n_cases=t.attrs["n_cases"])
     ds.drop_vars(list(drop)).to_netcdf(path)
     return path
 
@@ -152,14 +156,14 @@ def test_envelope_of_a_file_that_is_not_a_summary(tmp_path, which):
     if which == "table":
         summary, words = tmp_path / "out" / "table.nc", ["variable 'status' is missing"]
     elif which == "envelope":
-        good = summary_file(tmp_path / "summary.nc")
+        good = summary_file(tmp_path / "summary.nc", tmp_path / "out" / "table.nc")
         res = run_python(["envelope", d, "--criteria", crit, "--summary", good, "--no-figures"], tmp_path)
         assert res.returncode == 0, res.stderr
         summary = tmp_path / "env.nc"
         (tmp_path / "out" / "envelope.nc").rename(summary)
         words = ["variable 'min_clearance_m' is missing"]
     elif which == "no metric":
-        summary = summary_file(tmp_path / "s.nc", drop=["min_clearance_m"])
+        summary = summary_file(tmp_path / "s.nc", tmp_path / "out" / "table.nc", drop=["min_clearance_m"])
         words = ["variable 'min_clearance_m' is missing"]
     else:
         summary = tmp_path / "s.txt"
@@ -169,6 +173,34 @@ def test_envelope_of_a_file_that_is_not_a_summary(tmp_path, which):
     assert_error(res, str(summary), *words)
     assert not (tmp_path / "out" / "envelope.nc").exists()
     assert not list(tmp_path.rglob("*.part"))
+
+
+@pytest.mark.parametrize("change,words", [
+    (dict(n_cases=8, seed=9), ["seed is 5 in the summary, 9 in the definition"]),
+    (dict(design="sobol", n_cases=8), ["design is 'lhs' in the summary, 'sobol' in the definition"]),
+    (dict(inputs=ONE_INPUT.replace("upper = 1.0", "upper = 1.2")),
+     ["its values of bay%release_time are not those of out/table.nc"]),
+], ids=["seed and cases", "design", "input values"])
+def test_envelope_refuses_the_summary_of_another_sweep(tmp_path, change, words):
+    """A summary.nc left by an earlier sweep in the same output_dir (e.g. a rerun
+    with another n_cases and seed killed before its own summary) was evaluated
+    as the current sweep's: 12 cases reported, exit 0. It is refused with one
+    line; the summary of the current table is accepted."""
+    d = definition(tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1.5 /\n")
+    assert table(tmp_path, d).returncode == 0
+    summary_file(tmp_path / "out" / "summary.nc", tmp_path / "out" / "table.nc")
+    res = run_python(["envelope", d, "--criteria", crit, "--no-figures"], tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "over 6 cases" in res.stdout
+    (tmp_path / "out" / "envelope.nc").unlink()
+    d = definition(tmp_path, **change)             # the definition edited, its table drawn again
+    assert table(tmp_path, d).returncode == 0
+    res = run_python(["envelope", d, "--criteria", crit, "--no-figures"], tmp_path)
+    assert_error(res, f"out/summary.nc: the summary is not that of {d}", *words,
+                 "a summary left by an earlier sweep? run airlaunch-sweep")
+    assert not (tmp_path / "out" / "envelope.nc").exists()
 
 
 # 5. a variable assigned twice ------------------------------------------------

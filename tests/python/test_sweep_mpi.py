@@ -192,3 +192,34 @@ def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):
         p = env["probability"].sel(criterion="all").values
         assert 0.0 <= env["wilson_low"].sel(criterion="all") <= p <= env["wilson_high"].sel(criterion="all") <= 1.0
         assert np.all(np.isin(env["passed"].values, [0, 1]))
+
+
+def test_restart_removes_the_old_summary_and_envelope_before_any_case(tmp_path, exes):
+    """`--restart` left the earlier sweep's summary.nc and envelope.nc in place,
+    so a restart killed before its own summary left them to be taken as the new
+    sweep's. They are now removed before the first case runs (checked by killing
+    the run the moment it announces its cases)."""
+    small = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(small, tmp_path)
+    assert run_sweep(small, tmp_path).returncode == 0
+    out = tmp_path / "out"
+    assert (out / "summary.nc").is_file()
+    (out / "envelope.nc").write_text("the envelope of the earlier sweep\n")
+    small = small_definition(tmp_path / "s.nml", n_cases=400, seed=99)   # a long sweep: killed long before its end
+    make_table(small, tmp_path)
+    proc = subprocess.Popen([str(SWEEP_EXE), str(small), "--restart"], cwd=tmp_path, env=ENV, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    try:
+        for line in proc.stdout:
+            if "cases to run" in line:
+                break
+        else:
+            pytest.fail("the run did not announce its cases")
+        assert "400 cases to run" in line, line
+        proc.kill()
+    finally:
+        proc.kill()
+        proc.wait()
+    assert len(journal_rows(out / "journal")[0]) < 400, "the kill came too late"
+    assert not (out / "summary.nc").exists()
+    assert not (out / "envelope.nc").exists()
