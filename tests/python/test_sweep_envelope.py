@@ -172,3 +172,23 @@ def test_unknown_criterion_on_the_command_line(tmp_path):
     assert res.returncode == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "unknown criterion 'max_mach'" in lines[0], res.stderr
+
+
+def test_probability_map_in_chunks_equals_the_one_piece_map():
+    """The map is evaluated in chunks of grid points (memory bound); every
+    chunking gives the one-piece map (the direct formula, computed here with
+    the full (grid, case) kernel matrix) to round-off, 1e-13."""
+    a, b = lhs_points(300, 3).T
+    passed = b > boundary(a)
+    h = 0.08
+    u = np.linspace(0.0, 1.0, 81)
+    gu, gv = np.meshgrid(u, u)
+    pa, pb = (a - a.min()) / np.ptp(a), (b - b.min()) / np.ptp(b)
+    w = np.exp(-0.5 * ((gu.ravel()[:, None] - pa) ** 2 + (gv.ravel()[:, None] - pb) ** 2) / h**2)
+    direct = ((w @ passed.astype(float)) / w.sum(axis=1)).reshape(81, 81)
+    for chunk in (1, 299, 300, 301, 12345, 81 * 81 * 300, 10**9):
+        gx, gy, prob, hh = pass_probability_map(a, b, passed, bandwidth=h, chunk_elements=chunk)
+        assert hh == h
+        np.testing.assert_allclose(prob, direct, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(gx, a.min() + u * np.ptp(a), rtol=1e-15)
+    np.testing.assert_allclose(gy, b.min() + u * np.ptp(b), rtol=1e-15)
