@@ -192,3 +192,34 @@ def test_probability_map_in_chunks_equals_the_one_piece_map():
         np.testing.assert_allclose(prob, direct, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(gx, a.min() + u * np.ptp(a), rtol=1e-15)
     np.testing.assert_allclose(gy, b.min() + u * np.ptp(b), rtol=1e-15)
+
+
+@pytest.mark.parametrize("status,clearance", [([2, 2, 2], [np.nan] * 3), ([0, 0, 1, 2], [5.0, 0.5, np.nan, np.nan])],
+                         ids=["none computed", "mixed"])
+def test_one_input_map_draws_every_case(status, clearance):
+    """With one varied input the cases not computed were not drawn (3 invalid
+    cases: an empty axis titled '0 of 3 cases pass'). Every case is drawn once,
+    those not computed with the 2-input map's marker, inside the padded axis."""
+    from postproc.sweep.figures import passfail_figure
+
+    n = len(status)
+    x = np.array([-1.0, -1.0, -1.0]) if n == 3 else np.array([7.0, 8.0, 9.0, 10.0])
+    ds = xr.Dataset({"parachute%drag_area": ("case", x), "status": ("case", np.array(status, dtype=np.int32)),
+                     "min_clearance_m": ("case", np.array(clearance))}, coords={"case": np.arange(n)})
+    ds.attrs["inputs"] = "parachute%drag_area"
+    env = evaluate(ds, parse_criteria("&criteria min_clearance_m = 1.0 /"))
+    fig = passfail_figure(env)
+    try:
+        ax = fig.axes[0]
+        drawn = {c.get_label(): c.get_offsets() for c in ax.collections}
+        assert sum(len(v) for v in drawn.values()) == n, drawn
+        bad = np.array(status) != 0
+        nc = np.asarray(drawn["not computed"])
+        assert sorted(nc[:, 0]) == sorted(x[bad]), nc
+        lo, hi = ax.get_xlim()
+        assert lo < x.min() and x.max() < hi
+        n_pass = int(np.sum((np.array(status) == 0) & (np.nan_to_num(clearance, nan=-1.0) >= 1.0)))
+        assert f"{n_pass} of {n} cases pass" in fig._suptitle.get_text()
+    finally:
+        import matplotlib.pyplot as plt
+        plt.close(fig)
