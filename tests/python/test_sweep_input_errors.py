@@ -528,3 +528,65 @@ def test_relative_base_is_taken_from_the_current_directory(tmp_path):
     if SWEEP_EXE.exists():
         res = run_sweep(d, tmp_path, None, "--check")
         assert res.returncode == 0, res.stdout + res.stderr
+
+
+# 13. indexed list elements: in order, one value each, no gaps (both steps) -----
+
+ORDER_RULE = ("is not allowed: the elements of {v} are given one value each, in order and without gaps "
+              "({v}({k}) is next), or as the whole list first ({v} = a, b, ...)")
+
+
+def line_with(path, text):
+    """The number of the (only) line of a file that contains text."""
+    lines = [i + 1 for i, x in enumerate(pathlib.Path(path).read_text().splitlines()) if text in x]
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+@pytest.mark.parametrize("values,shown,k", [
+    ("values(2) = 0.5", "'values(2)' = 0.5", 1),                      # Python: 1 case; Fortran: "missing values"
+    ("values(3) = 0.5, 0.7", "'values(3)' = 0.5, 0.7", 1),            # Python: 1 case, 0.7 dropped
+    ("values(1) = 0.4, values(3) = 0.7", "'values(3)' = 0.7", 2),     # Python: error; Fortran: ok, 0.7 dropped
+    ("values(2) = 0.7, values(1) = 0.6", "'values(2)' = 0.7", 1),     # out of order
+    ("values(1) = 0.6, values = 0.7", "'values' = 0.7", 2),           # the whole list after an element
+    ("values(1) = 2*0.6", "'values(1)' = 2*0.6", 1),                  # an element takes one value
+], ids=["gap first", "element with two values", "gap", "out of order", "whole after element", "repeat"])
+def test_indexed_list_elements_in_order_without_gaps(tmp_path, values, shown, k):
+    """The table step (f90nml) and airlaunch-sweep read indexed list elements
+    differently (values(2) = 0.5: one case here, 'missing required value values'
+    there; values(1), values(3): the other way round, 0.7 dropped). Both now
+    refuse a gap, an element out of order or an element given more than one
+    value, with the same line."""
+    d = definition(tmp_path, inputs=f"&input name = 'flight%mach', distribution = 'list', {values} /\n")
+    want = f"{d}:{line_with(d, 'flight%mach')}: &input: {shown} " + ORDER_RULE.format(v="values", k=k)
+    line = assert_error(table(tmp_path, d), tmp_path=tmp_path)
+    assert line == "sweep: error: " + want
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 2, res.stdout + res.stderr
+        assert res.stderr.strip().splitlines() == ["airlaunch-sweep: error: " + want], res.stderr
+
+
+def test_indexed_keep_ids_follow_the_same_rule(tmp_path):
+    d = definition(tmp_path, extra_sweep="keep_ids(2) = 1")
+    want = f"{d}:{line_with(d, 'keep_ids')}: &sweep: 'keep_ids(2)' = 1 " + ORDER_RULE.format(v="keep_ids", k=1)
+    assert assert_error(table(tmp_path, d), tmp_path=tmp_path) == "sweep: error: " + want
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.stderr.strip().splitlines() == ["airlaunch-sweep: error: " + want], res.stderr
+
+
+@pytest.mark.parametrize("values", ["values = 0.5, 0.6, values(3) = 0.7",
+                                    "values(1) = 0.5, values(2) = 0.6, values(3) = 0.7"])
+def test_indexed_list_elements_in_order_are_read_alike(tmp_path, values):
+    """In order and without gaps, both steps take the same three values (the
+    table holds exactly them; the check step accepts the table)."""
+    d = definition(tmp_path, n_cases=9, inputs=f"&input name = 'flight%mach', distribution = 'list', {values} /\n")
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(tmp_path / "out" / "table.nc") as t:
+        assert sorted(set(t["flight%mach"].values)) == [0.5, 0.6, 0.7]
+        np.testing.assert_array_equal(t["flight%mach"].attrs["values"], [0.5, 0.6, 0.7])
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 0 and "matches the definition" in res.stdout, res.stdout + res.stderr
