@@ -1,7 +1,7 @@
 """Command line of the sweep post-processing (run from the repository root):
 
     python -m postproc.sweep table SWEEP.nml [--check]
-    python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures]
+    python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures] [--check]
 
 Exit status 0 on success, 2 for bad input (one line on stderr).
 """
@@ -85,6 +85,9 @@ def cmd_envelope(args) -> int:
     if not criteria_path:
         raise DefinitionError(f"{defn.path}: &sweep: no criteria file (set criteria = 'FILE' or give --criteria)")
     criteria = read_criteria(criteria_path)
+    if args.check:
+        print(f"envelope: criteria {criteria_path} ({len(criteria)} criteria) for {defn.path}")
+        return 0
     summary_path = pathlib.Path(args.summary or defn.summary_path)
     if not summary_path.is_file():
         raise DefinitionError(f"{summary_path}: summary does not exist (run airlaunch-sweep first)")
@@ -149,6 +152,8 @@ def main(argv=None) -> int:
     p.add_argument("--criteria", help="criteria file (default: the definition's)")
     p.add_argument("--summary", help="summary file (default: OUTPUT_DIR/summary.nc)")
     p.add_argument("--no-figures", action="store_true")
+    p.add_argument("--check", action="store_true",
+                   help="only check that the criteria file is given and valid (before a run)")
     p.set_defaults(func=cmd_envelope)
     args = parser.parse_args(argv)
     try:

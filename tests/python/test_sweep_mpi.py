@@ -223,3 +223,39 @@ def test_restart_removes_the_old_summary_and_envelope_before_any_case(tmp_path, 
     assert len(journal_rows(out / "journal")[0]) < 400, "the kill came too late"
     assert not (out / "summary.nc").exists()
     assert not (out / "envelope.nc").exists()
+
+
+@pytest.mark.parametrize("criteria,words", [
+    ([], "&sweep: no criteria file (set criteria = 'FILE' or give --criteria)"),
+    (["--criteria", "bad.nml"], "unknown criterion 'max_mach'"),
+], ids=["none", "invalid"])
+def test_scripts_sweep_without_criteria_stops_before_any_case(tmp_path, exes, criteria, words):
+    """A definition without `criteria` ran every case and then failed at the
+    envelope step, whose message said "give --criteria", an option scripts/sweep
+    did not have. The chain now checks the criteria first (one line, exit 2,
+    no table, no case run)."""
+    (tmp_path / "bad.nml").write_text("&criteria max_mach = 0.9 /\n")
+    definition = small_definition(tmp_path / "nocrit.nml", n_cases=4, output_dir=str(tmp_path / "out"))
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "1", *criteria], cwd=tmp_path,
+                         capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 2, res.stdout + res.stderr
+    errors = [x for x in res.stderr.splitlines() if "error" in x]
+    assert len(errors) == 1 and errors[0].startswith("sweep: error: ") and words in errors[0], res.stderr
+    assert "== table" not in res.stdout
+    assert not (tmp_path / "out").exists()
+
+
+def test_scripts_sweep_passes_criteria_to_the_envelope(tmp_path, exes):
+    """--criteria FILE reaches the envelope step (the definition has none)."""
+    definition = small_definition(tmp_path / "nocrit.nml", n_cases=4, output_dir=str(tmp_path / "out"))
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1.5 /\n")
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "1", "--criteria", str(crit)],
+                         cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 0, res.stdout + res.stderr
+    with xr.open_dataset(tmp_path / "out" / "envelope.nc") as env:
+        assert list(env["criterion"].values) == ["clearance", "all"]
+        assert env.attrs["criteria_file"] == str(crit)
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "--step", "envelope", "--criteria",
+                          str(crit)], cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 0, res.stdout + res.stderr
