@@ -38,6 +38,7 @@ module airlaunch_sweep_definition
     character(len=:), allocatable :: variable      !< variable inside the group
     character(len=:), allocatable :: distribution  !< uniform, normal, truncnorm or list
     character(len=:), allocatable :: units         !< units (documentation only)
+    character(len=:), allocatable :: description   !< description (long_name of table and summary)
     real(dp) :: lower = unset_real, upper = unset_real   !< bounds (uniform, truncnorm)
     real(dp) :: mean = unset_real, std = unset_real      !< normal, truncnorm
     real(dp), allocatable :: values(:)                   !< list
@@ -423,6 +424,7 @@ contains
         s%variable = s%name(index(s%name, "%") + 1:)
         s%distribution = lower_trim(distribution)
         s%units = trim(units)
+        s%description = trim(description)
         s%levels = levels
         if (len(s%distribution) == 0) then
           call fatal_error(error, where // "missing required value distribution (one of: uniform, normal, " // &

@@ -259,3 +259,28 @@ def test_scripts_sweep_passes_criteria_to_the_envelope(tmp_path, exes):
     res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "--step", "envelope", "--criteria",
                           str(crit)], cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=900)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_summary_attributes_describe_inputs_and_clearance(tmp_path, exes):
+    """An input's `description` was read but written to the summary nowhere
+    (docs/sweep.md: copied to the table and the summary); min_clearance_m's
+    long_name said 'ramp edge' while the value is the rocket-empennage clearance
+    (docs/output.md). The input's long_name is its description in both files
+    (the default text without one), its units the definition's."""
+    desc = "release time after the extraction canopy is established"
+    inputs = (f"&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0, units = 's', "
+              f"description = '{desc}' /\n"
+              "&input name = 'flight%mach', distribution = 'uniform', lower = 0.6, upper = 0.7 /\n")
+    definition = small_definition(tmp_path / "d.nml", n_cases=2, inputs=inputs)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    for name in ("table.nc", "summary.nc"):
+        with xr.open_dataset(tmp_path / "out" / name) as ds:
+            assert ds["bay%release_time"].attrs["long_name"] == desc, name
+            assert ds["bay%release_time"].attrs["units"] == "s", name
+            assert "flight%mach" in ds["flight%mach"].attrs["long_name"], name
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as ds:
+        long_name = ds["min_clearance_m"].attrs["long_name"]
+        assert "empennage" in long_name and "ramp edge" not in long_name, long_name
+        assert ds["flight%mach"].attrs["long_name"] == "varied input flight%mach (uniform)"
