@@ -180,11 +180,13 @@ def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None, chunk_elements
 
 
 def worst_cases(env: xr.Dataset, k=10):
-    """Case ids of the k cases with the smallest overall relative margin
-    (not computed first), worst first."""
+    """Case ids of the k cases with the smallest overall relative margin, worst
+    first: the cases not computed first (by id), then the computed ones by
+    relative margin (-inf: a metric NaN, the event never came), ties by id."""
     rel = env["relative_margin"].sel(criterion="all").values
-    key = np.where(env["status"].values != 0, -np.inf, rel)
-    order = np.lexsort((env["case"].values, key))
+    computed = env["status"].values == 0
+    key = np.where(computed, rel, -np.inf)
+    order = np.lexsort((env["case"].values, key, computed))
     return env["case"].values[order[:k]]
 
 

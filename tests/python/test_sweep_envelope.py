@@ -223,3 +223,17 @@ def test_one_input_map_draws_every_case(status, clearance):
     finally:
         import matplotlib.pyplot as plt
         plt.close(fig)
+
+
+def test_worst_cases_not_computed_before_computed_cases_with_a_nan_metric():
+    """Computed cases whose metric is NaN (the event never came: relative margin
+    -inf) shared the key of the cases not computed and interleaved with them by
+    case id; docs/sweep.md puts the cases not computed first."""
+    a = np.linspace(0.1, 0.6, 6)
+    status = np.array([0, 1, 0, 0, 2, 0], dtype=np.int32)
+    clearance = np.array([np.nan, 10.0, 1.6, np.nan, 10.0, 20.0])   # cases 0 and 3: never separated
+    env = evaluate(synthetic_summary(a, a, clearance, status=status), parse_criteria(CRITERIA))
+    assert np.isneginf(env["relative_margin"].sel(criterion="all", case=[0, 3]).values).all()
+    # by hand: not computed (1, 4), then the NaN metrics (0, 3), then by margin (2: 0.1 m, 5: 18.5 m)
+    assert list(worst_cases(env, 6)) == [1, 4, 0, 3, 2, 5]
+    assert list(worst_cases(env, 3)) == [1, 4, 0]
