@@ -1,7 +1,7 @@
 """Command line of the sweep post-processing (run from the repository root):
 
     python -m postproc.sweep table SWEEP.nml [--check]
-    python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures]
+    python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures] [--check]
 
 Exit status 0 on success, 2 for bad input (one line on stderr).
 """
@@ -11,7 +11,7 @@ import argparse
 import pathlib
 import sys
 
-from .definition import DefinitionError, read_definition
+from .definition import DefinitionError, check_base, read_definition
 
 
 def cmd_table(args) -> int:
@@ -19,6 +19,7 @@ def cmd_table(args) -> int:
     from .table import check_table, output_dir_error, write_table
 
     defn = read_definition(args.definition)
+    check_base(defn)
     if args.check:
         check_table(defn)
         print(f"table: {defn.table_path} is the table of {defn.path}")
@@ -34,6 +35,45 @@ def cmd_table(args) -> int:
     return 0
 
 
+def check_summary_belongs(defn, summary, summary_path) -> None:
+    """Raise DefinitionError unless the summary is that of the definition's
+    current table: same design, seed and case count as the definition, and the
+    same input values, case by case, as OUTPUT_DIR/table.nc (or, without that
+    file, as the table the definition draws).  A summary left by an earlier
+    sweep in the same output_dir (a rerun killed before its new summary) is
+    refused, not evaluated."""
+    import numpy as np
+
+    from .table import make_table, open_netcdf
+
+    where = f"{summary_path}: the summary is not that of {defn.path}"
+    again = "a summary left by an earlier sweep? run airlaunch-sweep to make this sweep's"
+    for key, want in (("design", defn.design), ("seed", defn.seed), ("n_cases", defn.n_cases)):
+        have = summary.attrs.get(key)
+        if isinstance(have, np.ndarray) and have.size == 1:
+            have = have.item()
+        if isinstance(have, (np.integer, np.str_)):
+            have = have.item()
+        if have != want:
+            raise DefinitionError(f"{where} ({key} is {have!r} in the summary, {want!r} in the definition): {again}")
+    n = summary.sizes.get("case")
+    if n != defn.n_cases:
+        raise DefinitionError(f"{where} (it has {n} cases, the definition {defn.n_cases}): {again}")
+    table_path = defn.table_path
+    if table_path.is_file():
+        table = open_netcdf(table_path, "case table", "run the table step again")
+        source = str(table_path)
+    else:
+        table, source = make_table(defn), f"the table that {defn.path} draws"
+    for s in defn.inputs:
+        if s.name not in table.variables or table[s.name].shape != (n,):
+            raise DefinitionError(f"{table_path}: the case table does not match {defn.path} (run the table step "
+                                  "again)")
+        have = summary[s.name].values if s.name in summary.variables else None
+        if have is None or have.shape != (n,) or not np.array_equal(have, table[s.name].values):
+            raise DefinitionError(f"{where} (its values of {s.name} are not those of {source}): {again}")
+
+
 def cmd_envelope(args) -> int:
     """Evaluate the criteria on the summary; write the envelope and the figures."""
     from .criteria import read_criteria
@@ -45,6 +85,9 @@ def cmd_envelope(args) -> int:
     if not criteria_path:
         raise DefinitionError(f"{defn.path}: &sweep: no criteria file (set criteria = 'FILE' or give --criteria)")
     criteria = read_criteria(criteria_path)
+    if args.check:
+        print(f"envelope: criteria {criteria_path} ({len(criteria)} criteria) for {defn.path}")
+        return 0
     summary_path = pathlib.Path(args.summary or defn.summary_path)
     if not summary_path.is_file():
         raise DefinitionError(f"{summary_path}: summary does not exist (run airlaunch-sweep first)")
@@ -64,6 +107,7 @@ def cmd_envelope(args) -> int:
         if summary[var].dims != ("case",) or summary[var].dtype.kind not in "biuf":
             raise DefinitionError(f"{summary_path}: not a sweep summary: variable '{var}' is not a number per case "
                                   f"(dimensions {summary[var].dims}, type {summary[var].dtype}) ({hint})")
+    check_summary_belongs(defn, summary, summary_path)
     env = evaluate(summary, criteria)
     env.attrs["criteria_file"] = str(criteria_path)
     env.attrs["summary"] = str(summary_path)
@@ -108,6 +152,8 @@ def main(argv=None) -> int:
     p.add_argument("--criteria", help="criteria file (default: the definition's)")
     p.add_argument("--summary", help="summary file (default: OUTPUT_DIR/summary.nc)")
     p.add_argument("--no-figures", action="store_true")
+    p.add_argument("--check", action="store_true",
+                   help="only check that the criteria file is given and valid (before a run)")
     p.set_defaults(func=cmd_envelope)
     args = parser.parse_args(argv)
     try:

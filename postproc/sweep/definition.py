@@ -336,6 +336,26 @@ def _check_form(path, item, kind, length, encoding):
         raise DefinitionError(f"{where}variable '{name}' = {shown} is not {expected}")
 
 
+def _check_list_order(path, item, before):
+    """The assignments of a list variable in one group fill it in order, without
+    gaps: the whole list first (`values = a, b`), then elements one value each,
+    `values(3) = c`, the next index each time (`before` values are set so far).
+    f90nml would leave a gap as None or drop values (`values(3) = 0.5, 0.7`),
+    airlaunch-sweep would count the leading values only or refuse the read:
+    both steps refuse these alike (check_list_order in src/io/airlaunch_namelist.f90)."""
+    group, name, idx, line, v = item
+    nxt = before + 1
+    if not idx:
+        ok = nxt == 1
+    else:
+        m = re.fullmatch(r"\(([+-]?\d+)\)", idx)
+        ok = m is not None and len(m.group(1)) <= 10 and int(m.group(1)) == nxt and _count_values(v)[0] == 1
+    if not ok:
+        raise DefinitionError(f"{path}:{line}: &{group}: '{name}{idx}' = {shown_text(v)} is not allowed: the elements "
+                              f"of {name} are given one value each, in order and without gaps ({name}({nxt}) is "
+                              f"next), or as the whole list first ({name} = a, b, ...)")
+
+
 def check_namelist_text(text, path, forms=None):
     """Scan the raw text of a namelist like the Fortran readers
     (src/io/airlaunch_namelist.f90) and raise DefinitionError for what a
@@ -437,7 +457,7 @@ def check_namelist_text(text, path, forms=None):
     if in_group:
         raise DefinitionError(f"{path}:{gline}: group &{group} is not closed (end it with /)")
 
-    seen = {}
+    seen, filled = {}, {}
     for number, it in items:
         grp, name, idx, line, value = it
         kind, length = (forms or {}).get(grp, {}).get(name, (None, 0))
@@ -453,6 +473,9 @@ def check_namelist_text(text, path, forms=None):
                                   f"time (first at line {first_line}: {shown_text(first_value)}); a namelist would "
                                   "keep the last value silently, so give it once")
         seen[key] = (line, value)
+        if kind in ("real_list", "integer_list"):
+            _check_list_order(path, it, filled.get((number, name), 0))
+            filled[(number, name)] = filled.get((number, name), 0) + _count_values(value)[0]
 
 
 def _groups(nml, group):
@@ -691,6 +714,23 @@ def parse_definition(text, path="<sweep>"):
                            keep_failed=keep_failed, keep_worst=keep_worst, worst_by=worst_by,
                            keep_ids=tuple(keep_ids), criteria=_str(where, sweep, "criteria", ""),
                            progress_interval=progress, fixed=fixed)
+
+
+def check_base(defn):
+    """The base scenario must be an existing regular file (docs/sweep.md: "an
+    existing, valid scenario"; whether it is valid, airlaunch-sweep --check
+    decides). A relative path is taken from the current directory, as
+    airlaunch-sweep takes it (src/sweep/airlaunch_sweep_definition.f90)."""
+    base = pathlib.Path(defn.base)
+    try:
+        why = None if base.is_file() else ("is a directory" if base.is_dir() else
+                                            "is not a regular file" if base.exists() else "does not exist")
+    except OSError as exc:
+        why = f"cannot be read ({exc.strerror or exc})"
+    if why:
+        raise DefinitionError(f"{defn.path}: &sweep: base = '{shown_text(defn.base)}' is not allowed: the file "
+                              f"{why} (allowed: an existing regular file, the base scenario; a relative path is "
+                              "taken from the current directory)")
 
 
 def _first_line(exc):

@@ -138,13 +138,23 @@ def choose_bandwidth(points, passed, candidates=None, max_points=2000):
     return best
 
 
-def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None):
+#: Most kernel weights held at once by pass_probability_map: grid points times
+#: cases per chunk (a few float64 arrays of this size: about 100 MB).
+MAP_CHUNK_ELEMENTS = 4_000_000
+
+
+def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None, chunk_elements=MAP_CHUNK_ELEMENTS):
     """P(pass) over the (x, y) box of the samples: Nadaraya-Watson regression of
     the pass indicator with a Gaussian kernel on inputs scaled to [0, 1].
 
     Returns (gx, gy, prob) with prob[j, i] at (gx[i], gy[j]), and the bandwidth.
     The 0.5 level of prob is the estimated boundary of the safe region; when
     other inputs vary too, it is the boundary of the probability averaged over them.
+
+    The grid is evaluated in chunks of grid points, each against every case, so
+    the memory is about 3 x 8 x chunk_elements bytes (not n_grid^2 x n x 16: 18 GB
+    at 1e5 cases); each grid point's value is the same sum over all cases as in
+    one piece.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -156,20 +166,27 @@ def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None):
     u = np.linspace(0.0, 1.0, n_grid)
     gu, gv = np.meshgrid(u, u)
     grid = np.stack([gu.ravel(), gv.ravel()], axis=1)
-    d2 = ((grid[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2)
-    w = np.exp(-0.5 * d2 / h**2)
-    prob = (w @ passed.astype(float)) / np.maximum(w.sum(axis=1), 1e-300)
+    yv = passed.astype(float)
+    prob = np.empty(len(grid))
+    step = max(1, int(chunk_elements) // max(1, len(pts)))
+    for start in range(0, len(grid), step):
+        g = grid[start:start + step]
+        d2 = (g[:, None, 0] - pts[None, :, 0]) ** 2 + (g[:, None, 1] - pts[None, :, 1]) ** 2
+        w = np.exp(-0.5 * d2 / h**2)
+        prob[start:start + step] = (w @ yv) / np.maximum(w.sum(axis=1), 1e-300)
     gx = lo[0] + u * (hi[0] - lo[0])
     gy = lo[1] + u * (hi[1] - lo[1])
     return gx, gy, prob.reshape(n_grid, n_grid), h
 
 
 def worst_cases(env: xr.Dataset, k=10):
-    """Case ids of the k cases with the smallest overall relative margin
-    (not computed first), worst first."""
+    """Case ids of the k cases with the smallest overall relative margin, worst
+    first: the cases not computed first (by id), then the computed ones by
+    relative margin (-inf: a metric NaN, the event never came), ties by id."""
     rel = env["relative_margin"].sel(criterion="all").values
-    key = np.where(env["status"].values != 0, -np.inf, rel)
-    order = np.lexsort((env["case"].values, key))
+    computed = env["status"].values == 0
+    key = np.where(computed, rel, -np.inf)
+    order = np.lexsort((env["case"].values, key, computed))
     return env["case"].values[order[:k]]
 
 

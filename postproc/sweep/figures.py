@@ -43,6 +43,13 @@ def clear_boundary(prob, contrast=0.15):
 
 def passfail_map(env, path, criterion="all"):
     """Pass/fail map with the boundary of the safe region for every pair of inputs."""
+    fig = passfail_figure(env, criterion)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def passfail_figure(env, criterion="all"):
+    """The figure of passfail_map (the caller saves and closes it)."""
     inputs = env.attrs["inputs"].split()
     pairs = list(itertools.combinations(inputs, 2))
     ok = env["status"].values == 0
@@ -54,11 +61,15 @@ def passfail_map(env, path, criterion="all"):
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
     for ax, (a, b) in zip(axes.ravel(), pairs):
         x = env[a].values
-        if b is None:
+        if b is None:   # one varied input: the cases along its axis
             ax.scatter(x[passed], np.zeros(passed.sum()), s=10, c=PASS_COLOUR, label="pass")
             ax.scatter(x[~passed & ok], np.zeros((~passed & ok).sum()), s=10, c=FAIL_COLOUR, label="fail")
+            if (~ok).any():
+                ax.scatter(x[~ok], np.zeros((~ok).sum()), s=22, c=NC_COLOUR, marker="x", label="not computed")
             ax.set_xlabel(_label(env, a))
+            ax.set_xlim(*_padded(x))
             ax.set_yticks([])
+            ax.legend(fontsize=7, loc="best")
             continue
         y = env[b].values
         if np.ptp(x) > 0 and np.ptp(y) > 0:
@@ -86,8 +97,7 @@ def passfail_map(env, path, criterion="all"):
         ax.axis("off")
     fig.suptitle(f"separation safety envelope ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return fig
 
 
 def margins(env, path):

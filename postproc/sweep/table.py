@@ -63,7 +63,8 @@ def quantile(spec: InputSpec, u: np.ndarray) -> np.ndarray:
 
 def grid_levels(spec: InputSpec) -> np.ndarray:
     """Grid levels of one input: the list's values, linspace(lower, upper) for a
-    uniform input, equal-probability cell midpoints for (truncated) normals."""
+    uniform input (one level: the midpoint), equal-probability cell medians for
+    (truncated) normals."""
     if spec.distribution == "list":
         return np.asarray(spec.values, dtype=float)
     if spec.distribution == "uniform":

@@ -199,6 +199,14 @@ contains
     end if
     n_resumed = count(done)
     pending = pack([(k - 1, k = 1, s%table%n_cases)], .not. done)
+    if (restart .or. size(pending) > 0) then
+      ! a summary exists only once every case has its row: one present now is
+      ! an earlier sweep's, and so is the envelope made from it.  They go
+      ! before any case runs, so a run killed now leaves neither behind for
+      ! the envelope step to take as this sweep's.
+      call delete_file(s%def%summary_path())
+      call delete_file(s%def%envelope_path())
+    end if
     if (n_resumed > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": resuming: " // str(n_resumed) // &
       " of " // str(s%table%n_cases) // " cases already in the journal"
     if (bad > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(bad) // &

@@ -393,7 +393,7 @@ contains
     type(nml_var), intent(in) :: vars(:)                  !< its variables
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer :: i, j
-    logical :: known
+    logical :: known, is_list
     do i = 1, size(self%items)
       if (self%items(i)%group /= lower(group)) cycle
       known = .false.
@@ -407,10 +407,12 @@ contains
         return
       end if
       ! The value's form against its variable (check_form below)
+      is_list = .false.
       do j = 1, size(vars)
         if (lower(trim(vars(j)%name)) /= self%items(i)%name) cycle
         call check_form(self%items(i), vars(j))
         if (allocated(error)) return
+        is_list = vars(j)%kind == "real_list" .or. vars(j)%kind == "integer_list"
       end do
       ! Fortran's namelist read keeps the last of two assignments without a word:
       ! a value written twice is an error, not a silent choice.
@@ -424,8 +426,51 @@ contains
           end if
         end associate
       end do
+      if (is_list) call check_list_order(i)
+      if (allocated(error)) return
     end do
   contains
+    !> The assignments of a list variable in one group fill it in order, without
+    !> gaps: the whole list first (`values = a, b`), then elements one value
+    !> each, `values(3) = c`, the next index each time.  Fortran's read would
+    !> leave a gap unset (and the readers count the leading set values only),
+    !> refuse `values(3) = a, b`; the table step (f90nml) would drop values:
+    !> both steps refuse all of these alike (check_namelist_text in
+    !> postproc/sweep/definition.py).
+    subroutine check_list_order(i)
+      integer, intent(in) :: i   !< the assignment to check
+      integer :: j, next, k, ios
+      logical :: ok
+      next = 1
+      do j = 1, i - 1
+        if (self%items(j)%group_number == self%items(i)%group_number .and. &
+          self%items(j)%name == self%items(i)%name) next = next + count_values(self%items(j)%value)
+      end do
+      associate(b => self%items(i))
+        if (len(b%index) == 0) then
+          ok = next == 1
+        else
+          k = 0
+          ios = 1
+          if (len(b%index) > 2 .and. len(b%index) <= 12) then
+            if (verify(b%index(2:len(b%index)-1), "+-0123456789") == 0) &
+              read(b%index(2:len(b%index)-1), *, iostat=ios) k
+          end if
+          if (ios == 0 .and. (k < 1 .or. k > max_list_items)) then
+            call fatal_error(error, self%where(b) // "'" // b%name // b%index // "' = " // b%value // &
+              " is not allowed (" // b%name // " holds at most " // str(max_list_items) // &
+              " values: indices 1 to " // str(max_list_items) // ")")
+            return
+          end if
+          ok = ios == 0 .and. k == next .and. count_values(b%value) == 1
+        end if
+        if (.not. ok) call fatal_error(error, self%where(b) // "'" // b%name // b%index // "' = " // b%value // &
+          " is not allowed: the elements of " // b%name // " are given one value each, in order and without " // &
+          "gaps (" // b%name // "(" // str(next) // ") is next), or as the whole list first (" // b%name // &
+          " = a, b, ...)")
+      end associate
+    end subroutine check_list_order
+
     !> - reals: NaN and Inf read as real numbers; no input is meant to be either;
     !> - numbers: every value looks like one (gfortran reads a lone "-" as 0);
     !> - strings: quoted (gfortran would take `name = 0` as the text "0"), and no

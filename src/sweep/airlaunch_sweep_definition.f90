@@ -38,6 +38,7 @@ module airlaunch_sweep_definition
     character(len=:), allocatable :: variable      !< variable inside the group
     character(len=:), allocatable :: distribution  !< uniform, normal, truncnorm or list
     character(len=:), allocatable :: units         !< units (documentation only)
+    character(len=:), allocatable :: description   !< description (long_name of table and summary)
     real(dp) :: lower = unset_real, upper = unset_real   !< bounds (uniform, truncnorm)
     real(dp) :: mean = unset_real, std = unset_real      !< normal, truncnorm
     real(dp), allocatable :: values(:)                   !< list
@@ -75,6 +76,7 @@ module airlaunch_sweep_definition
   contains
     procedure :: table_path => def_table_path
     procedure :: summary_path => def_summary_path
+    procedure :: envelope_path => def_envelope_path
     procedure :: journal_dir => def_journal_dir
     procedure :: work_dir => def_work_dir
     procedure :: trajectory_dir => def_trajectory_dir
@@ -203,7 +205,7 @@ contains
     integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_ids
     integer(int64) :: n_grid
     real(dp) :: t_end, progress_interval
-    logical :: keep_failed, present
+    logical :: keep_failed, present, exists, is_dir
     character(len=512) :: msg
     character(len=:), allocatable :: where
     namelist /sweep/ name, base, output_dir, design, n_cases, seed, t_end, keep_failed, keep_worst, &
@@ -243,6 +245,17 @@ contains
       return
     end if
     def%base = trim(base)
+    ! an existing regular file, as the table step requires (check_base in
+    ! postproc/sweep/definition.py); a relative path is taken from the current
+    ! directory.  Its content is read and checked by load_base_scenario.
+    inquire(file=def%base, exist=exists)
+    inquire(file=def%base // "/.", exist=is_dir)
+    if (.not. exists .or. is_dir) then
+      call fatal_error(error, where // "base = '" // def%base // "' is not allowed: the file " // &
+        trim(merge("is a directory", "does not exist", is_dir)) // " (allowed: an existing regular file, " // &
+        "the base scenario; a relative path is taken from the current directory)")
+      return
+    end if
     def%name = trim(name)
     if (len(def%name) == 0) def%name = stem(f%path)
     def%output_dir = trim(output_dir)
@@ -411,6 +424,7 @@ contains
         s%variable = s%name(index(s%name, "%") + 1:)
         s%distribution = lower_trim(distribution)
         s%units = trim(units)
+        s%description = trim(description)
         s%levels = levels
         if (len(s%distribution) == 0) then
           call fatal_error(error, where // "missing required value distribution (one of: uniform, normal, " // &
@@ -503,6 +517,13 @@ contains
     character(len=:), allocatable :: p
     p = self%output_dir // "/summary.nc"
   end function def_summary_path
+
+  !> OUTPUT_DIR/envelope.nc (written by the envelope step, postproc/sweep)
+  function def_envelope_path(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/envelope.nc"
+  end function def_envelope_path
 
   !> OUTPUT_DIR/journal: one append-only file of finished rows per rank.
   function def_journal_dir(self) result(p)

@@ -36,7 +36,7 @@ module airlaunch_sweep_row
   character(len=12), parameter :: metric_units(n_metrics) = [character(len=12) :: &
     "degree", "degree", "N", "s", "s", "s", "1", "s", "degree", "degree s-1", "s", "degree", "degree", &
     "m", "N", "s", "degree", "1", "m", "s", "1", "1", "1", "1", "1", "1", "s"]
-  character(len=100), parameter :: metric_long_names(n_metrics) = [character(len=100) :: &
+  character(len=120), parameter :: metric_long_names(n_metrics) = [character(len=120) :: &
     "trim angle of attack (Case 0)", "trim elevator deflection", "trim thrust", &
     "release: Case 0 -> 1 (NaN: not reached)", "rocket CG at the ramp edge: Case 1 -> 2 (NaN: not reached)", &
     "separation: Case 2 -> 3 (NaN: not reached)", "1 if the rocket left the edge early (normal force zero)", &
@@ -44,7 +44,7 @@ module airlaunch_sweep_row
     "rocket Euler pitch at separation", "rocket Euler pitch rate at separation", &
     "time of the first rocket pitch maximum after separation (the firing moment; NaN: not reached)", &
     "rocket Euler pitch at its first maximum", "rocket nose elevation at the first pitch maximum", &
-    "minimum distance from the rocket's surface to the ramp edge after separation (NaN: not separated)", &
+    "minimum distance from the rocket's surface to the empennage point after separation (NaN: not separated)", &
     "peak line tension (NaN: the scene has no line)", "time of the peak line tension (NaN: no line)", &
     "largest aircraft pitch excursion from trim", "largest aircraft load factor excursion from 1", &
     "largest cut-joint position residual", "simulated time reached", &

@@ -49,8 +49,15 @@ contains
     allocate(rbuf(n), ibuf(n))
     do k = 1, size(def%inputs)
       rbuf = table%values(k, :)
-      call w%add_var_1d(def%inputs(k)%name, ["case"], rbuf, units_of(def%inputs(k)%units), &
-        "varied input " // def%inputs(k)%name // " (" // def%inputs(k)%distribution // ")", error)
+      ! long_name: the input's description when it has one, as in the table
+      ! (input_attrs in postproc/sweep/table.py)
+      if (len(def%inputs(k)%description) > 0) then
+        call w%add_var_1d(def%inputs(k)%name, ["case"], rbuf, units_of(def%inputs(k)%units), &
+          def%inputs(k)%description, error)
+      else
+        call w%add_var_1d(def%inputs(k)%name, ["case"], rbuf, units_of(def%inputs(k)%units), &
+          "varied input " // def%inputs(k)%name // " (" // def%inputs(k)%distribution // ")", error)
+      end if
       call w%add_text_att(def%inputs(k)%name, "distribution", def%inputs(k)%distribution, error)
     end do
     ibuf = rows%status

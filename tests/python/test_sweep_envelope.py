@@ -172,3 +172,68 @@ def test_unknown_criterion_on_the_command_line(tmp_path):
     assert res.returncode == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "unknown criterion 'max_mach'" in lines[0], res.stderr
+
+
+def test_probability_map_in_chunks_equals_the_one_piece_map():
+    """The map is evaluated in chunks of grid points (memory bound); every
+    chunking gives the one-piece map (the direct formula, computed here with
+    the full (grid, case) kernel matrix) to round-off, 1e-13."""
+    a, b = lhs_points(300, 3).T
+    passed = b > boundary(a)
+    h = 0.08
+    u = np.linspace(0.0, 1.0, 81)
+    gu, gv = np.meshgrid(u, u)
+    pa, pb = (a - a.min()) / np.ptp(a), (b - b.min()) / np.ptp(b)
+    w = np.exp(-0.5 * ((gu.ravel()[:, None] - pa) ** 2 + (gv.ravel()[:, None] - pb) ** 2) / h**2)
+    direct = ((w @ passed.astype(float)) / w.sum(axis=1)).reshape(81, 81)
+    for chunk in (1, 299, 300, 301, 12345, 81 * 81 * 300, 10**9):
+        gx, gy, prob, hh = pass_probability_map(a, b, passed, bandwidth=h, chunk_elements=chunk)
+        assert hh == h
+        np.testing.assert_allclose(prob, direct, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(gx, a.min() + u * np.ptp(a), rtol=1e-15)
+    np.testing.assert_allclose(gy, b.min() + u * np.ptp(b), rtol=1e-15)
+
+
+@pytest.mark.parametrize("status,clearance", [([2, 2, 2], [np.nan] * 3), ([0, 0, 1, 2], [5.0, 0.5, np.nan, np.nan])],
+                         ids=["none computed", "mixed"])
+def test_one_input_map_draws_every_case(status, clearance):
+    """With one varied input the cases not computed were not drawn (3 invalid
+    cases: an empty axis titled '0 of 3 cases pass'). Every case is drawn once,
+    those not computed with the 2-input map's marker, inside the padded axis."""
+    from postproc.sweep.figures import passfail_figure
+
+    n = len(status)
+    x = np.array([-1.0, -1.0, -1.0]) if n == 3 else np.array([7.0, 8.0, 9.0, 10.0])
+    ds = xr.Dataset({"parachute%drag_area": ("case", x), "status": ("case", np.array(status, dtype=np.int32)),
+                     "min_clearance_m": ("case", np.array(clearance))}, coords={"case": np.arange(n)})
+    ds.attrs["inputs"] = "parachute%drag_area"
+    env = evaluate(ds, parse_criteria("&criteria min_clearance_m = 1.0 /"))
+    fig = passfail_figure(env)
+    try:
+        ax = fig.axes[0]
+        drawn = {c.get_label(): c.get_offsets() for c in ax.collections}
+        assert sum(len(v) for v in drawn.values()) == n, drawn
+        bad = np.array(status) != 0
+        nc = np.asarray(drawn["not computed"])
+        assert sorted(nc[:, 0]) == sorted(x[bad]), nc
+        lo, hi = ax.get_xlim()
+        assert lo < x.min() and x.max() < hi
+        n_pass = int(np.sum((np.array(status) == 0) & (np.nan_to_num(clearance, nan=-1.0) >= 1.0)))
+        assert f"{n_pass} of {n} cases pass" in fig._suptitle.get_text()
+    finally:
+        import matplotlib.pyplot as plt
+        plt.close(fig)
+
+
+def test_worst_cases_not_computed_before_computed_cases_with_a_nan_metric():
+    """Computed cases whose metric is NaN (the event never came: relative margin
+    -inf) shared the key of the cases not computed and interleaved with them by
+    case id; docs/sweep.md puts the cases not computed first."""
+    a = np.linspace(0.1, 0.6, 6)
+    status = np.array([0, 1, 0, 0, 2, 0], dtype=np.int32)
+    clearance = np.array([np.nan, 10.0, 1.6, np.nan, 10.0, 20.0])   # cases 0 and 3: never separated
+    env = evaluate(synthetic_summary(a, a, clearance, status=status), parse_criteria(CRITERIA))
+    assert np.isneginf(env["relative_margin"].sel(criterion="all", case=[0, 3]).values).all()
+    # by hand: not computed (1, 4), then the NaN metrics (0, 3), then by margin (2: 0.1 m, 5: 18.5 m)
+    assert list(worst_cases(env, 6)) == [1, 4, 0, 3, 2, 5]
+    assert list(worst_cases(env, 3)) == [1, 4, 0]

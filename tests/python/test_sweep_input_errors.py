@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from test_sweep_support import SWEEP_EXE, run_python, run_sweep, small_definition
+from test_sweep_support import PAPER, SWEEP_EXE, run_python, run_sweep, small_definition
 
 ONE_INPUT = "&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0 /\n"
 BIG = "1" + "0" * 400
@@ -132,13 +132,17 @@ def test_check_of_a_table_that_is_not_netcdf(tmp_path, content):
     assert_error(table(tmp_path, d, "--check"), "table.nc", "cannot read the case table", "not a netCDF file")
 
 
-def summary_file(path, drop=()):
-    """A small summary-shaped file with the definition's one input."""
-    n = 4
-    ds = xr.Dataset({"bay%release_time": ("case", np.linspace(0.4, 1.0, n)),
-                     "status": ("case", np.zeros(n, dtype=np.int32)),
-                     "min_clearance_m": ("case", np.full(n, 5.0))}, coords={"case": np.arange(n)})
-    ds.attrs["inputs"] = "bay%release_time"
+def summary_file(path, table_path, drop=()):
+    """A small summary-shaped file of the table at table_path (its one input,
+    design, seed and case count: the envelope step checks that the summary is
+    that of the current table)."""
+    with xr.open_dataset(table_path) as t:
+        n = t.sizes["case"]
+        ds = xr.Dataset({"bay%release_time": ("case", t["bay%release_time"].values),
+                         "status": ("case", np.zeros(n, dtype=np.int32)),
+                         "min_clearance_m": ("case", np.full(n, 5.0))}, coords={"case": np.arange(n)})
+        ds.attrs.update(inputs="bay%release_time", design=t.attrs["design"], seed=t.attrs["seed"],
+                        n_cases=t.attrs["n_cases"])
     ds.drop_vars(list(drop)).to_netcdf(path)
     return path
 
@@ -152,14 +156,14 @@ def test_envelope_of_a_file_that_is_not_a_summary(tmp_path, which):
     if which == "table":
         summary, words = tmp_path / "out" / "table.nc", ["variable 'status' is missing"]
     elif which == "envelope":
-        good = summary_file(tmp_path / "summary.nc")
+        good = summary_file(tmp_path / "summary.nc", tmp_path / "out" / "table.nc")
         res = run_python(["envelope", d, "--criteria", crit, "--summary", good, "--no-figures"], tmp_path)
         assert res.returncode == 0, res.stderr
         summary = tmp_path / "env.nc"
         (tmp_path / "out" / "envelope.nc").rename(summary)
         words = ["variable 'min_clearance_m' is missing"]
     elif which == "no metric":
-        summary = summary_file(tmp_path / "s.nc", drop=["min_clearance_m"])
+        summary = summary_file(tmp_path / "s.nc", tmp_path / "out" / "table.nc", drop=["min_clearance_m"])
         words = ["variable 'min_clearance_m' is missing"]
     else:
         summary = tmp_path / "s.txt"
@@ -169,6 +173,34 @@ def test_envelope_of_a_file_that_is_not_a_summary(tmp_path, which):
     assert_error(res, str(summary), *words)
     assert not (tmp_path / "out" / "envelope.nc").exists()
     assert not list(tmp_path.rglob("*.part"))
+
+
+@pytest.mark.parametrize("change,words", [
+    (dict(n_cases=8, seed=9), ["seed is 5 in the summary, 9 in the definition"]),
+    (dict(design="sobol", n_cases=8), ["design is 'lhs' in the summary, 'sobol' in the definition"]),
+    (dict(inputs=ONE_INPUT.replace("upper = 1.0", "upper = 1.2")),
+     ["its values of bay%release_time are not those of out/table.nc"]),
+], ids=["seed and cases", "design", "input values"])
+def test_envelope_refuses_the_summary_of_another_sweep(tmp_path, change, words):
+    """A summary.nc left by an earlier sweep in the same output_dir (e.g. a rerun
+    with another n_cases and seed killed before its own summary) was evaluated
+    as the current sweep's: 12 cases reported, exit 0. It is refused with one
+    line; the summary of the current table is accepted."""
+    d = definition(tmp_path)
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1.5 /\n")
+    assert table(tmp_path, d).returncode == 0
+    summary_file(tmp_path / "out" / "summary.nc", tmp_path / "out" / "table.nc")
+    res = run_python(["envelope", d, "--criteria", crit, "--no-figures"], tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "over 6 cases" in res.stdout
+    (tmp_path / "out" / "envelope.nc").unlink()
+    d = definition(tmp_path, **change)             # the definition edited, its table drawn again
+    assert table(tmp_path, d).returncode == 0
+    res = run_python(["envelope", d, "--criteria", crit, "--no-figures"], tmp_path)
+    assert_error(res, f"out/summary.nc: the summary is not that of {d}", *words,
+                 "a summary left by an earlier sweep? run airlaunch-sweep")
+    assert not (tmp_path / "out" / "envelope.nc").exists()
 
 
 # 5. a variable assigned twice ------------------------------------------------
@@ -250,10 +282,11 @@ def test_subnormal_line_strength(tmp_path):
 
 def test_tiny_scale_gives_no_warning(tmp_path):
     d = definition(tmp_path)
-    summary = summary_file(tmp_path / "s.nc")
+    assert table(tmp_path, d).returncode == 0   # the summary must be that of the definition's table
+    summary = summary_file(tmp_path / "s.nc", tmp_path / "out" / "table.nc")
     with xr.open_dataset(summary) as ds:
         ds = ds.load()
-    ds["peak_line_tension_N"] = ("case", np.full(4, 1.0e5))
+    ds["peak_line_tension_N"] = ("case", np.full(ds.sizes["case"], 1.0e5))
     ds.to_netcdf(tmp_path / "s2.nc")
     crit = tmp_path / "c.nml"
     crit.write_text("&criteria line_strength_n = 1e-300, line_safety_factor = 1e10 /\n")
@@ -463,3 +496,98 @@ def test_null_fixed_value_is_refused_by_the_check(tmp_path):
     assert res.returncode == 2, res.stdout + res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "&run: 'max_steps' has no value" in lines[0], res.stderr
+
+
+# 12. the base scenario: an existing regular file, for both steps -------------
+
+@pytest.mark.parametrize("base,why", [("nope.nml", "does not exist"), ("adir", "is a directory")],
+                         ids=["missing", "directory"])
+def test_base_that_is_not_a_file(tmp_path, base, why):
+    """A missing base or a directory passed the table step (exit 0, table.nc
+    written) and the check step named neither the definition nor &sweep base.
+    Both steps now refuse it with the same line; relative paths are taken from
+    the current directory by both."""
+    (tmp_path / "adir").mkdir()
+    d = definition(tmp_path, text=lambda t: t.replace(f"base = '{PAPER}'", f"base = '{base}'"))
+    assert f"base = '{base}'" in d.read_text()
+    words = (f"{d}: &sweep: base = '{base}' is not allowed: the file {why} (allowed: an existing regular file, "
+             "the base scenario; a relative path is taken from the current directory)")
+    line = assert_error(table(tmp_path, d), words, tmp_path=tmp_path)
+    assert line == "sweep: error: " + words
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 2, res.stdout + res.stderr
+        assert res.stderr.strip().splitlines() == ["airlaunch-sweep: error: " + words], res.stderr
+
+
+def test_relative_base_is_taken_from_the_current_directory(tmp_path):
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "b.nml").write_bytes(PAPER.read_bytes())
+    d = definition(tmp_path, text=lambda t: t.replace(f"base = '{PAPER}'", "base = 'sub/b.nml'"))
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 0, res.stdout + res.stderr
+
+
+# 13. indexed list elements: in order, one value each, no gaps (both steps) -----
+
+ORDER_RULE = ("is not allowed: the elements of {v} are given one value each, in order and without gaps "
+              "({v}({k}) is next), or as the whole list first ({v} = a, b, ...)")
+
+
+def line_with(path, text):
+    """The number of the (only) line of a file that contains text."""
+    lines = [i + 1 for i, x in enumerate(pathlib.Path(path).read_text().splitlines()) if text in x]
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+@pytest.mark.parametrize("values,shown,k", [
+    ("values(2) = 0.5", "'values(2)' = 0.5", 1),                      # Python: 1 case; Fortran: "missing values"
+    ("values(3) = 0.5, 0.7", "'values(3)' = 0.5, 0.7", 1),            # Python: 1 case, 0.7 dropped
+    ("values(1) = 0.4, values(3) = 0.7", "'values(3)' = 0.7", 2),     # Python: error; Fortran: ok, 0.7 dropped
+    ("values(2) = 0.7, values(1) = 0.6", "'values(2)' = 0.7", 1),     # out of order
+    ("values(1) = 0.6, values = 0.7", "'values' = 0.7", 2),           # the whole list after an element
+    ("values(1) = 2*0.6", "'values(1)' = 2*0.6", 1),                  # an element takes one value
+], ids=["gap first", "element with two values", "gap", "out of order", "whole after element", "repeat"])
+def test_indexed_list_elements_in_order_without_gaps(tmp_path, values, shown, k):
+    """The table step (f90nml) and airlaunch-sweep read indexed list elements
+    differently (values(2) = 0.5: one case here, 'missing required value values'
+    there; values(1), values(3): the other way round, 0.7 dropped). Both now
+    refuse a gap, an element out of order or an element given more than one
+    value, with the same line."""
+    d = definition(tmp_path, inputs=f"&input name = 'flight%mach', distribution = 'list', {values} /\n")
+    want = f"{d}:{line_with(d, 'flight%mach')}: &input: {shown} " + ORDER_RULE.format(v="values", k=k)
+    line = assert_error(table(tmp_path, d), tmp_path=tmp_path)
+    assert line == "sweep: error: " + want
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 2, res.stdout + res.stderr
+        assert res.stderr.strip().splitlines() == ["airlaunch-sweep: error: " + want], res.stderr
+
+
+def test_indexed_keep_ids_follow_the_same_rule(tmp_path):
+    d = definition(tmp_path, extra_sweep="keep_ids(2) = 1")
+    want = f"{d}:{line_with(d, 'keep_ids')}: &sweep: 'keep_ids(2)' = 1 " + ORDER_RULE.format(v="keep_ids", k=1)
+    assert assert_error(table(tmp_path, d), tmp_path=tmp_path) == "sweep: error: " + want
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.stderr.strip().splitlines() == ["airlaunch-sweep: error: " + want], res.stderr
+
+
+@pytest.mark.parametrize("values", ["values = 0.5, 0.6, values(3) = 0.7",
+                                    "values(1) = 0.5, values(2) = 0.6, values(3) = 0.7"])
+def test_indexed_list_elements_in_order_are_read_alike(tmp_path, values):
+    """In order and without gaps, both steps take the same three values (the
+    table holds exactly them; the check step accepts the table)."""
+    d = definition(tmp_path, n_cases=9, inputs=f"&input name = 'flight%mach', distribution = 'list', {values} /\n")
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(tmp_path / "out" / "table.nc") as t:
+        assert sorted(set(t["flight%mach"].values)) == [0.5, 0.6, 0.7]
+        np.testing.assert_array_equal(t["flight%mach"].attrs["values"], [0.5, 0.6, 0.7])
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 0 and "matches the definition" in res.stdout, res.stdout + res.stderr

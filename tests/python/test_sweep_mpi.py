@@ -192,3 +192,95 @@ def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):
         p = env["probability"].sel(criterion="all").values
         assert 0.0 <= env["wilson_low"].sel(criterion="all") <= p <= env["wilson_high"].sel(criterion="all") <= 1.0
         assert np.all(np.isin(env["passed"].values, [0, 1]))
+
+
+def test_restart_removes_the_old_summary_and_envelope_before_any_case(tmp_path, exes):
+    """`--restart` left the earlier sweep's summary.nc and envelope.nc in place,
+    so a restart killed before its own summary left them to be taken as the new
+    sweep's. They are now removed before the first case runs (checked by killing
+    the run the moment it announces its cases)."""
+    small = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(small, tmp_path)
+    assert run_sweep(small, tmp_path).returncode == 0
+    out = tmp_path / "out"
+    assert (out / "summary.nc").is_file()
+    (out / "envelope.nc").write_text("the envelope of the earlier sweep\n")
+    small = small_definition(tmp_path / "s.nml", n_cases=400, seed=99)   # a long sweep: killed long before its end
+    make_table(small, tmp_path)
+    proc = subprocess.Popen([str(SWEEP_EXE), str(small), "--restart"], cwd=tmp_path, env=ENV, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    try:
+        for line in proc.stdout:
+            if "cases to run" in line:
+                break
+        else:
+            pytest.fail("the run did not announce its cases")
+        assert "400 cases to run" in line, line
+        proc.kill()
+    finally:
+        proc.kill()
+        proc.wait()
+    assert len(journal_rows(out / "journal")[0]) < 400, "the kill came too late"
+    assert not (out / "summary.nc").exists()
+    assert not (out / "envelope.nc").exists()
+
+
+@pytest.mark.parametrize("criteria,words", [
+    ([], "&sweep: no criteria file (set criteria = 'FILE' or give --criteria)"),
+    (["--criteria", "bad.nml"], "unknown criterion 'max_mach'"),
+], ids=["none", "invalid"])
+def test_scripts_sweep_without_criteria_stops_before_any_case(tmp_path, exes, criteria, words):
+    """A definition without `criteria` ran every case and then failed at the
+    envelope step, whose message said "give --criteria", an option scripts/sweep
+    did not have. The chain now checks the criteria first (one line, exit 2,
+    no table, no case run)."""
+    (tmp_path / "bad.nml").write_text("&criteria max_mach = 0.9 /\n")
+    definition = small_definition(tmp_path / "nocrit.nml", n_cases=4, output_dir=str(tmp_path / "out"))
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "1", *criteria], cwd=tmp_path,
+                         capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 2, res.stdout + res.stderr
+    errors = [x for x in res.stderr.splitlines() if "error" in x]
+    assert len(errors) == 1 and errors[0].startswith("sweep: error: ") and words in errors[0], res.stderr
+    assert "== table" not in res.stdout
+    assert not (tmp_path / "out").exists()
+
+
+def test_scripts_sweep_passes_criteria_to_the_envelope(tmp_path, exes):
+    """--criteria FILE reaches the envelope step (the definition has none)."""
+    definition = small_definition(tmp_path / "nocrit.nml", n_cases=4, output_dir=str(tmp_path / "out"))
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1.5 /\n")
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "1", "--criteria", str(crit)],
+                         cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 0, res.stdout + res.stderr
+    with xr.open_dataset(tmp_path / "out" / "envelope.nc") as env:
+        assert list(env["criterion"].values) == ["clearance", "all"]
+        assert env.attrs["criteria_file"] == str(crit)
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "--step", "envelope", "--criteria",
+                          str(crit)], cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=900)
+    assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_summary_attributes_describe_inputs_and_clearance(tmp_path, exes):
+    """An input's `description` was read but written to the summary nowhere
+    (docs/sweep.md: copied to the table and the summary); min_clearance_m's
+    long_name said 'ramp edge' while the value is the rocket-empennage clearance
+    (docs/output.md). The input's long_name is its description in both files
+    (the default text without one), its units the definition's."""
+    desc = "release time after the extraction canopy is established"
+    inputs = (f"&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0, units = 's', "
+              f"description = '{desc}' /\n"
+              "&input name = 'flight%mach', distribution = 'uniform', lower = 0.6, upper = 0.7 /\n")
+    definition = small_definition(tmp_path / "d.nml", n_cases=2, inputs=inputs)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    for name in ("table.nc", "summary.nc"):
+        with xr.open_dataset(tmp_path / "out" / name) as ds:
+            assert ds["bay%release_time"].attrs["long_name"] == desc, name
+            assert ds["bay%release_time"].attrs["units"] == "s", name
+            assert "flight%mach" in ds["flight%mach"].attrs["long_name"], name
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as ds:
+        long_name = ds["min_clearance_m"].attrs["long_name"]
+        assert "empennage" in long_name and "ramp edge" not in long_name, long_name
+        assert ds["flight%mach"].attrs["long_name"] == "varied input flight%mach (uniform)"

@@ -9,12 +9,13 @@ import pytest
 import scipy.stats as st
 import xarray as xr
 
-from test_sweep_support import ROOT, run_python  # noqa: F401  (ROOT puts the repository on sys.path)
+from test_sweep_support import ROOT, run_python  # ROOT also puts the repository on sys.path
 
 from postproc.sweep.definition import DefinitionError, parse_definition
 from postproc.sweep.table import check_table, make_table, write_table
 
-BASE = "&sweep base = 'input/airlaunch_paper.nml', output_dir = '{out}', design = '{design}', n_cases = {n}, seed = {seed} /\n"
+# the base must exist for the table step (it runs in tmp_path): an absolute path
+BASE = "&sweep base = '" + str(ROOT / "input" / "airlaunch_paper.nml") + "', output_dir = '{out}', design = '{design}', n_cases = {n}, seed = {seed} /\n"
 
 
 def definition(tmp_path, inputs, design="lhs", n=64, seed=11):
@@ -122,3 +123,15 @@ def test_changed_definition_no_longer_matches_its_table(tmp_path):
         check_table(changed, path)
     with pytest.raises(DefinitionError, match="cases"):
         check_table(definition(tmp_path, THREE, n=65), path)
+
+
+def test_grid_with_one_uniform_level_takes_the_midpoint(tmp_path):
+    """docs/sweep.md: levels = 1 of a uniform input is (lower + upper)/2, not
+    linspace's lower; more levels are linspace(lower, upper, levels)."""
+    inputs = """
+&input name = 'bay%release_time', distribution = 'uniform', lower = 0.4, upper = 1.0, levels = 1 /
+&input name = 'flight%mach', distribution = 'uniform', lower = 0.6, upper = 0.7, levels = 3 /
+"""
+    t = make_table(parse_definition("&sweep base = 'b.nml', design = 'grid' /\n" + inputs, str(tmp_path / "g.nml")))
+    assert list(t["bay%release_time"].values) == [0.7] * 3
+    np.testing.assert_allclose(t["flight%mach"].values, [0.6, 0.65, 0.7], rtol=1e-15)
