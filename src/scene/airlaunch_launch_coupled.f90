@@ -472,6 +472,12 @@ contains
     ! every event restarts the chain at its time (the outer step ended there)
     if (.not. leave) call r%cpl%restart_chain(err)
     if (allocated(err)) return
+    ! the output times before the event were recorded inside the outer step
+    ! (with output_dt < outer_dt, several): the event's own is after them
+    do while (r%iout <= r%nout)
+      if (r%t_out(r%iout) >= r%cpl%t - 1.0e-12_dp*max(1.0_dp, run%t_end)) exit
+      r%iout = r%iout + 1
+    end do
     if (r%iout > r%nout) return
     if (abs(r%t_out(r%iout) - r%cpl%t) <= 1.0e-12_dp*max(1.0_dp, run%t_end)) &
       call rigidized_record(r, run, cfg, res, r%cpl%t, r%cpl%chain_solver%y, err)

@@ -327,3 +327,19 @@ def test_resolved_input_reads_back(airlaunch_exe, tmp_path):
         again.write_text(echo)
         res = run_airlaunch(airlaunch_exe, again, "--output", tmp_path / f"{name}_again.nc")
         assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("name,line", [
+    ("rigidized", ("  coupling = 'rigidized'",)),
+    ("rdrd", per_phase("rigidized", "direct", "rigidized", "direct"))])
+def test_output_times_alike_with_an_event_on_an_output_time(airlaunch_exe, tmp_path, name, line):
+    """output.md: every coupling writes the same output times.  With output_dt =
+    0.01 s below the outer step (0.02 s) an outer step holds two output times,
+    and the release at t0 = 0.72 s falls on one: the rigidized engine dropped
+    that record (150 instead of 151 over 1.5 s)."""
+    edits = [(r"^  t_end = 15.0 .*$", "  t_end = 1.5"), (r"^  output_dt = 0.02 .*$", "  output_dt = 0.01")]
+    with run(airlaunch_exe, tmp_path, "direct", edits=edits) as direct, \
+            run(airlaunch_exe, tmp_path, name, line, edits) as other:
+        assert 0.72 in np.round(direct["time"].values, 12)
+        assert other.sizes["time"] == direct.sizes["time"] == 151
+        np.testing.assert_allclose(other["time"].values, direct["time"].values, rtol=0, atol=1e-12)
