@@ -130,6 +130,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
     values = args.values.split(";") if args.values else (QUICK_VALUES if args.quick else VALUES)
     paths = [pathlib.Path(f) if f.endswith(".nml") else ROOT / "input" / f"{f}.nml" for f in args.files.split(",")]
+    for p in paths:
+        if not p.is_file():
+            ap.error(f"--files: {p} is not a file (give input/NAME.nml paths or names of input/*.nml)")
     results = []
     with tempfile.TemporaryDirectory(prefix="airlaunch_fuzz_") as d:
         tmp = pathlib.Path(d)

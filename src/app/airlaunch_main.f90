@@ -43,19 +43,19 @@ program airlaunch
       stop
     case ("-o", "--output")
       i = i + 1
-      if (i > nargs) call fail_input("airlaunch: --output needs a file name")
+      if (i > nargs) call fail_input("--output needs a file name")
       call get_command_argument(i, arg)
       output_override = trim(arg)
     case default
-      if (arg(1:1) == "-") call fail_input("airlaunch: unknown option " // trim(arg) // " (see airlaunch --help)")
-      if (len(path) > 0) call fail_input("airlaunch: more than one scenario file given")
+      if (arg(1:1) == "-") call fail_input("unknown option " // trim(arg) // " (see airlaunch --help)")
+      if (len(path) > 0) call fail_input("more than one scenario file given")
       path = trim(arg)
     end select
     i = i + 1
   end do
   if (len(path) == 0) then
     call usage()
-    call fail_input("airlaunch: no scenario file given")
+    call fail_input("no scenario file given")
   end if
 
   call f%load(path, error)
