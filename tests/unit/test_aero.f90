@@ -179,5 +179,34 @@ program test_aero
   ! thrust balances aircraft drag + parachute pull (cos alpha ~ 1)
   call check_close(tr%thrust, tp%pull + (ac%cd0 + ac%k_induced*(117000*g0/(tp%density*tp%speed**2/2*ac%wing_area))**2) &
     *tp%density*tp%speed**2/2*ac%wing_area, "thrust ~ drag + pull", rel=2e-2_dp)
+
+  call section("trim: an equilibrium beyond the elevator limit is refused")
+  ! the calibrated aircraft at Mach 0.35: first with an unlimited elevator
+  ! (the reference: its equilibrium), then with a limit of half that elevator:
+  ! the same equilibrium is found (1e-9 rad: Newton converged to 1e-10 of the
+  ! weight) and refused as infeasible; `ac` is left as it was
+  block
+    type(aircraft_aero) :: ac_free, ac_lim
+    type(trim_result) :: tr_free, tr_lim
+    tp%speed = 0.35_dp*air%sound_speed
+    ac_free = ac
+    ac_free%delta_e_max = huge(1.0_dp)
+    call trim_case0(tp, ac_free, tr_free, error)
+    call check(.not. allocated(error) .and. .not. tr_free%infeasible, "unlimited elevator: the trim converges")
+    call check(tr_free%alpha > 0.0_dp .and. tr_free%alpha < 15*deg2rad .and. tr_free%delta_e < 0.0_dp, &
+      "slow flight: alpha within its range, nose-up (negative) elevator")
+    if (allocated(error)) deallocate(error)
+    ac_lim = ac
+    ac_lim%delta_e_max = 0.5_dp*abs(tr_free%delta_e)
+    call trim_case0(tp, ac_lim, tr_lim, error)
+    call check(allocated(error) .and. tr_lim%infeasible, "elevator beyond its limit: error, infeasible")
+    if (allocated(error)) then
+      call check(index(error%message, "beyond the elevator limit (allowed") > 0 .and. &
+        index(error%message, new_line("a")) == 0, "one line naming the elevator limit: " // error%message)
+      deallocate(error)
+    end if
+    call check_close(tr_lim%delta_e, tr_free%delta_e, "the refused elevator is the equilibrium's", abs=1e-9_dp)
+    call check(ac_lim%delta_e_trim == ac%delta_e_trim .and. ac_lim%thrust == ac%thrust, "aircraft left unchanged")
+  end block
   call finish()
 end program test_aero
