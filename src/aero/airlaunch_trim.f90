@@ -1,5 +1,6 @@
 !> Trim of the Case 0 system: the aircraft with the rocket locked in its bay
-!> and the deployed parachute pulling on the rocket's tie-down point, in
+!> and the deployed parachute pulling on the rocket's tie-down point (the
+!> line's force there: `pull` aft along earth -x and `pull_y` vertical), in
 !> steady level flight at the given altitude and speed.
 !>
 !> Unknowns (Newton's method, finite-difference Jacobian, LAPACK solve):
@@ -38,6 +39,8 @@ module airlaunch_trim
     real(dp) :: r_rocket(3) = 0.0_dp     !< rocket CG from aircraft CG, aircraft body frame [m]
     real(dp) :: r_tie(3) = 0.0_dp        !< line tie-down point from aircraft CG, aircraft body frame [m]
     real(dp) :: pull = 0.0_dp            !< line pull at the tie-down, along earth -x [N]
+    real(dp) :: pull_y = 0.0_dp          !< earth-y component of the line's force at the tie-down [N]
+                                         !< (the settled line's weight pulls it down: < 0)
     real(dp) :: density = 0.0_dp         !< [kg/m^3]
     real(dp) :: speed = 0.0_dp           !< [m/s]
     character(len=16) :: mode = "fly"    !< "fly" or "calibrate"
@@ -187,8 +190,8 @@ contains
       c = rot_z(alpha)                         ! body -> earth at pitch = alpha
       v_b = matmul(transpose(c), [prob%speed, 0.0_dp, 0.0_dp])
       o = aircraft_aero_eval(a, prob%density, v_b, [0.0_dp, 0.0_dp, 0.0_dp], alpha)
-      f_e = matmul(c, o%force) + [-prob%pull, -(prob%aircraft_mass + prob%rocket_mass)*g0, 0.0_dp]
-      pull_b = matmul(transpose(c), [-prob%pull, 0.0_dp, 0.0_dp])
+      f_e = matmul(c, o%force) + [-prob%pull, prob%pull_y - (prob%aircraft_mass + prob%rocket_mass)*g0, 0.0_dp]
+      pull_b = matmul(transpose(c), [-prob%pull, prob%pull_y, 0.0_dp])
       grav_b = matmul(transpose(c), [0.0_dp, -prob%rocket_mass*g0, 0.0_dp])
       m_b = o%moment + cross(prob%r_rocket, grav_b) + cross(prob%r_tie, pull_b)
       eq = [f_e(1), f_e(2), m_b(3)]
