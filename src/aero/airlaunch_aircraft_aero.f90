@@ -14,7 +14,8 @@
 !>
 !> Axes: body x forward, y up, z right.  alpha = atan2(-v_y, v_x) of the
 !> body-frame air-relative velocity, beta = asin(v_z/V).  Lift is normal to the
-!> velocity in the body x-y plane, drag opposite to it.  Pitch rate is w_z
+!> velocity in the body x-y plane (the plane of symmetry), drag along -V (the
+!> wind axis, also in sideslip), the side force C_Y along body z.  Pitch rate is w_z
 !> (nose up positive); the standard yaw rate (nose right) is r = -w_y, so the
 !> yawing moment about +y is -qSb Cn.  Cm_alphadot is folded into Cm_q
 !> (quasi-steady: alpha_dot ~ q in the short-period motion), since alpha_dot
@@ -98,7 +99,9 @@ contains
     croll = p%croll_beta*o%beta + p%croll_p*phat + p%croll_r*rhat
     cn = p%cn_beta*o%beta + p%cn_p*phat + p%cn_r*rhat
     ca = cos(o%alpha); sa = sin(o%alpha)
-    o%force = qbar*p%wing_area*(o%cl*[sa, ca, 0.0_dp] - o%cd*[ca, -sa, 0.0_dp] + [0.0_dp, 0.0_dp, cy])
+    ! lift normal to V in the plane of symmetry, drag along -V (wind axes, also
+    ! in sideslip), side force along body z (C_Y is a body-axis derivative)
+    o%force = qbar*p%wing_area*(o%cl*[sa, ca, 0.0_dp] - o%cd*v_b/v + [0.0_dp, 0.0_dp, cy])
     o%force(1) = o%force(1) + p%thrust
     o%moment = qbar*p%wing_area*[p%span*croll, -p%span*cn, p%chord*o%cm]
   end function aircraft_aero_eval

@@ -80,17 +80,20 @@ contains
       force = force + f
       moment = moment + [0.0_dp, -x*f(3), x*f(2)]    ! (x,0,0) x f
     end do
-    if (v <= 0.0_dp) return
+    ! potential (slender-body) normal force near the nose, opposite to the
+    ! cross-flow velocity of the body; scaled by the exposed fraction.  Only
+    ! this term needs a cross-flow at the CG (vpn > 0 implies v > 0); the fins
+    ! below use their local velocity and act on a pitching body too.
     vp = [0.0_dp, v_b(2), v_b(3)]
     vpn = norm2(vp)
-    if (vpn <= 0.0_dp) return
-    alpha = acos(max(-1.0_dp, min(1.0_dp, v_b(1)/v)))
-    ! potential (slender-body) normal force near the nose, opposite to the
-    ! cross-flow velocity of the body; scaled by the exposed fraction
-    f = -0.5_dp*rho*v*v*s_ref*sin(2*alpha)*cos(alpha/2)*exposed*vp/vpn
-    force = force + f
-    x = x_nose - p%cp_pot_from_nose
-    moment = moment + [0.0_dp, -x*f(3), x*f(2)]
+    if (vpn > 0.0_dp) then
+      ! atan2 keeps full relative precision at small angles (acos(v_x/v) does not)
+      alpha = atan2(vpn, v_b(1))
+      f = -0.5_dp*rho*v*v*s_ref*sin(2*alpha)*cos(alpha/2)*exposed*vp/vpn
+      force = force + f
+      x = x_nose - p%cp_pot_from_nose
+      moment = moment + [0.0_dp, -x*f(3), x*f(2)]
+    end if
     if (p%cn_alpha_fin > 0.0_dp) then
       x = x_nose - p%x_fin_from_nose
       if (x <= x_shield) then

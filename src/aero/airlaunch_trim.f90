@@ -1,5 +1,6 @@
 !> Trim of the Case 0 system: the aircraft with the rocket locked in its bay
-!> and the deployed parachute pulling on the rocket's tie-down point, in
+!> and the deployed parachute pulling on the rocket's tie-down point (the
+!> line's force there: `pull` aft along earth -x and `pull_y` vertical), in
 !> steady level flight at the given altitude and speed.
 !>
 !> Unknowns (Newton's method, finite-difference Jacobian, LAPACK solve):
@@ -10,8 +11,15 @@
 !>                     aircraft's zero-alpha lift and moment are not).
 !> Equations: sum of forces (earth x, y) and pitching moment about the
 !> aircraft's CG vanish.  Pitch attitude = angle of attack (level flight).
+!>
+!> A converged trim must also be flyable ("fly" mode): the elevator within
+!> +-delta_e_max and the angle of attack within [trim_alpha_min_deg,
+!> trim_alpha_max_deg], the range the input accepts for the paper's trim angle
+!> (&flight trim_alpha_deg): the lift is linear, without stall, so an
+!> equilibrium at, say, 60 deg is an artefact of the model.  Otherwise the
+!> result says `infeasible` and an error is returned.
 module airlaunch_trim
-  use airlaunch_kinds, only: dp, g0
+  use airlaunch_kinds, only: dp, g0, deg2rad, rad2deg
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_linalg, only: solve_general
@@ -19,7 +27,10 @@ module airlaunch_trim
   use airlaunch_aircraft_aero, only: aircraft_aero, aircraft_aero_eval, aircraft_aero_out
   implicit none
   private
-  public :: trim_problem, trim_result, trim_case0
+  public :: trim_problem, trim_result, trim_case0, trim_alpha_min_deg, trim_alpha_max_deg
+
+  !> Angles of attack a trim may have [deg] (also the input range of trim_alpha_deg).
+  real(dp), parameter :: trim_alpha_min_deg = -5.0_dp, trim_alpha_max_deg = 15.0_dp
 
   !> What the trim needs to know.
   type :: trim_problem
@@ -28,6 +39,8 @@ module airlaunch_trim
     real(dp) :: r_rocket(3) = 0.0_dp     !< rocket CG from aircraft CG, aircraft body frame [m]
     real(dp) :: r_tie(3) = 0.0_dp        !< line tie-down point from aircraft CG, aircraft body frame [m]
     real(dp) :: pull = 0.0_dp            !< line pull at the tie-down, along earth -x [N]
+    real(dp) :: pull_y = 0.0_dp          !< earth-y component of the line's force at the tie-down [N]
+                                         !< (the settled line's weight pulls it down: < 0)
     real(dp) :: density = 0.0_dp         !< [kg/m^3]
     real(dp) :: speed = 0.0_dp           !< [m/s]
     character(len=16) :: mode = "fly"    !< "fly" or "calibrate"
@@ -42,6 +55,7 @@ module airlaunch_trim
     real(dp) :: cl0 = 0.0_dp, cm0 = 0.0_dp
     real(dp) :: residual = 0.0_dp   !< max |equation| after convergence [N or N m]
     integer :: iterations = 0
+    logical :: infeasible = .false. !< converged, but elevator or alpha beyond their limits
   end type trim_result
 
 contains
@@ -55,6 +69,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: x(3), r(3), r2(3), jac(3, 3), dx(3, 1), h(3), scale(3)
     integer :: it, k
+    logical :: bad_elevator, bad_alpha
+    character(len=:), allocatable :: beyond
     ! initial guess
     select case (prob%mode)
     case ("fly")
@@ -89,19 +105,48 @@ contains
       end if
       x = x + dx(:, 1)
     end do
+    ! the residual of the x that is applied (after 50 steps x moved after r)
+    r = equations(x)
+    res%residual = maxval(abs(r))
     if (.not. all(abs(r) <= 1.0e-8_dp*scale)) then
       call fatal_error(error, "trim: no equilibrium found (residual " // str(maxval(abs(r)/scale)) // &
         " of the weight after 50 Newton steps); check masses, speed and aerodynamic data")
       return
     end if
-    call apply(x)
     res%alpha = alpha_of(x)
+    res%delta_e = merge(x(2), 0.0_dp, prob%mode == "fly")
+    res%thrust = x(3)
+    bad_elevator = abs(res%delta_e) > ac%delta_e_max
+    bad_alpha = res%alpha < trim_alpha_min_deg*deg2rad .or. res%alpha > trim_alpha_max_deg*deg2rad
+    if (bad_elevator .or. bad_alpha) then
+      res%infeasible = .true.
+      if (bad_elevator .and. bad_alpha) then
+        beyond = "the elevator limit and the alpha range"
+      else if (bad_elevator) then
+        beyond = "the elevator limit"
+      else
+        beyond = "the alpha range"
+      end if
+      call fatal_error(error, "trim: the equilibrium needs elevator " // deg(res%delta_e) // &
+        " deg at alpha " // deg(res%alpha) // " deg, beyond " // beyond // " (allowed: |elevator| <= " // &
+        deg(ac%delta_e_max) // " deg, alpha in [" // str(trim_alpha_min_deg) // ", " // &
+        str(trim_alpha_max_deg) // "] deg)")
+      return
+    end if
+    call apply(x)
     res%delta_e = ac%delta_e_trim
     res%thrust = ac%thrust
     res%cl0 = ac%cl0
     res%cm0 = ac%cm0
     ac%theta_ref = res%alpha
   contains
+    !> An angle [rad] as degrees to 0.01 deg.
+    function deg(a) result(t)
+      real(dp), intent(in) :: a
+      character(len=:), allocatable :: t
+      t = str(anint(a*rad2deg*100)/100)
+    end function deg
+
     real(dp) function alpha_of(xx)
       real(dp), intent(in) :: xx(3)
       if (prob%mode == "fly") then
@@ -145,8 +190,8 @@ contains
       c = rot_z(alpha)                         ! body -> earth at pitch = alpha
       v_b = matmul(transpose(c), [prob%speed, 0.0_dp, 0.0_dp])
       o = aircraft_aero_eval(a, prob%density, v_b, [0.0_dp, 0.0_dp, 0.0_dp], alpha)
-      f_e = matmul(c, o%force) + [-prob%pull, -(prob%aircraft_mass + prob%rocket_mass)*g0, 0.0_dp]
-      pull_b = matmul(transpose(c), [-prob%pull, 0.0_dp, 0.0_dp])
+      f_e = matmul(c, o%force) + [-prob%pull, prob%pull_y - (prob%aircraft_mass + prob%rocket_mass)*g0, 0.0_dp]
+      pull_b = matmul(transpose(c), [-prob%pull, prob%pull_y, 0.0_dp])
       grav_b = matmul(transpose(c), [0.0_dp, -prob%rocket_mass*g0, 0.0_dp])
       m_b = o%moment + cross(prob%r_rocket, grav_b) + cross(prob%r_tie, pull_b)
       eq = [f_e(1), f_e(2), m_b(3)]

@@ -96,6 +96,8 @@ program airlaunch
       if (allocated(error)) call fail_input(error%message)
       call prepare_output_file()
       call run_launch(run, cfg, echo, res, error)
+      ! a scenario the aircraft cannot fly (its trim) is bad input: one line, exit 2
+      if (allocated(error) .and. res%status == "invalid_input") call fail_input(path // ": " // error%message)
       summary = launch_summary(res)
     end block
   case default

@@ -25,6 +25,8 @@ module airlaunch_launch_history
     character(len=:), allocatable :: failure
     real(dp) :: trim_alpha_deg = 0.0_dp, trim_elevator_deg = 0.0_dp, trim_thrust_n = 0.0_dp
     real(dp) :: trim_cl0 = 0.0_dp, trim_cm0 = 0.0_dp   !< the aircraft's C_L0, C_m0 after the trim
+    integer :: trim_passes = 1                    !< trim-and-settle passes (the line's force at the tie-down)
+    real(dp) :: trim_line_force_change_n = 0.0_dp !< change of that force in the last pass [N]
     real(dp) :: release_time = -1.0_dp, edge_time = -1.0_dp, separation_time = -1.0_dp
     logical :: early_separation = .false.
     real(dp) :: edge_pull_time = -1.0_dp   !< bilateral edge: first time the edge had to pull [s]

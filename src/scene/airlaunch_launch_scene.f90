@@ -47,109 +47,160 @@ contains
 
   !> Build the system, trim it and fill its initial state y0 (relative
   !> variables, see airlaunch_launch_system).
+  !>
+  !> The trim needs the line's force on the tie-down point, which the settled
+  !> line gives only once the trimmed attitude places it: the first pass trims
+  !> with the steady pull along earth -x (canopy drag and skin friction), every
+  !> further pass with the settled line's end force of the pass before (its
+  !> weight pulls the tie-down down, ~250 N in the paper scenario), until the
+  !> end force changes by at most 1e-9 of the total weight between passes (the
+  !> order of the trim's own convergence, 1e-10, and of the line's settling,
+  !> 1e-9 of its tension): the system then starts at rest to that tolerance.
   subroutine setup_launch(cfg, sys, y0, res, error)
     type(scenario_config), intent(in) :: cfg
     type(launch_system), intent(inout) :: sys
     real(dp), allocatable, intent(out) :: y0(:)
     type(launch_result), intent(inout) :: res
     type(error_type), allocatable, intent(inout) :: error
+    type(launch_system) :: fresh
     type(air_state) :: air
-    type(trim_problem) :: tp
-    type(trim_result) :: tr
-    type(rigid_body) :: b0, b1
-    type(cut_joint_geometry) :: geo
-    type(cut_joint_options) :: jopt
-    type(launch_loads) :: loads
-    type(line_params) :: lp
-    real(dp) :: v0, radius, r_rocket(3), r_tie(3), pull
-    integer :: n, i, status
+    real(dp) :: v0, pull, f_tie(3), f_new(3), tol
+    integer :: pass
+    integer, parameter :: max_pass = 6
 
     air = isa(cfg%flight%altitude)
     v0 = cfg%flight%mach*air%sound_speed
-    radius = cfg%rocket%aero%diameter/2
-    sys%has_line = cfg%line%enabled
-    if (sys%has_line) then
-      ! the line: weight and drag on, ISA density along it
-      lp = line_params(length=cfg%line%length, n_seg=cfg%line%n_seg, ea=cfg%line%ea, &
-        mass_per_length=cfg%line%mass_per_length, damping=cfg%line%damping, diameter=cfg%line%diameter, &
-        cd_normal=cfg%line%cd_normal, cd_tangential=cfg%line%cd_tangential, gravity=.true., air=.true.)
-      call sys%line%init(lp, error)
-      if (allocated(error)) return
-      sys%chute = cfg%chute
-      if (sys%chute%deploy_time >= 0.0_dp) sys%chute%fill_time = &
-        sys%chute%fill_constant*sqrt(4*sys%chute%drag_area/(pi*sys%chute%cd0))/v0
-    end if
-
-    ! --- trim of the Case 0 system (aircraft + locked rocket + parachute pull)
-    r_rocket = [cfg%bay%ramp_edge_x + cfg%bay%l0, cfg%bay%floor_y + radius, 0.0_dp]
-    r_tie = r_rocket + [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
     ! steady pull: the canopy's drag and the skin friction of the trailing line
-    pull = 0.5_dp*air%density*v0**2*(sys%chute%drag_area + cfg%line%cd_tangential*pi*cfg%line%diameter &
+    pull = 0.5_dp*air%density*v0**2*(cfg%chute%drag_area + cfg%line%cd_tangential*pi*cfg%line%diameter &
       *cfg%line%length)
-    if (sys%chute%deploy_time >= 0.0_dp) pull = 0.5_dp*air%density*v0**2*sys%chute%packed_drag_area
-    if (.not. sys%has_line) pull = 0.0_dp
-    tp = trim_problem(aircraft_mass=cfg%aircraft%mass, rocket_mass=cfg%rocket%mass, r_rocket=r_rocket, &
-      r_tie=r_tie, pull=pull, density=air%density, speed=v0, mode=cfg%flight%trim_mode, &
-      alpha_target=cfg%flight%trim_alpha)
-    loads%aircraft = cfg%aircraft%aero
-    call trim_case0(tp, loads%aircraft, tr, error)
-    if (allocated(error)) then
-      error%message = "Case 0 trim (t = 0 s): " // error%message
-      return
-    end if
-    res%trim_alpha_deg = tr%alpha*rad2deg
-    res%trim_elevator_deg = tr%delta_e*rad2deg
-    res%trim_thrust_n = tr%thrust
-    res%trim_cl0 = tr%cl0
-    res%trim_cm0 = tr%cm0
-
-    ! --- bodies: aircraft in trimmed level flight, rocket locked on the rail
-    b0 = new_rigid_body("aircraft", cfg%aircraft%mass, diag(cfg%aircraft%inertia), error)
-    if (allocated(error)) return
-    b0%r = [0.0_dp, cfg%flight%altitude, 0.0_dp]
-    b0%v = [v0, 0.0_dp, 0.0_dp]
-    call b0%set_attitude(quat_from_euler([0.0_dp, tr%alpha, 0.0_dp]))
-    b1 = new_rigid_body("rocket", cfg%rocket%mass, diag(cfg%rocket%inertia), error)
-    if (allocated(error)) return
-    geo = cut_joint_geometry(rail_direction=[-1.0_dp, 0.0_dp, 0.0_dp], &
-      floor_point=[0.0_dp, cfg%bay%floor_y, 0.0_dp], edge_point=[cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp], &
-      contact_point=[0.0_dp, -radius, 0.0_dp], nose_x=cfg%rocket%aero%cg_from_nose, &
-      rocket_length=cfg%rocket%aero%length, rocket_radius=radius)
-    jopt = cut_joint_options(mu_rail=cfg%bay%friction, mu_edge=cfg%bay%friction)
-    sys%tie_down = [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
-    call sys%sep%init(b0, b1, sys%tie_down, 1, geo, jopt, cfg%bay%release_time, error, &
-      aircraft_prescribed=cfg%aircraft%dynamics == "prescribed")
-    if (allocated(error)) return
-    sys%sep%edge_bilateral = cfg%bay%edge_contact == "bilateral"
-    call sys%sep%joint%place_on_rail(sys%sep%bodies(0), cfg%bay%l0, 0.0_dp, sys%sep%bodies(1))
-    call sys%sep%add_source(gravity_source())
-    loads%rocket = cfg%rocket%aero
-    loads%edge_point = geo%edge_point
-    loads%tie_down = sys%tie_down
-    loads%aircraft_aero_on = cfg%aircraft%dynamics /= "prescribed"
-    loads%line_on = sys%has_line
-    call sys%sep%add_source(loads)
-    sys%iloads = size(sys%sep%sources)
-
-    ! --- state: reference frame at V0, h0; the line trails straight aft from
-    !     the tie-down point, stretched by the steady pull
-    sys%v_ref = v0
-    sys%h_ref = cfg%flight%altitude
-    n = merge(sys%line%n, 0, sys%has_line)
-    allocate(y0(rigid_size + 6*n), sys%yabs(rigid_size + 6*n), sys%ydabs(rigid_size + 6*n))
-    call sys%sep%pack_state(y0(1:rigid_size))
-    do i = 0, 1
-      y0(13*i+1:13*i+3) = y0(13*i+1:13*i+3) - [0.0_dp, sys%h_ref, 0.0_dp]
-      y0(13*i+4) = y0(13*i+4) - v0
-    end do
-    if (sys%has_line) then
-      allocate(sys%x(3, 0:n), sys%v(3, 0:n), sys%f(3, 0:n), sys%tension(n))
-      call place_line(sys, cfg, pull, air%density, v0, y0, error)
+    if (cfg%chute%deploy_time >= 0.0_dp) pull = 0.5_dp*air%density*v0**2*cfg%chute%packed_drag_area
+    if (.not. cfg%line%enabled) pull = 0.0_dp
+    f_tie = [-pull, 0.0_dp, 0.0_dp]
+    tol = 1.0e-9_dp*(cfg%aircraft%mass + cfg%rocket%mass)*g0
+    do pass = 1, max_pass
+      sys = fresh   ! each pass builds the system afresh (also a system set up before)
+      if (allocated(y0)) deallocate(y0)
+      call build_trimmed(f_tie, error)
       if (allocated(error)) return
-    end if
-    call sys%prepare(0.0_dp, y0, status)
-    call sys%sep%start(0.0_dp, sys%yabs(1:rigid_size), phase_preparation, error)
+      if (.not. sys%has_line) exit
+      f_new = sys%f(:, 0)
+      res%trim_line_force_change_n = norm2(f_new - f_tie)
+      res%trim_passes = pass
+      if (norm2(f_new - f_tie) <= tol) exit
+      if (pass == max_pass) then
+        call fatal_error(error, "Case 0 trim (t = 0 s): the trim and the settled line's force on the " // &
+          "tie-down point did not agree after " // str(max_pass) // " passes (last change " // &
+          str(norm2(f_new - f_tie)) // " N, allowed " // str(tol) // " N)")
+        return
+      end if
+      f_tie = f_new
+    end do
   contains
+    !> One pass: the trim with the line's force f_line (earth frame) at the
+    !> tie-down point, the bodies in the trimmed flight, the line settled.
+    subroutine build_trimmed(f_line, error)
+      real(dp), intent(in) :: f_line(3)
+      type(error_type), allocatable, intent(inout) :: error
+      type(trim_problem) :: tp
+      type(trim_result) :: tr
+      type(rigid_body) :: b0, b1
+      type(cut_joint_geometry) :: geo
+      type(cut_joint_options) :: jopt
+      type(launch_loads) :: loads
+      type(line_params) :: lp
+      real(dp) :: radius, r_rocket(3), r_tie(3)
+      integer :: n, i, status
+
+      radius = cfg%rocket%aero%diameter/2
+      sys%has_line = cfg%line%enabled
+      if (sys%has_line) then
+        ! the line: weight and drag on, ISA density along it
+        lp = line_params(length=cfg%line%length, n_seg=cfg%line%n_seg, ea=cfg%line%ea, &
+          mass_per_length=cfg%line%mass_per_length, damping=cfg%line%damping, diameter=cfg%line%diameter, &
+          cd_normal=cfg%line%cd_normal, cd_tangential=cfg%line%cd_tangential, gravity=.true., air=.true.)
+        call sys%line%init(lp, error)
+        if (allocated(error)) return
+        sys%chute = cfg%chute
+        if (sys%chute%deploy_time >= 0.0_dp) sys%chute%fill_time = &
+          sys%chute%fill_constant*sqrt(4*sys%chute%drag_area/(pi*sys%chute%cd0))/v0
+      end if
+
+      ! --- trim of the Case 0 system (aircraft + locked rocket + parachute pull)
+      r_rocket = [cfg%bay%ramp_edge_x + cfg%bay%l0, cfg%bay%floor_y + radius, 0.0_dp]
+      r_tie = r_rocket + [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
+      tp = trim_problem(aircraft_mass=cfg%aircraft%mass, rocket_mass=cfg%rocket%mass, r_rocket=r_rocket, &
+        r_tie=r_tie, pull=-f_line(1), pull_y=f_line(2), density=air%density, speed=v0, &
+        mode=cfg%flight%trim_mode, alpha_target=cfg%flight%trim_alpha)
+      loads%aircraft = cfg%aircraft%aero
+      call trim_case0(tp, loads%aircraft, tr, error)
+      if (allocated(error)) then
+        if (tr%infeasible) then
+          ! an equilibrium the aircraft cannot fly: the scenario is impossible (bad input)
+          res%status = "invalid_input"
+          error%message = "&flight: trim_mode = '" // trim(cfg%flight%trim_mode) // "' cannot trim the Case 0 " // &
+            "flight at mach = " // str(cfg%flight%mach) // " (&aircraft cl0 = " // str(cfg%aircraft%aero%cl0) // &
+            ", cm0 = " // str(cfg%aircraft%aero%cm0) // ", delta_e_max_deg = " // &
+            str(cfg%aircraft%aero%delta_e_max*rad2deg) // "): " // error%message(len("trim: ")+1:) // &
+            "; give cl0, cm0 that trim this flight or trim_mode = 'calibrate'"
+          return
+        end if
+        error%message = "Case 0 trim (t = 0 s): " // error%message
+        return
+      end if
+      res%trim_alpha_deg = tr%alpha*rad2deg
+      res%trim_elevator_deg = tr%delta_e*rad2deg
+      res%trim_thrust_n = tr%thrust
+      res%trim_cl0 = tr%cl0
+      res%trim_cm0 = tr%cm0
+
+      ! --- bodies: aircraft in trimmed level flight, rocket locked on the rail
+      b0 = new_rigid_body("aircraft", cfg%aircraft%mass, diag(cfg%aircraft%inertia), error)
+      if (allocated(error)) return
+      b0%r = [0.0_dp, cfg%flight%altitude, 0.0_dp]
+      b0%v = [v0, 0.0_dp, 0.0_dp]
+      call b0%set_attitude(quat_from_euler([0.0_dp, tr%alpha, 0.0_dp]))
+      b1 = new_rigid_body("rocket", cfg%rocket%mass, diag(cfg%rocket%inertia), error)
+      if (allocated(error)) return
+      geo = cut_joint_geometry(rail_direction=[-1.0_dp, 0.0_dp, 0.0_dp], &
+        floor_point=[0.0_dp, cfg%bay%floor_y, 0.0_dp], edge_point=[cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp], &
+        contact_point=[0.0_dp, -radius, 0.0_dp], nose_x=cfg%rocket%aero%cg_from_nose, &
+        rocket_length=cfg%rocket%aero%length, rocket_radius=radius)
+      jopt = cut_joint_options(mu_rail=cfg%bay%friction, mu_edge=cfg%bay%friction)
+      sys%tie_down = [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
+      call sys%sep%init(b0, b1, sys%tie_down, 1, geo, jopt, cfg%bay%release_time, error, &
+        aircraft_prescribed=cfg%aircraft%dynamics == "prescribed")
+      if (allocated(error)) return
+      sys%sep%edge_bilateral = cfg%bay%edge_contact == "bilateral"
+      call sys%sep%joint%place_on_rail(sys%sep%bodies(0), cfg%bay%l0, 0.0_dp, sys%sep%bodies(1))
+      call sys%sep%add_source(gravity_source())
+      loads%rocket = cfg%rocket%aero
+      loads%edge_point = geo%edge_point
+      loads%tie_down = sys%tie_down
+      loads%aircraft_aero_on = cfg%aircraft%dynamics /= "prescribed"
+      loads%line_on = sys%has_line
+      call sys%sep%add_source(loads)
+      sys%iloads = size(sys%sep%sources)
+
+      ! --- state: reference frame at V0, h0; the line trails straight aft from
+      !     the tie-down point, stretched by the steady pull
+      sys%v_ref = v0
+      sys%h_ref = cfg%flight%altitude
+      n = merge(sys%line%n, 0, sys%has_line)
+      allocate(y0(rigid_size + 6*n), sys%yabs(rigid_size + 6*n), sys%ydabs(rigid_size + 6*n))
+      call sys%sep%pack_state(y0(1:rigid_size))
+      do i = 0, 1
+        y0(13*i+1:13*i+3) = y0(13*i+1:13*i+3) - [0.0_dp, sys%h_ref, 0.0_dp]
+        y0(13*i+4) = y0(13*i+4) - v0
+      end do
+      if (sys%has_line) then
+        allocate(sys%x(3, 0:n), sys%v(3, 0:n), sys%f(3, 0:n), sys%tension(n))
+        call place_line(sys, cfg, pull, air%density, v0, y0, error)
+        if (allocated(error)) return
+      end if
+      call sys%prepare(0.0_dp, y0, status)
+      call sys%sep%start(0.0_dp, sys%yabs(1:rigid_size), phase_preparation, error)
+    end subroutine build_trimmed
+
     pure function diag(d) result(m)
       real(dp), intent(in) :: d(3)
       real(dp) :: m(3, 3)

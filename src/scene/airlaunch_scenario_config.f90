@@ -12,6 +12,7 @@ module airlaunch_scenario_config
   use airlaunch_aircraft_aero, only: aircraft_aero
   use airlaunch_rocket_aero, only: rocket_aero
   use airlaunch_parachute, only: parachute
+  use airlaunch_trim, only: trim_alpha_min_deg, trim_alpha_max_deg
   implicit none
   private
   public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config
@@ -192,7 +193,7 @@ contains
     call require_range(f, "flight", "altitude", altitude, 0.0_dp, 20000.0_dp, "m", error)
     call require_range(f, "flight", "mach", mach, 0.05_dp, 0.95_dp, "", error)
     call require_choice(f, "flight", "trim_mode", trim_mode, [character(len=16) :: "calibrate", "fly"], error)
-    call require_range(f, "flight", "trim_alpha_deg", trim_alpha_deg, -5.0_dp, 15.0_dp, "deg", error)
+    call require_range(f, "flight", "trim_alpha_deg", trim_alpha_deg, trim_alpha_min_deg, trim_alpha_max_deg, "deg", error)
     if (allocated(error)) return
     c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad)
     open(newunit=u, status="scratch", action="readwrite")

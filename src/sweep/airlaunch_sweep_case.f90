@@ -351,7 +351,10 @@ contains
     if (run%trajectory) run%output = trajectory
     call run_launch(run, cfg, echo, res, error)
     call system_clock(c1)
-    if (allocated(error)) then
+    if (allocated(error) .and. res%status == "invalid_input") then
+      ! a case the aircraft cannot fly (its trim): rejected input, not a failed run
+      row = invalid_row(id, "case " // str(id) // ": " // error%message, real(c1 - c0, dp)/rate)
+    else if (allocated(error)) then
       row = row_from_result(id, res, .true., error%message, real(c1 - c0, dp)/rate)
     else
       row = row_from_result(id, res, .false., "", real(c1 - c0, dp)/rate)

@@ -15,6 +15,9 @@ RTOL = float(re.search(r"^\s*rtol\s*=\s*(\S+)", PAPER.read_text(), flags=re.M).g
 # the paper's own discretization (60 elements, its Fig. 8) at tight tolerances
 FINE = [(r"^  rtol = \S+.*$", "  rtol = 1.0e-6"), (r"^  atol = \S+.*$", "  atol = 1.0e-7"),
         (r"^  n_seg = \d+.*$", "  n_seg = 60")]
+# the paper's aircraft with the C_L0, C_m0 of its calibration, trimmed by alpha and elevator
+FLY = [(r"^  trim_mode = 'calibrate' .*$", "  trim_mode = 'fly'"),
+       (r"^  chord = 6.0 .*$", "  chord = 6.0\n  cl0 = 3.6555975256055862E-001\n  cm0 = -2.1118860723936879E-002")]
 MILESTONES = ["edge_time_s", "separation_time_s", "edge_pull_time_s", "pitch_at_separation_deg",
               "pitch_rate_at_separation_deg_s", "pitch_max_time_s", "pitch_max_deg", "min_clearance_m",
               "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion"]
@@ -137,6 +140,18 @@ def test_defaults_within_0p1_percent_of_the_paper_discretization(paper_run, pape
     ([(r"^  l0 = 10.0 .*$", "  l0 = 5.0")], "&bay: l0 = 5.0 is not allowed"),
     ([(r"^  fin_semi_span = 1.34 .*$", "  fin_semi_span = 2.0")], "&rocket: fin_semi_span = 2.0 is not allowed"),
     ([(r"^  deploy_time = -1.0 .*$", "  deploy_time = 20.0")], "the parachute would never inflate"),
+    # an aircraft that cannot fly the trim: the paper's aircraft (C_L0, C_m0 of
+    # its calibration, as input/sweep_paper.nml freezes them) flown too slowly
+    # trims at 60.8 deg with -56.5 deg elevator (was accepted, the hold then
+    # clamped the elevator to 25 deg and the run started out of trim) ...
+    (FLY + [(r"^  mach = 0.65 .*$", "  mach = 0.15")],
+     "&flight: trim_mode = 'fly' cannot trim the Case 0 flight at mach = 0.15"),
+    (FLY + [(r"^  mach = 0.65 .*$", "  mach = 0.15")], "beyond the elevator limit and the alpha range (allowed"),
+    # ... at Mach 0.25 only the angle of attack is beyond its range (28 deg, -18 deg elevator) ...
+    (FLY + [(r"^  mach = 0.65 .*$", "  mach = 0.25")], "deg, beyond the alpha range (allowed"),
+    # ... at Mach 0.35 only the elevator (-7.3 deg at 13.3 deg) beyond a 5 deg limit
+    (FLY + [(r"^  mach = 0.65 .*$", "  mach = 0.35"), (r"^  delta_e_max_deg = 25.0$", "  delta_e_max_deg = 5.0")],
+     "deg, beyond the elevator limit (allowed: |elevator| <= 5.0 deg"),
 ])
 def test_impossible_scenarios_give_one_clear_line(airlaunch_exe, tmp_path, edits, fragment):
     nml = nml_variant(tmp_path, edits=edits)

@@ -5,6 +5,7 @@
 program test_aero
   use airlaunch_kinds, only: dp, pi, deg2rad, g0
   use airlaunch_error, only: error_type
+  use airlaunch_strings, only: str
   use airlaunch_aircraft_aero
   use airlaunch_rocket_aero
   use airlaunch_parachute
@@ -20,7 +21,10 @@ program test_aero
   type(trim_result) :: tr, tr2
   type(error_type), allocatable :: error
   type(air_state) :: air
-  real(dp) :: v, alpha, vb(3), qs, f(3), m(3), expected, rho, w, l
+  real(dp) :: v, alpha, vb(3), qs, f(3), m(3), expected, rho, w, l, beta, vhat(3), fperp(3), x, f0(3), m0(3), &
+    cn, tol
+  real(dp), parameter :: small_alphas(3) = [1.0e-8_dp, 1.0e-6_dp, 1.0e-3_dp]
+  integer :: k, sgn
 
   call section("aircraft: lift normal to and drag along the relative wind")
   ac%cl0 = 0.3_dp
@@ -33,6 +37,28 @@ program test_aero
   call check_close(o%cl, ac%cl0 + ac%cl_alpha*alpha, "CL = CL0 + CLa alpha", rel=1e-14_dp)
   call check_close(norm2(o%force - dot_product(o%force, vb/v)*vb/v), qs*o%cl, "|force normal to V| = qS CL", rel=1e-12_dp)
   call check(abs(o%force(3)) + abs(o%moment(1)) + abs(o%moment(2)) == 0.0_dp, "symmetric flight: no lateral force or moment")
+
+  call section("aircraft: drag along -V in sideslip (wind axes)")
+  ! beta = 10 deg, no side-force derivative: the aerodynamic force is
+  ! qS (CL l - CD V/|V|) with l normal to V in the plane of symmetry, so its
+  ! component along V is -qS CD and the rest has magnitude qS CL and no body-z
+  ! part.  One evaluation: round-off, 1e-12 relative.  (A drag kept in the
+  ! body x-y plane gives -qS CD cos(beta): 1.5e-2 off.)
+  block
+    type(aircraft_aero) :: acb
+    acb = ac
+    acb%cy_beta = 0.0_dp
+    beta = 10*deg2rad
+    vb = v*[cos(beta)*cos(alpha), -cos(beta)*sin(alpha), sin(beta)]
+    vhat = vb/v
+    o = aircraft_aero_eval(acb, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 0.0_dp)
+    call check_close(o%beta, beta, "beta from the body velocity", abs=1e-14_dp)
+    call check_close(-dot_product(o%force, vhat), qs*(acb%cd0 + acb%k_induced*o%cl**2), &
+      "force along -V = qS CD at beta = 10 deg", rel=1e-12_dp)
+    fperp = o%force - dot_product(o%force, vhat)*vhat
+    call check_close(norm2(fperp), qs*o%cl, "|force normal to V| = qS CL at beta = 10 deg", rel=1e-12_dp)
+    call check_close(fperp(3), 0.0_dp, "the lift has no body-z part (plane of symmetry)", abs=1e-12_dp*qs*o%cl)
+  end block
 
   call section("aircraft: signs of the stability derivatives")
   o = aircraft_aero_eval(ac, rho, [v, 0.0_dp, 10.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], 0.0_dp)
@@ -77,6 +103,52 @@ program test_aero
   call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], rk%cg_from_nose - rk%length - 0.1_dp, f, m)
   call check(all(f == 0.0_dp) .and. all(m == 0.0_dp), "fully shielded inside the bay: no load")
 
+  call section("rocket: slender-body slope C_N -> 2 alpha at small angles")
+  ! body alone (no cross-flow drag, no fins): C_N = sin(2a) cos(a/2) =
+  ! 2a (1 - (2/3 + 1/8) a^2 + ...), so C_N/(2a) - 1 is below a^2 in magnitude,
+  ! plus round-off (1e-12).  acos(v_x/v) lost it: -1.0 at 1e-8, 1.6e-4 at 1e-6.
+  rk = rocket_aero()
+  rk%c_dn = 0.0_dp
+  v = 194.7_dp
+  do k = 1, size(small_alphas)
+    alpha = small_alphas(k)
+    vb = v*[cos(alpha), -sin(alpha), 0.0_dp]
+    call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+    cn = f(2)/(0.5_dp*rho*v*v*pi*rk%diameter**2/4)
+    tol = 1.0e-12_dp + alpha**2
+    call check_close(cn/(2*alpha), 1.0_dp, "C_N/(2 alpha) at alpha = " // str(alpha) // " rad", abs=tol)
+  end do
+
+  call section("rocket: fins of a pitching rocket with no cross-flow at the CG")
+  ! the paper's X fins (Barrowman: CN_alpha = 6.4734 on S_ref, centre of
+  ! pressure 17.333 m from the nose, flat-plate 3.6193 at 90 deg); V along the
+  ! body axis, pitch rate q: the fins see v_y = q x_f (x_f = CG - fin < 0), so
+  !   F_y = -1/2 rho S_ref (CN_alpha V + CN_90 |q x_f|) q x_f,  M_z = x_f F_y.
+  ! Cross-flow drag off to isolate the fins; one evaluation: 1e-12 relative.
+  rk = rocket_aero()
+  rk%cn_alpha_fin = 6.4734_dp; rk%x_fin_from_nose = 17.3333_dp; rk%cn_fin_90 = 3.6193_dp
+  rk%c_dn = 0.0_dp
+  v = 194.7_dp; w = 0.5_dp
+  x = rk%cg_from_nose - rk%x_fin_from_nose
+  expected = -0.5_dp*rho*pi*rk%diameter**2/4*(rk%cn_alpha_fin*v + rk%cn_fin_90*abs(w*x))*w*x
+  call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
+  call check_close(f(2), expected, "fin normal force of a pure pitch rate", rel=1e-12_dp)
+  call check_close(m(3), x*expected, "fin damping moment of a pure pitch rate", rel=1e-12_dp)
+  call check(m(3) < 0.0_dp, "the fins damp a nose-up rate")
+  ! continuity in v_y at 0 (with the cross-flow drag): the loads' slope in v_y
+  ! is ~ rho V S_ref (1 + CN_alpha/2) ~ 7e2 N per m/s, so a step of 1e-9 m/s
+  ! changes them by < 1e-6 N, ~ 5e-10 of |F_y|; allowed: 1e-8 relative.
+  rk%c_dn = 1.2_dp
+  call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f0, m0)
+  do sgn = -1, 1, 2
+    call rocket_aero_eval(rk, rho, [v, sgn*1.0e-9_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
+    call check_close(f(2), f0(2), "F_y continuous at v_y = 0 (" // str(sgn*1.0e-9_dp) // ")", &
+      abs=1e-8_dp*abs(f0(2)))
+    call check_close(m(3), m0(3), "M_z continuous at v_y = 0 (" // str(sgn*1.0e-9_dp) // ")", &
+      abs=1e-8_dp*abs(m0(3)))
+  end do
+  rk = rocket_aero()
+
   call section("parachute: inflation law and apparent mass")
   pc%deploy_time = 1.0_dp; pc%fill_time = 0.4_dp
   call check_close(parachute_drag_area(pc, 0.5_dp), pc%packed_drag_area, "packed before deployment", rel=1e-15_dp)
@@ -107,5 +179,34 @@ program test_aero
   ! thrust balances aircraft drag + parachute pull (cos alpha ~ 1)
   call check_close(tr%thrust, tp%pull + (ac%cd0 + ac%k_induced*(117000*g0/(tp%density*tp%speed**2/2*ac%wing_area))**2) &
     *tp%density*tp%speed**2/2*ac%wing_area, "thrust ~ drag + pull", rel=2e-2_dp)
+
+  call section("trim: an equilibrium beyond the elevator limit is refused")
+  ! the calibrated aircraft at Mach 0.35: first with an unlimited elevator
+  ! (the reference: its equilibrium), then with a limit of half that elevator:
+  ! the same equilibrium is found (1e-9 rad: Newton converged to 1e-10 of the
+  ! weight) and refused as infeasible; `ac` is left as it was
+  block
+    type(aircraft_aero) :: ac_free, ac_lim
+    type(trim_result) :: tr_free, tr_lim
+    tp%speed = 0.35_dp*air%sound_speed
+    ac_free = ac
+    ac_free%delta_e_max = huge(1.0_dp)
+    call trim_case0(tp, ac_free, tr_free, error)
+    call check(.not. allocated(error) .and. .not. tr_free%infeasible, "unlimited elevator: the trim converges")
+    call check(tr_free%alpha > 0.0_dp .and. tr_free%alpha < 15*deg2rad .and. tr_free%delta_e < 0.0_dp, &
+      "slow flight: alpha within its range, nose-up (negative) elevator")
+    if (allocated(error)) deallocate(error)
+    ac_lim = ac
+    ac_lim%delta_e_max = 0.5_dp*abs(tr_free%delta_e)
+    call trim_case0(tp, ac_lim, tr_lim, error)
+    call check(allocated(error) .and. tr_lim%infeasible, "elevator beyond its limit: error, infeasible")
+    if (allocated(error)) then
+      call check(index(error%message, "beyond the elevator limit (allowed") > 0 .and. &
+        index(error%message, new_line("a")) == 0, "one line naming the elevator limit: " // error%message)
+      deallocate(error)
+    end if
+    call check_close(tr_lim%delta_e, tr_free%delta_e, "the refused elevator is the equilibrium's", abs=1e-9_dp)
+    call check(ac_lim%delta_e_trim == ac%delta_e_trim .and. ac_lim%thrust == ac%thrust, "aircraft left unchanged")
+  end block
   call finish()
 end program test_aero
