@@ -69,7 +69,10 @@
 !> rho*l0/2 is NOT accelerated by the line: the owner adds it to the body's mass
 !> (its weight is already in f, so no gravity is applied to it again), or
 !> neglects it (error of order m_0/m_body).  The tension alone is `tension(1)`,
-!> `tension(N)` with `end_tangent`.
+!> `tension(N)` with `end_tangent`.  With the mixed mass the support of a
+!> kinematic node 0 feels f(:,0) - m_0 a_0 - beta rho l0 (a_1 - a_0) (node 0's
+!> row of M a); f(:,0) is the lumped-mass end force with either matrix (the line
+!> scene records it as line_end_force; docs/line.md section 4).
 module airlaunch_line_model
   use airlaunch_kinds, only: dp, g0, pi
   use airlaunch_error, only: error_type, fatal_error
