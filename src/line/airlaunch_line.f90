@@ -7,7 +7,7 @@ module airlaunch_line
   use airlaunch_line_model, only: line_params, line_model, line_energy, node_state_name
   use airlaunch_line_ends, only: line_end, end_kind_code, end_kind_name, end_fixed, end_prescribed, &
     end_free, end_point_mass, end_body
-  use airlaunch_line_shape, only: straight_shape, sagged_shape
+  use airlaunch_line_shape, only: straight_shape, sagged_shape, parabola_length, parabola_sag_for_length
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
   use airlaunch_line_cvode, only: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, &
     line_force_jacobian
@@ -17,7 +17,7 @@ module airlaunch_line
   private
   public :: line_params, line_model, line_energy, node_state_name
   public :: line_end, end_kind_code, end_kind_name, end_fixed, end_prescribed, end_free, end_point_mass, end_body
-  public :: straight_shape, sagged_shape
+  public :: straight_shape, sagged_shape, parabola_length, parabola_sag_for_length
   public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
   public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, line_force_jacobian
   public :: line_marching, new_line_marching

@@ -24,16 +24,28 @@
 !>  Step 3  Eq. (12), the recursion along the line from the near end: the
 !>          segment vector is advanced by the relative velocity of its nodes
 !>          (Eq. (10) integrated), dx_k^{n+1} = dx_k^n + h (v_k^{n+1} - v_{k-1}^{n+1}),
-!>          and x_k^{n+1} = x_{k-1}^{n+1} + dx_k^{n+1}, k = near+1 .. far.  The
+!>          k = near+1 .. far, carried as node displacements
+!>          d_k = x_k^{n+1} - x_k^n = d_{k-1} + h (v_k^{n+1} - v_{k-1}^{n+1}),
+!>          x_k^{n+1} = x_k^n + d_k (the same recursion; the displacements keep
+!>          the rounding of large coordinates out of the far-end residual).  The
 !>          near kinematic end enters with its discrete velocity
 !>          (x_0^{n+1} - x_0^n)/h, so the march reproduces its path exactly.
 !>          The far node is advanced with a trial end force F:
 !>          v_N^{n+1} = v_N^n + h (f_N + F)/m_N, and the far end's condition gives
 !>          the force F(N) it would exert for that motion.
 !>  Step 4  e = F - F(N)  (Eq. (16)).
-!>  Step 5  Newton on F with a 3x3 finite-difference Jacobian (LAPACK) until
+!>  Step 5  Newton on F with the analytic 3x3 Jacobian de/dF until
 !>          |e| <= e0 (`force_tol`, or the round-off level of e if larger),
-!>          warm-started from the previous step's force.
+!>          warm-started from the previous step's force.  For kinematic and free
+!>          far ends e is affine in F with de/dF = I, so one correction F - e is
+!>          exact; for a point mass de/dF = (1 + M/m) I - (dP/dv) h/m (P its
+!>          weight and drag; LAPACK solves the 3x3 system).  The residual is
+!>          formed from the far node's displacement: a kinematic end gives
+!>          e = (m/h^2)(d_N - (x_target - x_N^n)).  (Before, a finite-difference
+!>          Jacobian whose trial step moved the far node by ~h^2 delta/m, 3e-13 m
+!>          for the paper's line at dt = 3e-4 s, was singular once that fell
+!>          below the rounding of the coordinates: a line at y = 10 km stopped
+!>          at t = 0.)
 !> Stripped of notation this is the semi-implicit (symplectic) Euler method on
 !> the lumped-mass semi-discretization, with the far end coupled implicitly
 !> through its force: first order in time and conditionally stable,
@@ -41,7 +53,7 @@
 !> a larger step is refused.  Because the interior update is explicit, the far
 !> residual is affine in F for free, kinematic and drag-free point-mass ends and
 !> Newton converges in one correction; a point mass with quadratic drag takes a
-!> few.  Only the far node depends on F, so each iteration costs O(1), the
+!> few (quadratic convergence: the Jacobian is exact with a fixed air density).  Only the far node depends on F, so each iteration costs O(1), the
 !> march O(N).  If the node-0 end is not kinematic but the node-N end is, the
 !> march starts from node N.  A point mass at the near (non-kinematic) end is
 !> lumped with its node.
@@ -73,7 +85,9 @@ module airlaunch_line_marching
     real(dp), allocatable :: inv_mass(:)             !< 1/m (near point mass lumped)
     real(dp) :: far_force(3) = 0.0_dp         !< converged force of the far end on the far node [N]
     real(dp) :: v_prev(3) = 0.0_dp            !< march velocity of the node before the far one
+    real(dp) :: d_prev(3) = 0.0_dp            !< march displacement x^(n+1) - x^n of that node [m]
     real(dp) :: x_target(3) = 0.0_dp          !< kinematic far end: position at t+h
+    real(dp) :: d_target(3) = 0.0_dp          !< kinematic far end: its displacement over the step [m]
     integer(i8) :: n_steps = 0, n_iter = 0, n_forces = 0
   contains
     procedure :: advance => marching_advance
@@ -172,9 +186,9 @@ contains
     class(line_marching), intent(inout) :: self            !< scheme
     real(dp), intent(in) :: h                              !< step [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    integer :: k, st, it, j, fe, ne
-    real(dp) :: t1, vm_near(3), v_exact(3), force(3), e(3), e1(3), jac(3, 3), rhs(3, 1), delta, e_floor
-    real(dp) :: x_far(3), v_far(3), dummy(3)
+    integer :: k, st, it, fe, ne
+    real(dp) :: t1, vm_near(3), v_exact(3), force(3), e(3), jac(3, 3), rhs(3, 1), e_floor
+    real(dp) :: x_far(3), v_far(3), d_far(3), dummy(3)
 
     t1 = self%t + h
     ne = near_end(self)
@@ -207,21 +221,29 @@ contains
       vm_near = self%vn(:, self%near)
     end if
     self%v_prev = vm_near
+    ! the march carries displacements d_k = x_k^(n+1) - x_k^n (Eq. (12) with
+    ! Eq. (10): d_k = d_(k-1) + h (v_k^(n+1) - v_(k-1)^(n+1))), not positions, so
+    ! that the rounding of large coordinates (a line at 10 km) does not enter
+    self%d_prev = self%xn(:, self%near) - self%x(:, self%near)
     k = self%near + self%dir
     do while (k /= self%far)
-      self%xn(:, k) = self%xn(:, k - self%dir) + (self%x(:, k) - self%x(:, k - self%dir)) &
-        + h*(self%vn(:, k) - self%v_prev)
+      self%d_prev = self%d_prev + h*(self%vn(:, k) - self%v_prev)
+      self%xn(:, k) = self%x(:, k) + self%d_prev
       self%v_prev = self%vn(:, k)
       k = k + self%dir
     end do
-    if (self%ends(fe)%is_kinematic()) call self%ends(fe)%motion(t1, self%x_target, dummy)
+    if (self%ends(fe)%is_kinematic()) then
+      call self%ends(fe)%motion(t1, self%x_target, dummy)
+      self%d_target = self%x_target - self%x(:, self%far)
+    end if
 
-    ! Steps 3-5: iterate on the far-end force, Eq. (16)
+    ! Steps 3-5: Newton on the far-end force, Eq. (16), with its analytic
+    ! Jacobian (far_jacobian: exact; the identity for kinematic and free ends)
     force = self%far_force
-    call far_residual(self, h, force, e, x_far, v_far)
+    call far_residual(self, h, force, e, x_far, v_far, d_far)
     it = 0
     do
-      e_floor = residual_floor(self, h, force, x_far, v_far)
+      e_floor = residual_floor(self, h, force, d_far, v_far)
       if (norm2(e) <= max(self%force_tol, e_floor)) exit
       if (it >= self%max_iter) then
         call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
@@ -229,18 +251,14 @@ contains
           str(it) // " iterations")
         return
       end if
-      delta = 1.0e-6_dp*max(1.0_dp, norm2(force), norm2(e))
-      do j = 1, 3
-        rhs(:, 1) = force
-        rhs(j, 1) = rhs(j, 1) + delta
-        call far_residual(self, h, rhs(:, 1), e1, x_far, v_far)
-        jac(:, j) = (e1 - e)/delta
-      end do
       rhs(:, 1) = -e
-      call solve_general(jac, rhs, error, "line (marching): far-end force Jacobian", estimate_condition=.false.)
-      if (allocated(error)) return
+      if (self%ends(fe)%kind == end_point_mass) then
+        jac = far_jacobian(self, h, x_far, v_far)
+        call solve_general(jac, rhs, error, "line (marching): far-end force Jacobian", estimate_condition=.false.)
+        if (allocated(error)) return
+      end if
       force = force + rhs(:, 1)
-      call far_residual(self, h, force, e, x_far, v_far)
+      call far_residual(self, h, force, e, x_far, v_far, d_far)
       it = it + 1
     end do
     self%n_iter = self%n_iter + it
@@ -257,49 +275,73 @@ contains
   end subroutine marching_step
 
   !> Far node advanced with the trial end force `force`, and the residual
-  !> e = F - F(N) of Eq. (16) of its end condition.
-  subroutine far_residual(self, h, force, e, x_far, v_far)
+  !> e = F - F(N) of Eq. (16) of its end condition, formed from the far node's
+  !> displacement d_far = x_far - x^n (the positions' rounding stays out).
+  subroutine far_residual(self, h, force, e, x_far, v_far, d_far)
     type(line_marching), intent(in) :: self   !< scheme (after the march)
     real(dp), intent(in) :: h                 !< step [s]
     real(dp), intent(in) :: force(3)          !< trial force F of the end on the far node [N]
     real(dp), intent(out) :: e(3)             !< residual [N]
     real(dp), intent(out) :: x_far(3), v_far(3)  !< far node at t+h
-    integer :: kf, kb, fe
-    real(dp) :: fn(3)
+    real(dp), intent(out) :: d_far(3)         !< its displacement over the step [m]
+    integer :: kf, fe
     kf = self%far
-    kb = kf - self%dir
     fe = far_end(self)
     v_far = self%v(:, kf) + h*(self%f(:, kf) + force)*self%inv_mass(kf)
-    x_far = self%xn(:, kb) + (self%x(:, kf) - self%x(:, kb)) + h*(v_far - self%v_prev)
+    d_far = self%d_prev + h*(v_far - self%v_prev)
+    x_far = self%x(:, kf) + d_far
     associate (en => self%ends(fe))
       if (en%is_kinematic()) then
-        ! the reaction that puts the far node on its prescribed position
-        fn = force + (self%x_target - x_far)/(h*h*self%inv_mass(kf))
+        ! F - F(N), F(N) = F + (x_target - x_far) m/h^2 the reaction that puts
+        ! the far node on its prescribed position: affine in F, de/dF = I
+        e = (d_far - self%d_target)/(h*h*self%inv_mass(kf))
       else if (en%kind == end_point_mass) then
         ! Newton's law of the end mass with the backward-difference acceleration
-        fn = point_load(self, fe, x_far, v_far) - en%mass*(v_far - self%v(:, kf))/h
+        e = force - point_load(self, fe, x_far, v_far) + en%mass*(v_far - self%v(:, kf))/h
       else
-        fn = 0.0_dp   ! free end: no force
+        e = force   ! free end: no force, de/dF = I
       end if
     end associate
-    e = force - fn
   end subroutine far_residual
+
+  !> de/dF of far_residual for a point-mass far end:
+  !>   I + (M/m) I - (dP/dv) h/m - (dP/dx) h^2/m,
+  !> m the far node's mass, P the end's weight and drag; dP/dv is the drag's
+  !> derivative (line_end%external_load_dv); dP/dx (the ISA density's change
+  !> with altitude over one step) is left out: exact with a fixed air_density,
+  !> a relative error of ~1e-4 h |v| otherwise, which Newton absorbs.
+  function far_jacobian(self, h, x_far, v_far) result(jac)
+    type(line_marching), intent(in) :: self     !< scheme
+    real(dp), intent(in) :: h                   !< step [s]
+    real(dp), intent(in) :: x_far(3), v_far(3)  !< far node at t+h
+    real(dp) :: jac(3, 3)
+    integer :: fe, i
+    real(dp) :: hm
+    fe = far_end(self)
+    hm = h*self%inv_mass(self%far)
+    jac = -hm*self%ends(fe)%external_load_dv(x_far, v_far, self%model%p%air, self%model%p%wind, &
+      self%model%p%air_density)
+    do i = 1, 3
+      jac(i, i) = jac(i, i) + 1.0_dp + self%ends(fe)%mass*self%inv_mass(self%far)
+    end do
+  end function far_jacobian
 
   !> Round-off level of the far-end residual (64 eps times the size of the
   !> terms that cancel in it), so that e0 below it cannot stall the iteration.
-  real(dp) function residual_floor(self, h, force, x_far, v_far) result(floor)
+  real(dp) function residual_floor(self, h, force, d_far, v_far) result(floor)
     type(line_marching), intent(in) :: self       !< scheme
     real(dp), intent(in) :: h                     !< step [s]
     real(dp), intent(in) :: force(3)              !< current force [N]
-    real(dp), intent(in) :: x_far(3), v_far(3)    !< far node at t+h
+    real(dp), intent(in) :: d_far(3), v_far(3)    !< far node's displacement and velocity at t+h
     real(dp) :: m_far, size
     integer :: fe
     fe = far_end(self)
     m_far = 1.0_dp/self%inv_mass(self%far)
     size = norm2(force) + norm2(self%f(:, self%far))
     if (self%ends(fe)%is_kinematic()) then
-      ! (m/h^2)(x_target - x_far): positions cancel
-      size = size + m_far*(norm2(self%x_target) + norm2(x_far))/h**2
+      ! (m/h^2)(d_far - d_target): displacements cancel, and the velocities in d_far
+      size = size + m_far*(norm2(self%d_target) + norm2(d_far))/h**2 + &
+        m_far*(norm2(self%v(:, self%far)) + norm2(self%v_prev))/h
     else if (self%ends(fe)%kind == end_point_mass) then
       ! M (v_far - v)/h: velocities cancel
       size = size + (self%ends(fe)%mass + m_far)*norm2(v_far)/h

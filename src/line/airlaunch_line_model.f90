@@ -26,9 +26,14 @@
 !>  - aerodynamic drag from the air velocity relative to the segment midpoint,
 !>    u = wind - (v_{k-1}+v_k)/2, split into its tangential part u_t = (u.t)t and
 !>    cross-flow part u_n = u - u_t (the independence principle):
-!>        D = 1/2 rho_air ell [ Cd_n d |u_n| u_n + Cd_t pi d |u_t| u_t ],
-!>    i.e. cross-flow drag on the projected area d*ell and skin friction on the
-!>    wetted area pi*d*ell (MoorDyn's convention).  rho_air is the ISA density
+!>        D = 1/2 rho_air ell_d [ Cd_n d |u_n| u_n + Cd_t pi d |u_t| u_t ],
+!>    i.e. cross-flow drag on the projected area d*ell_d and skin friction on the
+!>    wetted area pi*d*ell_d (MoorDyn's convention), ell_d = max(ell, l0): the
+!>    stretched length of a taut segment, the material length l0 of a slack one
+!>    (its crumpled material is all in the air; with the chord ell a slack line
+!>    lost area and fell faster the finer it was cut).  The direction split
+!>    still uses the chord's t (a slack segment's true shape is unknown: a
+!>    model choice, docs/line.md section 1).  rho_air is the ISA density
 !>    at the segment midpoint altitude y (see `air_density_fit`), or a fixed value.
 !>  - optionally a settling aid: a linear damper to the earth frame,
 !>    -alpha m_k v_k (mass-proportional "Rayleigh" damping, alpha [1/s]), used
@@ -64,7 +69,10 @@
 !> rho*l0/2 is NOT accelerated by the line: the owner adds it to the body's mass
 !> (its weight is already in f, so no gravity is applied to it again), or
 !> neglects it (error of order m_0/m_body).  The tension alone is `tension(1)`,
-!> `tension(N)` with `end_tangent`.
+!> `tension(N)` with `end_tangent`.  With the mixed mass the support of a
+!> kinematic node 0 feels f(:,0) - m_0 a_0 - beta rho l0 (a_1 - a_0) (node 0's
+!> row of M a); f(:,0) is the lumped-mass end force with either matrix (the line
+!> scene records it as line_end_force; docs/line.md section 4).
 module airlaunch_line_model
   use airlaunch_kinds, only: dp, g0, pi
   use airlaunch_error, only: error_type, fatal_error
@@ -246,7 +254,8 @@ contains
         un = u - ut
         rho_a = rho_lo
         if (log_slope /= 0.0_dp) rho_a = rho_lo*exp(log_slope*(0.5_dp*(x(2, k-1) + x(2, k)) - y_lo))
-        drag = rho_a*ell*(qn*length3(un)*un + qt*length3(ut)*ut)
+        ! area from the material length max(ell, l0): a slack segment keeps its drag
+        drag = rho_a*max(ell, self%l0)*(qn*length3(un)*un + qt*length3(ut)*ut)
         f(:, k-1) = f(:, k-1) + 0.5_dp*drag
         f(:, k) = f(:, k) + 0.5_dp*drag
       end if
@@ -271,10 +280,13 @@ contains
   !> steps and 45 % more Jacobians on the heavily damped pendulum (material
   !> damping, N = 60, rtol 1e-3: 2.21 G instructions against 1.56 G; difference
   !> quotients 2.10 G; docs/line.md section 2).
-  !> Drag of a segment, D = rho ell (qn |un| un + qt |ut| ut) with
-  !> u = wind - (v_(k-1) + v_k)/2, ut = (u.t) t, un = u - ut, half to each node:
-  !>   dD/du = rho ell (qn A_n P + qt A_t t t^T),  A = |w| I + w w^T/|w|,
-  !>   dD/d(dx) = D t^T/ell + rho (qt A_t - qn A_n) (t u^T + (u.t) I) P,
+  !> Drag of a segment, D = rho ell_d (qn |un| un + qt |ut| ut) with
+  !> ell_d = max(ell, l0), u = wind - (v_(k-1) + v_k)/2, ut = (u.t) t,
+  !> un = u - ut, half to each node:
+  !>   dD/du = rho ell_d (qn A_n P + qt A_t t t^T),  A = |w| I + w w^T/|w|,
+  !>   dD/d(dx) = [D t^T/ell] + rho (ell_d/ell) (qt A_t - qn A_n) (t u^T + (u.t) I) P,
+  !> the bracketed area term only for a taut segment (ell > l0; a slack one's
+  !> area does not move with dx),
   !> and, with the ISA density, its local gradient along y (the density fit's
   !> dependence on the lowest and highest node is left out: an approximate
   !> Jacobian there, exact with a fixed `air_density`).  Settling damping:
@@ -288,7 +300,7 @@ contains
     integer :: k, i
     real(dp) :: dx(3), dv(3), t(3), pdv(3), u(3), ut(3), un(3), drag(3)
     real(dp) :: p(3, 3), tt(3, 3), kb(3, 3), cb(3, 3), an(3, 3), at(3, 3), gu(3, 3), ddx(3, 3), dut(3, 3)
-    real(dp) :: ell, eps, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope, qn, qt, un_n, ut_n, ud
+    real(dp) :: ell, ell_d, eps, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope, qn, qt, un_n, ut_n, ud
 
     ea = self%p%ea
     cd = self%p%damping
@@ -335,16 +347,20 @@ contains
         if (log_slope /= 0.0_dp) rho_a = rho_lo*exp(log_slope*(0.5_dp*(x(2, k-1) + x(2, k)) - y_lo))
         un_n = length3(un)
         ut_n = length3(ut)
-        drag = rho_a*ell*(qn*un_n*un + qt*ut_n*ut)
+        ell_d = max(ell, self%l0)
+        drag = rho_a*ell_d*(qn*un_n*un + qt*ut_n*ut)
         an = un_n*identity3()
         if (un_n > 0.0_dp) an = an + outer3(un, un)/un_n
         at = ut_n*identity3()
         if (ut_n > 0.0_dp) at = at + outer3(ut, ut)/ut_n
-        gu = rho_a*ell*(qn*matmul(an, p) + qt*matmul(at, tt))
+        gu = rho_a*ell_d*(qn*matmul(an, p) + qt*matmul(at, tt))
         ! du/dv_(k-1) = du/dv_k = -I/2, half of the drag to each node: -gu/4
         call add_segment_blocks(dfdv, k, -0.25_dp*gu, -0.25_dp*gu, same_sign=.true.)
         dut = outer3(t, u) + ud*identity3()
-        ddx = outer3(drag, t)/ell + rho_a*matmul(qt*at - qn*an, matmul(dut, p))
+        ! the direction term (dt/d(dx) = P/ell) always; the area term D t^T/ell only
+        ! while taut (a slack segment's area rho l0 does not depend on dx)
+        ddx = rho_a*(ell_d/ell)*matmul(qt*at - qn*an, matmul(dut, p))
+        if (ell > self%l0) ddx = ddx + outer3(drag, t)/ell
         call add_segment_blocks(dfdx, k, 0.5_dp*ddx, 0.5_dp*ddx)
         if (log_slope /= 0.0_dp) then
           ! d rho/d y_(k-1) = d rho/d y_k = rho s/2: a column along y in both blocks

@@ -1,13 +1,18 @@
 !> Initial shapes of a line between its two end positions: straight (uniform
 !> strain, possibly negative = slack) or sagged (a parabola of given midspan sag
-!> below the chord, nodes at equal arc-length spacing).
+!> below the chord, nodes at equal arc-length spacing).  The parabola's length
+!> is fixed by chord and sag, not by the line's length: its strain is
+!> parabola_length/L - 1 (the caller checks it).  The nodes sit on the
+!> parabola, so for even N node N/2 is its vertex and the sag is met exactly;
+!> for odd N the middle segment's chord spans the vertex and lies above it by
+!> about sag/N^2 (exactly: the nodes at arc fraction 1/2 -+ 1/(2N)).
 module airlaunch_line_shape
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: straight_shape, sagged_shape
+  public :: straight_shape, sagged_shape, parabola_length, parabola_sag_for_length
 
 contains
 
@@ -21,6 +26,41 @@ contains
       x(:, k) = xa + (xb - xa)*(real(k, dp)/n)
     end do
   end subroutine straight_shape
+
+  !> Arc length [m] of the parabola over a chord c [m] with midspan sag f [m]:
+  !> (c/2) sqrt(1 + 16 r^2) + c asinh(4 r)/(8 r), r = f/c (c for f = 0).
+  pure real(dp) function parabola_length(chord, sag) result(s)
+    real(dp), intent(in) :: chord   !< chord length c > 0 [m]
+    real(dp), intent(in) :: sag     !< midspan sag f >= 0 [m]
+    real(dp) :: r
+    r = sag/chord
+    if (r < 1.0e-6_dp) then
+      s = chord*(1.0_dp + 8.0_dp/3.0_dp*r*r)   ! the series: the closed form cancels
+    else
+      s = 0.5_dp*chord*sqrt(1.0_dp + 16.0_dp*r*r) + chord*asinh(4.0_dp*r)/(8.0_dp*r)
+    end if
+  end function parabola_length
+
+  !> Sag [m] of the parabola of arc length `length` over a chord c (bisection;
+  !> the length grows with the sag); 0 if length <= c.
+  pure real(dp) function parabola_sag_for_length(chord, length) result(f)
+    real(dp), intent(in) :: chord    !< chord length c > 0 [m]
+    real(dp), intent(in) :: length   !< arc length [m]
+    real(dp) :: lo, hi
+    integer :: i
+    f = 0.0_dp
+    if (length <= chord) return
+    lo = 0.0_dp
+    hi = length
+    do i = 1, 200
+      f = 0.5_dp*(lo + hi)
+      if (parabola_length(chord, f) > length) then
+        hi = f
+      else
+        lo = f
+      end if
+    end do
+  end function parabola_sag_for_length
 
   !> Nodes x(3,0:n) at equal arc length on the parabola through xa and xb with
   !> midspan sag `sag` [m] perpendicular to the chord, downwards (towards -y) in

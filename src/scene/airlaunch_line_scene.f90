@@ -64,6 +64,8 @@ module airlaunch_line_scene
     logical :: completed = .false.                   !< reached t_end
     real(dp) :: t_reached = 0.0_dp                   !< time the integration reached (a failure's time) [s]
     logical :: ready = .false.                       !< init succeeded
+    !> largest segment strain of the initial shape (negative: all slack)
+    real(dp) :: initial_strain = 0.0_dp
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -78,7 +80,7 @@ contains
     class(line_scene), intent(inout) :: self               !< scene (re-initialised)
     type(line_scene_config), intent(in) :: cfg             !< inputs
     type(error_type), allocatable, intent(inout) :: error  !< set on bad input
-    integer :: n, n_max
+    integer :: n, n_max, k
     real(dp) :: xa(3), xb(3), va(3), vb(3), sep, strain
 
     call self%free()
@@ -136,6 +138,21 @@ contains
         "' is not allowed: use 'straight' or 'sag'")
       return
     end select
+    self%initial_strain = -1.0_dp
+    do k = 1, n
+      self%initial_strain = max(self%initial_strain, norm2(self%x(:, k) - self%x(:, k-1))/self%model%l0 - 1.0_dp)
+    end do
+    if (cfg%initial_shape == "sag" .and. self%initial_strain > max_initial_strain) then
+      ! the parabola's length is set by chord and sag, not by L: the straight
+      ! line's strain limit, on the segments actually built
+      call fatal_error(error, "line_scene: initial_sag = " // str(cfg%initial_sag) // " m lays the " // &
+        str(cfg%line%length) // " m line on a parabola " // str(parabola_length(sep, cfg%initial_sag)) // &
+        " m long between ends " // str(sep) // " m apart, which stretches its segments by " // &
+        str(100*self%initial_strain) // " %: not allowed (at most " // str(100*max_initial_strain) // &
+        " %; the model assumes small strain; initial_sag = " // &
+        str(parabola_sag_for_length(sep, cfg%line%length)) // " m gives the unstretched length)")
+      return
+    end if
     ! initial velocities: linear between the ends' initial velocities
     call straight_shape(n, va, vb, self%v)
 
@@ -451,6 +468,7 @@ contains
     i_max = maxloc(scene%end_tension(:, 1:m))
     summary = "line: " // str(cfg%line%length) // " m, " // str(cfg%line%n_seg) // " segments, scheme " // &
       trim(cfg%integration%scheme) // ", " // trim(cfg%line%mass) // " mass" // nl // &
+      initial_note(scene) // nl // &
       end_note(scene) // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
       str(scene%wall_time) // " s" // nl // &
@@ -465,6 +483,21 @@ contains
     end if
     call scene%free()
   end subroutine run_line_scene
+
+  !> The summary's line on the initial shape: its largest segment strain and
+  !> tension EA eps (the shape 'sag' has the parabola's length, not L's).
+  function initial_note(scene) result(text)
+    type(line_scene), intent(in) :: scene  !< scene (after init)
+    character(len=:), allocatable :: text
+    text = "initial shape " // trim(scene%cfg%initial_shape)
+    if (scene%cfg%initial_shape == "sag") text = text // " (midspan sag " // str(scene%cfg%initial_sag) // " m)"
+    text = text // ": largest segment strain " // str(100*scene%initial_strain) // " %"
+    if (scene%initial_strain > 0.0_dp) then
+      text = text // " (tension " // str(scene%cfg%line%ea*scene%initial_strain) // " N)"
+    else
+      text = text // " (slack)"
+    end if
+  end function initial_note
 
   !> "end of run at t = ... s (completed), " or, after a failure, the time the
   !> integration reached and the last record's.
@@ -553,6 +586,7 @@ contains
     call write_run_metadata(w, "line", "airlaunch: standalone flexible line", echo, error)
     call w%add_text_att("/", "scheme", trim(scene%cfg%integration%scheme), error)
     call w%add_text_att("/", "mass_matrix", trim(scene%cfg%line%mass), error)
+    call w%add_real_att("/", "initial_strain", scene%initial_strain, error)
     call w%add_real_att("/", "wall_time_s", scene%wall_time, error)
     call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)

@@ -183,3 +183,51 @@ def test_a_failed_run_reports_its_failure_time(airlaunch_exe, tmp_path):
     with xr.open_dataset(out) as ds:
         assert ds.attrs["status"] == "failed"
         assert 0 <= ds["time"].values[-1] <= t_fail
+
+
+def sag_nml(tmp_path, tag, sag, chord=60.0, n=60):
+    """A 60 m line (EA 1 MN) laid on a parabola of midspan sag `sag` between fixed ends
+    `chord` apart, run for 0.01 s: (namelist, output)."""
+    out = tmp_path / f"{tag}.nc"
+    nml = tmp_path / f"{tag}.nml"
+    nml.write_text(f"""&run scene = 'line', t_end = 0.01, output_dt = 0.01, output = '{out}' /
+&line length = 60.0, n_seg = {n}, ea = 1.0e6 /
+&line_scene a_kind = 'fixed', b_kind = 'fixed', b_position = {chord}, 0.0, 0.0,
+  initial_shape = 'sag', initial_sag = {sag} /
+""")
+    return nml, out
+
+
+def parabola_arc(chord, sag):
+    """Arc length of the parabola of midspan sag `sag` over `chord` (numerical quadrature)."""
+    x = np.linspace(0.0, chord, 200001)
+    slope = 4.0 * sag * (chord - 2.0 * x) / chord**2
+    return np.trapezoid(np.sqrt(1.0 + slope**2), x)
+
+
+def test_sagged_start_is_held_to_the_strain_limit_and_reported(airlaunch_exe, tmp_path):
+    """initial_shape = 'sag' lays the line on a parabola whose length is set by chord and
+    sag, not by the line's length: between ends 60 m apart a 60 m line with sag 60 m is
+    stretched by 132 % (1.32 MN) - refused like a straight line stretched beyond 50 %, one
+    line naming initial_sag (it ran silently); sag 30 m (+47.9 %) runs and the summary and
+    the attribute initial_strain report the strain, which is the parabola's length / L - 1
+    to 1e-3 (the reported value is the longest segment's chord, shorter than its arc by
+    (kappa l0)^2/24 ~ 1e-5 relative here)."""
+    nml, out = sag_nml(tmp_path, "sag60", 60.0)
+    line = assert_input_error(run_airlaunch(airlaunch_exe, nml), "&line_scene: initial_sag = 60.0 m lays the 60.0 m "
+                              "line on a parabola", out)
+    assert "not allowed (at most 50.0 %" in line
+    expected = parabola_arc(60.0, 30.0) / 60.0 - 1.0
+    nml, out = sag_nml(tmp_path, "sag30", 30.0)
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 0, res.stderr
+    reported = float(re.search(r"initial shape sag \(midspan sag 30.0 m\): largest segment strain ([0-9.]+) % "
+                               r"\(tension ", res.stdout).group(1)) / 100
+    assert reported == pytest.approx(expected, abs=1e-3)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["initial_strain"] == pytest.approx(expected, abs=1e-3)
+    # a slack start (sag 10 m over a 50 m chord: the parabola is 55.4 m long) says so
+    nml, out = sag_nml(tmp_path, "slack", 10.0, chord=50.0)
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 0, res.stderr
+    assert re.search(r"largest segment strain -[0-9.]+ % \(slack\)", res.stdout), res.stdout

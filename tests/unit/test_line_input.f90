@@ -67,6 +67,55 @@ program test_line_input
   cfg%initial_shape = "spiral"
   call expect_scene(cfg, "initial_shape = 'spiral'")
 
+  call section("initial shape 'sag': the strain of the shape built, its sag")
+  ! L = 10 m between fixed ends 10 m apart: the parabola is longer than L, by
+  ! S(f)/L - 1 with S its arc length (by Simpson's rule here, independent of
+  ! the code's closed form); sag 10 m: S = 23.23 m, +132 %, refused like a
+  ! straight line stretched beyond 50 %; sag 4.5 m: +40.5 %, accepted and
+  ! reported (the largest segment strain: the chord of the flattest arc, near
+  ! an end, shorter than the arc by (kappa l0)^2/24 = 1.5e-4 relative there:
+  ! tolerance 1e-3 on 1 + eps)
+  cfg = good
+  cfg%end_b = line_end(kind=end_fixed, position=[10.0_dp, 0.0_dp, 0.0_dp])
+  cfg%initial_shape = "sag"
+  cfg%initial_sag = 10.0_dp
+  call expect_scene(cfg, "initial_sag = 10.0 m lays the 10.0 m line on a parabola")
+  call expect_scene(cfg, "not allowed (at most 50.0 %")
+  cfg%initial_sag = 4.5_dp
+  call scene%init(cfg, error)
+  call check(.not. allocated(error), "initial_sag = 4.5 m (+40.5 %) is accepted")
+  call check_close(1.0_dp + scene%initial_strain, parabola_arc(10.0_dp, 4.5_dp)/10.0_dp, &
+    "reported initial strain, 1 + eps, vs the parabola's arc length / L", rel=1.0e-3_dp)
+  call scene%free()
+  if (allocated(error)) deallocate(error)
+  ! the sag achieved: chord 10 m, sag 1 m.  Even N: node N/2 is the vertex, the
+  ! sag is met to rounding (1e-9 m).  Odd N: the middle segment spans the vertex,
+  ! its nodes at arc distance S/(2N) from it, where the slope is ~0, so its
+  ! midpoint is sag (1 - (S/(c N))^2) below the chord (N = 11: 0.99129 m; the
+  ! slope there, 0.04, changes that by ~1e-5 m: tolerance 1e-4 m)
+  cfg = good
+  cfg%line%length = 10.5_dp
+  cfg%end_b = line_end(kind=end_fixed, position=[10.0_dp, 0.0_dp, 0.0_dp])
+  cfg%initial_shape = "sag"
+  cfg%initial_sag = 1.0_dp
+  cfg%line%n_seg = 10
+  call scene%init(cfg, error)
+  call scene%run(error)
+  call check(.not. allocated(error), "N = 10 runs")
+  if (.not. allocated(error)) call check_close(-scene%nodes(2, 5, 1), 1.0_dp, "N = 10: node 5 below the " // &
+    "chord midpoint [m]", abs=1.0e-9_dp)
+  call check(abs(scene%nodes(1, 5, 1) - 5.0_dp) < 1.0e-9_dp, "N = 10: node 5 at midspan")
+  call scene%free()
+  cfg%line%n_seg = 11
+  call scene%init(cfg, error)
+  call scene%run(error)
+  call check(.not. allocated(error), "N = 11 runs")
+  if (.not. allocated(error)) call check_close(-0.5_dp*(scene%nodes(2, 5, 1) + scene%nodes(2, 6, 1)), &
+    1.0_dp - (parabola_arc(10.0_dp, 1.0_dp)/(10.0_dp*11))**2, "N = 11: middle segment's midpoint below " // &
+    "the chord [m]", abs=1.0e-4_dp)
+  call scene%free()
+  if (allocated(error)) deallocate(error)
+
   call section("integration settings")
   cfg = good
   cfg%integration%rtol = 0.0_dp
@@ -112,6 +161,21 @@ program test_line_input
   call finish()
 
 contains
+
+  !> Arc length of the parabola y = 4 f x (c - x)/c^2 over [0, c], Simpson's rule (2000 intervals).
+  real(dp) function parabola_arc(c, f) result(s)
+    real(dp), intent(in) :: c, f
+    integer, parameter :: m = 2000
+    integer :: i
+    real(dp) :: x, w
+    s = 0.0_dp
+    do i = 0, m
+      x = c*i/m
+      w = merge(1.0_dp, merge(4.0_dp, 2.0_dp, mod(i, 2) == 1), i == 0 .or. i == m)
+      s = s + w*sqrt(1.0_dp + (4.0_dp*f*(c - 2.0_dp*x)/c**2)**2)
+    end do
+    s = s*(c/m)/3.0_dp
+  end function parabola_arc
 
   subroutine expect_model(p, text)
     type(line_params), intent(in) :: p
