@@ -122,6 +122,7 @@ program test_cvode
   logical :: event
   integer :: which(1), k
 
+  call fixed_seed()   ! the same random states in every run
   do k = 1, 4
     call section("oscillator, " // trim(methods(k)) // " + " // trim(solvers(k)))
     opts = cvode_options(method=methods(k), linear_solver=solvers(k), upper_bandwidth=1, &

@@ -35,6 +35,7 @@ program test_line_jacobian
   integer, parameter :: n = 8
   real(dp), parameter :: h = 1.0e-6_dp
 
+  call fixed_seed()   ! the same random states in every run
   call model_blocks()
   call system_band()
   call pendulum_same_track()

@@ -6,11 +6,20 @@ module testing
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: check, check_close, finish, section
+  public :: check, check_close, finish, section, fixed_seed
 
   integer, save :: n_pass = 0, n_fail = 0
 
 contains
+
+  !> Seed the random numbers of a test with a fixed sequence: the same states
+  !> in every run (gfortran seeds each run differently otherwise), so a test
+  !> cannot pass or fail by the draw.
+  subroutine fixed_seed()
+    integer :: n, i
+    call random_seed(size=n)
+    call random_seed(put=[(12345 + 7*i, i = 1, n)])
+  end subroutine fixed_seed
 
   !> Print a heading.
   subroutine section(name)
