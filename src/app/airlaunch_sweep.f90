@@ -116,13 +116,18 @@ contains
 
   !> Run the cases ids(:) over all ranks (dynamic assignment).  With
   !> `trajectory`, each case writes its full output and nothing is journaled.
+  !> A file error on any rank (a case's scratch namelist, the journal) stops
+  !> the pass: no rank takes another case, the cases in flight finish, and
+  !> every rank ends with exit status 4 after the first rank that met one has
+  !> named it in one line.  Nothing is journaled for the case that met it.
   subroutine run_pass(ids, trajectory)
     integer, intent(in) :: ids(:)
     logical, intent(in) :: trajectory
     type(sweep_scheduler) :: sched
     type(journal_writer) :: journal
     type(sweep_row) :: row
-    integer :: position, id, done, failed
+    type(error_type), allocatable :: file_error
+    integer :: position, id, done, failed, first
     real(dp) :: t0, last, now
     if (.not. trajectory) then
       call journal%open(s%def%journal_dir(), rank, error)
@@ -138,11 +143,15 @@ contains
       if (position >= size(ids)) exit
       id = ids(position + 1)
       if (trajectory) then
-        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), row)
+        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), row, &
+          file_error)
       else
-        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row)
-        call journal%append(row, error)
-        if (allocated(error)) call die(error%message)
+        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row, file_error)
+        if (.not. allocated(file_error)) call journal%append(row, file_error)
+      end if
+      if (allocated(file_error)) then
+        call sched%stop()
+        exit
       end if
       call sched%finished(row%status /= status_ok)
       now = MPI_Wtime()
@@ -156,7 +165,7 @@ contains
     if (rank == 0 .and. .not. trajectory) then
       do
         call sched%counts(done, failed)
-        if (done >= size(ids)) exit
+        if (done >= size(ids) .or. sched%stopped()) exit
         now = MPI_Wtime()
         if (now - last >= s%def%progress_interval) then
           call report_progress(done, failed, size(ids), MPI_Wtime() - t0)
@@ -165,8 +174,20 @@ contains
         if (c_usleep(100000_c_int) /= 0) continue
       end do
     end if
-    call sched%free()
+    ! each rank closes its journal before the collective end of the pass, so
+    ! rank 0 reads the journal only after every rank has closed its file
     if (.not. trajectory) call journal%close()
+    call sched%free()
+    first = nranks
+    if (allocated(file_error)) first = rank
+    call MPI_Allreduce(MPI_IN_PLACE, first, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
+    if (first < nranks) then
+      if (rank == first) then
+        write(error_unit, '(a)') "airlaunch-sweep: error: " // file_error%message
+        flush(error_unit)
+      end if
+      call finish(exit_runtime)
+    end if
   end subroutine run_pass
 
   !> Rank 0, before any case: directories, --restart, fingerprint, resume.

@@ -320,8 +320,10 @@ contains
   end function strike_assignments
 
   !> Run case `id`: write its namelist to `scratch`, read it, run it.  A
-  !> trajectory is written to `trajectory` unless it is "".
-  subroutine run_case(def, base, id, values, scratch, trajectory, row)
+  !> trajectory is written to `trajectory` unless it is "".  A failure to
+  !> write the scratch file is not a result of the case: it is returned in
+  !> `file_error` (and `row` is not a result then).
+  subroutine run_case(def, base, id, values, scratch, trajectory, row, file_error)
     type(sweep_definition), intent(in) :: def   !< the sweep
     type(base_scenario), intent(in) :: base     !< its base scenario
     integer, intent(in) :: id                   !< case id
@@ -329,6 +331,7 @@ contains
     character(len=*), intent(in) :: scratch     !< per-rank scratch file for the namelist
     character(len=*), intent(in) :: trajectory  !< trajectory file ("" for summary mode)
     type(sweep_row), intent(out) :: row         !< the result
+    type(error_type), allocatable, intent(inout) :: file_error  !< set if the scratch file cannot be written
     type(nml_file) :: f
     type(run_config) :: run
     type(scenario_config) :: cfg
@@ -338,8 +341,12 @@ contains
     integer(int64) :: c0, c1, rate
 
     call system_clock(c0, rate)
-    call write_text_file(scratch, case_namelist(def, base, id, values), error)
-    if (.not. allocated(error)) call f%load(scratch, error)
+    call write_text_file(scratch, case_namelist(def, base, id, values), file_error)
+    if (allocated(file_error)) then
+      file_error%message = "case " // str(id) // ": " // file_error%message
+      return
+    end if
+    call f%load(scratch, error)
     if (.not. allocated(error)) call read_run_config(f, run, echo, error)
     if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
     if (allocated(error)) then
