@@ -165,7 +165,8 @@ contains
     if (rank == 0 .and. .not. trajectory) then
       do
         call sched%counts(done, failed)
-        if (done >= size(ids) .or. sched%stopped()) exit
+        if (done >= size(ids)) exit
+        if (sched%stopped()) exit
         now = MPI_Wtime()
         if (now - last >= s%def%progress_interval) then
           call report_progress(done, failed, size(ids), MPI_Wtime() - t0)
@@ -176,7 +177,7 @@ contains
     end if
     ! each rank closes its journal before the collective end of the pass, so
     ! rank 0 reads the journal only after every rank has closed its file
-    if (.not. trajectory) call journal%close()
+    if (.not. trajectory) call journal%close(file_error)
     call sched%free()
     first = nranks
     if (allocated(file_error)) first = rank
@@ -195,6 +196,7 @@ contains
     logical, allocatable :: done(:)
     type(sweep_row), allocatable :: old(:)
     integer :: duplicates, bad
+    logical :: differs
     call make_output_dir(s%def, s%def%journal_dir(), error)
     if (.not. allocated(error)) call make_output_dir(s%def, s%def%work_dir(), error)
     if (allocated(error)) then
@@ -208,9 +210,9 @@ contains
         call delete_file(s%def%trajectory_path(k))
       end do
     end if
-    call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error)
+    call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error, differs)
     if (allocated(error)) then
-      status = exit_input
+      status = merge(exit_input, exit_runtime, differs)   ! another sweep's journal, or a file error
       return
     end if
     call read_journals(s%def%journal_dir(), s%table%n_cases, old, done, duplicates, bad, error)

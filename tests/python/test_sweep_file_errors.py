@@ -4,6 +4,7 @@ journal's fingerprint lost to a full disk, a trajectory that cannot be written.
 Each stops the sweep with one line naming the file and exit status 4, records
 nothing false in the journal, and a rerun once the cause is gone ends with
 every case ok."""
+import contextlib
 import os
 import pathlib
 import shutil
@@ -60,3 +61,118 @@ def test_unwritable_case_namelist_stops_the_sweep(tmp_path, exes):
     res = run_sweep(definition, tmp_path, 2)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "12 cases: 12 ok, 0 failed, 0 invalid input; 12 run now" in res.stdout, res.stdout
+
+
+# --- a full disk: a small tmpfs (root only) -----------------------------------
+
+PAGE = 4096
+TMPFS_PAGES = 16
+
+
+@contextlib.contextmanager
+def small_tmpfs(path, free_pages):
+    """A 64 KiB tmpfs mounted at `path` with `free_pages` pages left free (a
+    filler file takes the rest); unmounted on exit.  Skips the test where
+    mounting is impossible (not root, no tmpfs, a container without
+    CAP_SYS_ADMIN)."""
+    path = pathlib.Path(path)
+    path.mkdir(parents=True, exist_ok=True)
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("a full disk is made with a small tmpfs: needs root and mount(8)")
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={TMPFS_PAGES * PAGE}", "tmpfs", str(path)],
+                         capture_output=True, text=True)
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs to make a full disk: {res.stderr.strip()}")
+    try:
+        filler = path / ".filler"
+        with open(filler, "wb") as f:
+            f.write(b"\0" * ((TMPFS_PAGES - free_pages) * PAGE))
+        st = os.statvfs(path)
+        assert st.f_bavail * st.f_frsize == free_pages * PAGE, "the tmpfs does not count pages as expected"
+        yield filler
+    finally:
+        if subprocess.run(["umount", str(path)], capture_output=True).returncode != 0:
+            subprocess.run(["umount", "-l", str(path)], capture_output=True)
+
+
+def test_full_disk_stops_the_sweep_at_the_first_lost_journal_row(tmp_path, exes):
+    """The journal on a full disk: gfortran's buffered write, flush and close
+    reported no error, rows were lost while the cases went on, and the loss was
+    found only after the last case ("N cases have no row after the run").  Now
+    the first row that cannot be written in full stops the sweep (exit 4, one
+    line naming the journal file and ENOSPC); every row the journal holds is
+    whole or torn (never a wrong row), and a rerun from it ends with every case."""
+    n = 40
+    definition = small_definition(tmp_path / "s.nml", n_cases=n)
+    make_table(definition, tmp_path)
+    journal = tmp_path / "out" / "journal"
+    saved = tmp_path / "journal_saved"
+    # 3 free pages: the fingerprint, and one page (about 5 rows) per rank file
+    with small_tmpfs(journal, free_pages=3):
+        res = run_sweep(definition, tmp_path, 2)
+        shutil.copytree(journal, saved, ignore=shutil.ignore_patterns(".filler"))
+    assert res.returncode == 4, res.stdout + res.stderr
+    errors = _errors(res)
+    assert len(errors) == 1, res.stderr
+    assert "rank_000" in errors[0] and "No space left on device" in errors[0], errors[0]
+    assert not (tmp_path / "out" / "summary.nc").exists()
+    ids, _ = journal_rows(saved)
+    assert 0 < len(ids) < n // 2, f"{len(ids)} rows: the sweep did not stop at the first lost row"
+    assert len(set(ids)) == len(ids)
+    # the journal kept on a real disk: the rerun resumes from its rows
+    shutil.rmtree(journal)
+    shutil.copytree(saved, journal)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert f"resuming: {len(ids)} of {n}" in res.stdout, res.stdout
+    assert f"{n} cases: {n} ok" in res.stdout, res.stdout
+
+
+def test_fingerprint_on_a_full_disk_is_an_error_and_leaves_no_empty_file(tmp_path, exes):
+    """The fingerprint written to a full disk was left as a 0-byte file without
+    an error, and every later run refused "fingerprints differ".  Now the run
+    stops before any case (exit 4, one line naming the file and ENOSPC), no
+    fingerprint is left, and once there is space the run ends with every case."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    journal = tmp_path / "out" / "journal"
+    with small_tmpfs(journal, free_pages=0) as filler:
+        res = run_sweep(definition, tmp_path, 2)
+        assert res.returncode == 4, res.stdout + res.stderr
+        errors = _errors(res)
+        assert len(errors) == 1 and "fingerprint.txt" in errors[0] and "No space left on device" in errors[0], \
+            res.stderr
+        assert "cases to run" not in res.stdout, res.stdout
+        assert sorted(p.name for p in journal.iterdir()) == [".filler"], "a partial fingerprint was left"
+        filler.unlink()
+        res = run_sweep(definition, tmp_path, 2)
+        assert res.returncode == 0, res.stdout + res.stderr
+        assert "4 cases: 4 ok" in res.stdout, res.stdout
+        assert (journal / "fingerprint.txt").stat().st_size > 0
+
+
+def test_case_namelist_cut_by_a_full_disk_stops_the_sweep(tmp_path, exes):
+    """A case namelist cut short by a full disk (gfortran: no error) could be
+    read and run on the base's defaults: a wrong row.  Now the first case whose
+    namelist cannot be written in full stops the sweep (exit 4, one line naming
+    the namelist and ENOSPC) and nothing is journaled.  The tmpfs on work/
+    leaves room for the ranks' check namelists (written before any case) and
+    one page less than a case namelist needs."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 0, res.stderr
+    check_size = (tmp_path / "out" / "work" / "check_rank0.nml").stat().st_size
+    res = run_sweep(definition, tmp_path, None, "--case-namelist", 0)
+    case_size = len(res.stdout.encode())
+
+    def pages(n):
+        return -(-n // PAGE)
+
+    shutil.rmtree(tmp_path / "out" / "work")
+    with small_tmpfs(tmp_path / "out" / "work", free_pages=2 * pages(check_size) + pages(case_size) - 1):
+        res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 4, res.stdout + res.stderr
+    errors = _errors(res)
+    assert len(errors) == 1 and "case_rank" in errors[0] and "No space left on device" in errors[0], res.stderr
+    assert journal_rows(tmp_path / "out" / "journal")[0] == [], "a case was run from a cut namelist"
