@@ -22,7 +22,7 @@ program airlaunch_sweep
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: file_exists, delete_file
-  use airlaunch_sweep_case, only: run_case, case_namelist
+  use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
   use airlaunch_sweep_summary, only: write_summary
@@ -42,7 +42,7 @@ program airlaunch_sweep
   type(sweep_setup) :: s
   type(error_type), allocatable :: error
   character(len=:), allocatable :: path, scratch
-  integer :: rank, nranks, status, case_id, n_resumed, k
+  integer :: rank, nranks, status, case_id, n_resumed, k, n_written
   logical :: check_only, restart
   integer, allocatable :: pending(:), keep(:)
   type(sweep_row), allocatable :: rows(:)
@@ -90,7 +90,7 @@ program airlaunch_sweep
 
   ! --- the cases
   t_run = MPI_Wtime()
-  call run_pass(pending, .false.)
+  call run_pass(pending, .false., n_written)
   if (rank == 0) then
     call collect_rows()
     call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
@@ -106,29 +106,36 @@ program airlaunch_sweep
     if (rank == 0) call make_output_dir(s%def, s%def%trajectory_dir(), error)
     if (allocated(error)) call die(error%message)
     call MPI_Barrier(MPI_COMM_WORLD)
-    call run_pass(keep, .true.)
-    if (rank == 0) write(output_unit, '(a)') "trajectories: " // str(size(keep)) // " written to " // &
-      s%def%trajectory_dir()
+    call run_pass(keep, .true., n_written)
+    if (rank == 0) then
+      write(output_unit, '(a)') "trajectories: " // str(n_written) // " written to " // s%def%trajectory_dir()
+      if (n_written < size(keep)) write(output_unit, '(a)') "trajectories: " // str(size(keep) - n_written) // &
+        " of the cases kept end before their first output record (no file; the summary has their failure)"
+    end if
   end if
   call finish(exit_ok)
 
 contains
 
   !> Run the cases ids(:) over all ranks (dynamic assignment).  With
-  !> `trajectory`, each case writes its full output and nothing is journaled.
+  !> `trajectory`, each case writes its full output and nothing is journaled;
+  !> `written` (on every rank) counts the files written over all ranks.
   !> A file error on any rank (a case's scratch namelist, the journal) stops
   !> the pass: no rank takes another case, the cases in flight finish, and
   !> every rank ends with exit status 4 after the first rank that met one has
   !> named it in one line.  Nothing is journaled for the case that met it.
-  subroutine run_pass(ids, trajectory)
+  subroutine run_pass(ids, trajectory, written)
     integer, intent(in) :: ids(:)
     logical, intent(in) :: trajectory
+    integer, intent(out) :: written
     type(sweep_scheduler) :: sched
     type(journal_writer) :: journal
     type(sweep_row) :: row
     type(error_type), allocatable :: file_error
     integer :: position, id, done, failed, first
     real(dp) :: t0, last, now
+    logical :: file_written
+    written = 0
     if (.not. trajectory) then
       call journal%open(s%def%journal_dir(), rank, error)
       if (allocated(error)) call die(error%message)
@@ -143,8 +150,10 @@ contains
       if (position >= size(ids)) exit
       id = ids(position + 1)
       if (trajectory) then
-        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), row, &
-          file_error)
+        call run_trajectory(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), &
+          file_written, file_error)
+        if (file_written) written = written + 1
+        row%status = status_ok
       else
         call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row, file_error)
         if (.not. allocated(file_error)) call journal%append(row, file_error)
@@ -182,6 +191,7 @@ contains
     first = nranks
     if (allocated(file_error)) first = rank
     call MPI_Allreduce(MPI_IN_PLACE, first, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
+    call MPI_Allreduce(MPI_IN_PLACE, written, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
     if (first < nranks) then
       if (rank == first) then
         write(error_unit, '(a)') "airlaunch-sweep: error: " // file_error%message
