@@ -21,7 +21,7 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -216,9 +216,12 @@ contains
     if (restart) then
       ! the rows and the kept trajectories of the earlier sweep go together
       call remove_journal(s%def%journal_dir())
-      do k = 0, s%table%n_cases - 1
-        call delete_file(s%def%trajectory_path(k))
-      end do
+      ! every case file, whatever the earlier sweep's case count was
+      call remove_case_files(s%def%trajectory_dir(), error)
+      if (allocated(error)) then
+        status = exit_runtime
+        return
+      end if
     end if
     call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error, differs)
     if (allocated(error)) then

@@ -9,7 +9,7 @@ module airlaunch_sweep_files
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
-  public :: open_for_writing, write_bytes, close_file
+  public :: open_for_writing, write_bytes, close_file, remove_case_files
 
   !> Length of the C library's message buffer.
   integer, parameter :: msg_len = 256
@@ -37,6 +37,10 @@ module airlaunch_sweep_files
       integer(c_long), value :: n
       character(kind=c_char), intent(inout) :: msg(*)
     end function c_file_write
+    integer(c_int) function c_remove_case_files(dir) bind(C, name="airlaunch_remove_case_files")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: dir(*)
+    end function c_remove_case_files
     integer(c_int) function c_file_close(fd, msg, msglen) bind(C, name="airlaunch_file_close")
       import :: c_int, c_char
       integer(c_int), value :: fd, msglen
@@ -181,6 +185,23 @@ contains
     open(newunit=unit, file=path, status="old", iostat=ios)
     if (ios == 0) close(unit, status="delete")
   end subroutine delete_file
+
+  !> Remove every case_<digits>.nc and case_<digits>.nc.part file of `dir`
+  !> (a missing directory has none).
+  subroutine remove_case_files(dir, error)
+    character(len=*), intent(in) :: dir                   !< directory
+    type(error_type), allocatable, intent(inout) :: error !< set if one remains
+    integer(c_int) :: rc
+    rc = c_remove_case_files(dir // c_null_char)
+    if (rc < 0) call fatal_error(error, dir // ": cannot read the directory to remove its case files")
+    if (rc > 0) call fatal_error(error, dir // ": cannot remove " // trim(itoa(int(rc))) // " case files")
+  contains
+    function itoa(i) result(t)
+      integer, intent(in) :: i
+      character(len=16) :: t
+      write(t, '(i0)') i
+    end function itoa
+  end subroutine remove_case_files
 
   !> Rename `old` to `new` (atomic on one file system).
   subroutine rename_file(old, new, error)

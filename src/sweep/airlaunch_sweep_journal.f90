@@ -100,7 +100,9 @@ contains
 
   !> Read every rank file of `dir`: rows(id+1) and done(id+1) for the valid
   !> rows with ids in [0, n_cases); a second valid row of an id counts in
-  !> `duplicates`, a torn or corrupt line in `bad`.
+  !> `duplicates`, a torn or corrupt line in `bad` - unless its case id can
+  !> still be read whole and that case has a valid row (a line torn by a kill
+  !> whose case ran again later: no longer news).
   subroutine read_journals(dir, n_cases, rows, done, duplicates, bad, error)
     character(len=*), intent(in) :: dir                   !< journal directory
     integer, intent(in) :: n_cases                        !< number of cases
@@ -109,11 +111,12 @@ contains
     integer, intent(out) :: duplicates                    !< extra rows of finished ids
     integer, intent(out) :: bad                           !< lines that are not rows
     type(error_type), allocatable, intent(inout) :: error !< set if a file is unreadable
-    integer :: r, unit, ios
+    integer :: r, unit, ios, torn_id
     character(len=:), allocatable :: path, line
     type(sweep_row) :: row
     logical :: ok
-    allocate(rows(n_cases), done(n_cases))
+    integer, allocatable :: torn(:)
+    allocate(rows(n_cases), done(n_cases), torn(0))
     done = .false.
     duplicates = 0
     bad = 0
@@ -132,7 +135,12 @@ contains
         call parse_row(line, row, ok)
         if (ok) ok = row%id < n_cases
         if (.not. ok) then
-          bad = bad + 1
+          torn_id = torn_line_id(line)
+          if (torn_id >= 0 .and. torn_id < n_cases) then
+            torn = [torn, torn_id]
+          else
+            bad = bad + 1
+          end if
         else if (done(row%id + 1)) then
           duplicates = duplicates + 1
         else
@@ -142,7 +150,26 @@ contains
       end do
       close(unit)
     end do
+    do r = 1, size(torn)
+      if (.not. done(torn(r) + 1)) bad = bad + 1
+    end do
   end subroutine read_journals
+
+  !> The case id of a line that is not a valid row, if it can be read whole
+  !> (8 hex digits, a blank, the id's digits, a blank after them); else -1.
+  function torn_line_id(line) result(id)
+    character(len=*), intent(in) :: line
+    integer :: id
+    integer :: q, ios
+    id = -1
+    if (len(line) < 11) return
+    if (line(9:9) /= " " .or. verify(line(1:8), "0123456789abcdefABCDEF") /= 0) return
+    q = index(line(10:), " ")
+    if (q < 2 .or. q > 10) return   ! no blank after the id (cut inside it), or no id
+    if (verify(line(10:8+q), "0123456789") /= 0) return
+    read(line(10:8+q), *, iostat=ios) id
+    if (ios /= 0) id = -1
+  end function torn_line_id
 
   !> Compare the journal's fingerprint with `text`; write it if there is none
   !> (atomically: a fingerprint cut short by a full disk is never left).

@@ -8,10 +8,14 @@
  * byte is an error at once, with the C library's text for errno.
  *
  * Each function returns 0 on success (airlaunch_file_open: the descriptor) and
- * -1 on failure, with a NUL-terminated message in msg[0 .. msglen-1]. */
+ * -1 on failure, with a NUL-terminated message in msg[0 .. msglen-1].
+ * airlaunch_remove_case_files lists a directory (which Fortran cannot) for
+ * --restart. */
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stddef.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/types.h>
 #include <unistd.h>
@@ -64,4 +68,38 @@ int airlaunch_file_close(int fd, char *msg, int msglen) {
     return -1;
   }
   return 0;
+}
+
+/* Remove every case_<digits>.nc and case_<digits>.nc.part of directory `dir`
+ * (the kept trajectories of any earlier sweep, whatever its case count).
+ * Returns the number of files that could not be removed (0: all gone), -1 if
+ * the directory exists but cannot be read; a missing directory is 0. */
+static int is_case_file(const char *name) {
+  const char *p = name;
+  if (strncmp(p, "case_", 5) != 0) return 0;
+  p += 5;
+  if (*p < '0' || *p > '9') return 0;
+  while (*p >= '0' && *p <= '9') ++p;
+  return strcmp(p, ".nc") == 0 || strcmp(p, ".nc.part") == 0;
+}
+
+int airlaunch_remove_case_files(const char *dir) {
+  DIR *d = opendir(dir);
+  struct dirent *e;
+  int failed = 0;
+  size_t n = strlen(dir);
+  if (d == NULL) return errno == ENOENT ? 0 : -1;
+  while ((e = readdir(d)) != NULL) {
+    if (!is_case_file(e->d_name)) continue;
+    size_t m = n + 1 + strlen(e->d_name) + 1;
+    char *path = malloc(m);
+    if (path == NULL) { ++failed; continue; }
+    memcpy(path, dir, n);
+    path[n] = '/';
+    memcpy(path + n + 1, e->d_name, strlen(e->d_name) + 1);
+    if (unlink(path) != 0 && errno != ENOENT) ++failed;
+    free(path);
+  }
+  closedir(d);
+  return failed;
 }

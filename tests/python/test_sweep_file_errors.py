@@ -3,7 +3,8 @@ a case's scratch namelist that cannot be written, a journal row or the
 journal's fingerprint lost to a full disk, a trajectory that cannot be written.
 Each stops the sweep with one line naming the file and exit status 4, records
 nothing false in the journal, and a rerun once the cause is gone ends with
-every case ok."""
+every case ok.  Also: --restart removes every kept trajectory, and a torn
+journal line whose case has run again is not reported again."""
 import contextlib
 import os
 import pathlib
@@ -228,3 +229,44 @@ def test_keep_failed_keeps_failed_cases_only_and_counts_files(tmp_path, exes):
     res = run_sweep(definition, tmp_path, 2)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "trajectories:" not in res.stdout, res.stdout
+
+
+def test_restart_removes_every_kept_trajectory(tmp_path, exes):
+    """--restart removed the kept trajectories only for ids below the new
+    sweep's n_cases: a restart with fewer cases left the earlier sweep's
+    case_000010.nc beside the new ones.  Now every case file goes (a stray
+    .part too); other files in the directory stay."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=12, extra_sweep="keep_ids = 1, 10")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    traj = tmp_path / "out" / "trajectories"
+    assert sorted(p.name for p in traj.iterdir()) == ["case_000001.nc", "case_000010.nc"]
+    (traj / "case_000011.nc.part").write_text("an interrupted write\n")
+    (traj / "notes.txt").write_text("not a case file\n")
+    definition = small_definition(tmp_path / "s.nml", n_cases=4, seed=11)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2, "--restart")
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert sorted(p.name for p in traj.iterdir()) == ["notes.txt"]
+
+
+def test_torn_line_of_a_case_run_again_is_not_reported_again(tmp_path, exes):
+    """"N torn journal lines ignored (their cases run again)" was printed on
+    every later run, after those cases had run again.  Now a torn line whose
+    case has a valid row is not counted; one whose case has none still is."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    assert run_sweep(definition, tmp_path, None).returncode == 0
+    rank0 = tmp_path / "out" / "journal" / "rank_0000.txt"
+    lines = rank0.read_text().splitlines()
+    # the row of the first case cut by a "kill" in its metrics: it ran again since
+    rank0.write_text("\n".join(lines + [lines[0][:60]]) + "\n")
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "resuming: 4 of 4" in res.stdout and "torn" not in res.stdout, res.stdout
+    # the row of the last case torn, with no whole row left: reported, and the case runs again
+    rank0.write_text("\n".join(lines[:-1] + [lines[-1][:60]]) + "\n")
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "resuming: 3 of 4" in res.stdout and "1 torn journal lines ignored" in res.stdout, res.stdout

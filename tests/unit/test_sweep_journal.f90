@@ -118,6 +118,19 @@ program test_sweep_journal
   call check(bad == 1, "one torn line ignored")
   call check(dup == 1, "one duplicate counted")
   call check(rows(5)%id == 4 .and. rows(6)%id == 5, "rows stored by id")
+  ! case 3 runs again later: its torn line is no longer counted; a line cut
+  ! inside its id (no blank after it) still is
+  call jw%open(dir, 1, error)
+  row%id = 3
+  call jw%append(row, error)
+  call jw%close()
+  open(newunit=u, file=journal_file(dir, 1), access="stream", form="unformatted", position="append")
+  write(u) "0A1B2C3D 3"
+  close(u)
+  call read_journals(dir, 6, rows, done, dup, bad, error)
+  call check(all(done), "every case done once case 3 has a row")
+  call check(bad == 1, "the torn row of case 3 (which has a row now) not counted; a line cut inside its id is: " &
+    // trim(itoa(bad)))
   call remove_journal(dir)
   call delete_file(dir // "/fingerprint.txt")
 
