@@ -21,8 +21,8 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file
-  use airlaunch_sweep_case, only: run_case, case_namelist
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files
+  use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
   use airlaunch_sweep_summary, only: write_summary
@@ -42,7 +42,7 @@ program airlaunch_sweep
   type(sweep_setup) :: s
   type(error_type), allocatable :: error
   character(len=:), allocatable :: path, scratch
-  integer :: rank, nranks, status, case_id, n_resumed, k
+  integer :: rank, nranks, status, case_id, n_resumed, k, n_written
   logical :: check_only, restart
   integer, allocatable :: pending(:), keep(:)
   type(sweep_row), allocatable :: rows(:)
@@ -90,7 +90,7 @@ program airlaunch_sweep
 
   ! --- the cases
   t_run = MPI_Wtime()
-  call run_pass(pending, .false.)
+  call run_pass(pending, .false., n_written)
   if (rank == 0) then
     call collect_rows()
     call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
@@ -106,24 +106,36 @@ program airlaunch_sweep
     if (rank == 0) call make_output_dir(s%def, s%def%trajectory_dir(), error)
     if (allocated(error)) call die(error%message)
     call MPI_Barrier(MPI_COMM_WORLD)
-    call run_pass(keep, .true.)
-    if (rank == 0) write(output_unit, '(a)') "trajectories: " // str(size(keep)) // " written to " // &
-      s%def%trajectory_dir()
+    call run_pass(keep, .true., n_written)
+    if (rank == 0) then
+      write(output_unit, '(a)') "trajectories: " // str(n_written) // " written to " // s%def%trajectory_dir()
+      if (n_written < size(keep)) write(output_unit, '(a)') "trajectories: " // str(size(keep) - n_written) // &
+        " of the cases kept end before their first output record (no file; the summary has their failure)"
+    end if
   end if
   call finish(exit_ok)
 
 contains
 
   !> Run the cases ids(:) over all ranks (dynamic assignment).  With
-  !> `trajectory`, each case writes its full output and nothing is journaled.
-  subroutine run_pass(ids, trajectory)
+  !> `trajectory`, each case writes its full output and nothing is journaled;
+  !> `written` (on every rank) counts the files written over all ranks.
+  !> A file error on any rank (a case's scratch namelist, the journal) stops
+  !> the pass: no rank takes another case, the cases in flight finish, and
+  !> every rank ends with exit status 4 after the first rank that met one has
+  !> named it in one line.  Nothing is journaled for the case that met it.
+  subroutine run_pass(ids, trajectory, written)
     integer, intent(in) :: ids(:)
     logical, intent(in) :: trajectory
+    integer, intent(out) :: written
     type(sweep_scheduler) :: sched
     type(journal_writer) :: journal
     type(sweep_row) :: row
-    integer :: position, id, done, failed
+    type(error_type), allocatable :: file_error
+    integer :: position, id, done, failed, first
     real(dp) :: t0, last, now
+    logical :: file_written
+    written = 0
     if (.not. trajectory) then
       call journal%open(s%def%journal_dir(), rank, error)
       if (allocated(error)) call die(error%message)
@@ -138,11 +150,17 @@ contains
       if (position >= size(ids)) exit
       id = ids(position + 1)
       if (trajectory) then
-        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), row)
+        call run_trajectory(s%def, s%base, id, s%table%values(:, id + 1), scratch, s%def%trajectory_path(id), &
+          file_written, file_error)
+        if (file_written) written = written + 1
+        row%status = status_ok
       else
-        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row)
-        call journal%append(row, error)
-        if (allocated(error)) call die(error%message)
+        call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row, file_error)
+        if (.not. allocated(file_error)) call journal%append(row, file_error)
+      end if
+      if (allocated(file_error)) then
+        call sched%stop()
+        exit
       end if
       call sched%finished(row%status /= status_ok)
       now = MPI_Wtime()
@@ -157,6 +175,7 @@ contains
       do
         call sched%counts(done, failed)
         if (done >= size(ids)) exit
+        if (sched%stopped()) exit
         now = MPI_Wtime()
         if (now - last >= s%def%progress_interval) then
           call report_progress(done, failed, size(ids), MPI_Wtime() - t0)
@@ -165,8 +184,21 @@ contains
         if (c_usleep(100000_c_int) /= 0) continue
       end do
     end if
+    ! each rank closes its journal before the collective end of the pass, so
+    ! rank 0 reads the journal only after every rank has closed its file
+    if (.not. trajectory) call journal%close(file_error)
     call sched%free()
-    if (.not. trajectory) call journal%close()
+    first = nranks
+    if (allocated(file_error)) first = rank
+    call MPI_Allreduce(MPI_IN_PLACE, first, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
+    call MPI_Allreduce(MPI_IN_PLACE, written, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
+    if (first < nranks) then
+      if (rank == first) then
+        write(error_unit, '(a)') "airlaunch-sweep: error: " // file_error%message
+        flush(error_unit)
+      end if
+      call finish(exit_runtime)
+    end if
   end subroutine run_pass
 
   !> Rank 0, before any case: directories, --restart, fingerprint, resume.
@@ -174,6 +206,7 @@ contains
     logical, allocatable :: done(:)
     type(sweep_row), allocatable :: old(:)
     integer :: duplicates, bad
+    logical :: differs
     call make_output_dir(s%def, s%def%journal_dir(), error)
     if (.not. allocated(error)) call make_output_dir(s%def, s%def%work_dir(), error)
     if (allocated(error)) then
@@ -183,13 +216,16 @@ contains
     if (restart) then
       ! the rows and the kept trajectories of the earlier sweep go together
       call remove_journal(s%def%journal_dir())
-      do k = 0, s%table%n_cases - 1
-        call delete_file(s%def%trajectory_path(k))
-      end do
+      ! every case file, whatever the earlier sweep's case count was
+      call remove_case_files(s%def%trajectory_dir(), error)
+      if (allocated(error)) then
+        status = exit_runtime
+        return
+      end if
     end if
-    call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error)
+    call check_fingerprint(s%def%journal_dir(), fingerprint_text(s), error, differs)
     if (allocated(error)) then
-      status = exit_input
+      status = merge(exit_input, exit_runtime, differs)   ! another sweep's journal, or a file error
       return
     end if
     call read_journals(s%def%journal_dir(), s%table%n_cases, old, done, duplicates, bad, error)

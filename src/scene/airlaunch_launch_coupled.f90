@@ -69,7 +69,7 @@ contains
   !> (interface in airlaunch_launch_scene)
   module procedure run_coupled
     type(coupled_run) :: r
-    type(error_type), allocatable :: run_error
+    type(error_type), allocatable :: run_error, output_error
     real(dp), allocatable :: y0(:)
     logical :: switch
 
@@ -102,7 +102,13 @@ contains
       res%status = "failed"
       res%failure = run_error%message
     end if
-    if (run%trajectory) call write_output(r, run, echo, res, run_error)
+    if (run%trajectory) then
+      call write_output(r, run, echo, res, output_error)
+      if (allocated(output_error)) then
+        res%output_error = output_error%message
+        if (.not. allocated(run_error)) call move_alloc(output_error, run_error)
+      end if
+    end if
     call release(r)
     if (allocated(run_error)) call move_alloc(run_error, error)
   end procedure run_coupled

@@ -39,6 +39,9 @@ module airlaunch_launch_history
     real(dp) :: end_time = 0.0_dp
     logical :: has_line = .true.   !< false: no line (no peak tension; its attributes are left out)
     type(cvode_stats) :: stats
+    !> Set when the trajectory file could not be written: the writer's message
+    !> (kept even when the run failed too, whose error is the one returned)
+    character(len=:), allocatable :: output_error
   end type launch_result
 
   !> The state of the rigid part at one instant, as the outputs see it.

@@ -24,7 +24,7 @@ module airlaunch_sweep_case
   implicit none
   private
   public :: base_scenario, known_variable, load_base_scenario, check_varied_inputs, case_namelist
-  public :: run_case, inject_assignments, strike_assignments, value_text, check_common_settings
+  public :: run_case, run_trajectory, inject_assignments, strike_assignments, value_text, check_common_settings
 
   !> A variable the scenario readers know (from the resolved input they echo).
   type :: known_variable
@@ -320,8 +320,10 @@ contains
   end function strike_assignments
 
   !> Run case `id`: write its namelist to `scratch`, read it, run it.  A
-  !> trajectory is written to `trajectory` unless it is "".
-  subroutine run_case(def, base, id, values, scratch, trajectory, row)
+  !> trajectory is written to `trajectory` unless it is "".  A failure to
+  !> write the scratch file is not a result of the case: it is returned in
+  !> `file_error` (and `row` is not a result then).
+  subroutine run_case(def, base, id, values, scratch, trajectory, row, file_error)
     type(sweep_definition), intent(in) :: def   !< the sweep
     type(base_scenario), intent(in) :: base     !< its base scenario
     integer, intent(in) :: id                   !< case id
@@ -329,6 +331,7 @@ contains
     character(len=*), intent(in) :: scratch     !< per-rank scratch file for the namelist
     character(len=*), intent(in) :: trajectory  !< trajectory file ("" for summary mode)
     type(sweep_row), intent(out) :: row         !< the result
+    type(error_type), allocatable, intent(inout) :: file_error  !< set if the scratch file cannot be written
     type(nml_file) :: f
     type(run_config) :: run
     type(scenario_config) :: cfg
@@ -338,8 +341,12 @@ contains
     integer(int64) :: c0, c1, rate
 
     call system_clock(c0, rate)
-    call write_text_file(scratch, case_namelist(def, base, id, values), error)
-    if (.not. allocated(error)) call f%load(scratch, error)
+    call write_text_file(scratch, case_namelist(def, base, id, values), file_error)
+    if (allocated(file_error)) then
+      file_error%message = "case " // str(id) // ": " // file_error%message
+      return
+    end if
+    call f%load(scratch, error)
     if (.not. allocated(error)) call read_run_config(f, run, echo, error)
     if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
     if (allocated(error)) then
@@ -360,6 +367,48 @@ contains
       row = row_from_result(id, res, .false., "", real(c1 - c0, dp)/rate)
     end if
   end subroutine run_case
+
+  !> Run case `id` again with its full output into `trajectory`.  `written`:
+  !> the file exists afterwards.  A file error (the scratch namelist, or the
+  !> trajectory file that the run began to write and could not finish) is
+  !> returned in `file_error`; a case that fails before its first output
+  !> record (e.g. in the trim) writes no file and is no file error.
+  subroutine run_trajectory(def, base, id, values, scratch, trajectory, written, file_error)
+    type(sweep_definition), intent(in) :: def   !< the sweep
+    type(base_scenario), intent(in) :: base     !< its base scenario
+    integer, intent(in) :: id                   !< case id
+    real(dp), intent(in) :: values(:)           !< the case's values
+    character(len=*), intent(in) :: scratch     !< per-rank scratch file for the namelist
+    character(len=*), intent(in) :: trajectory  !< trajectory file
+    logical, intent(out) :: written             !< the trajectory file exists
+    type(error_type), allocatable, intent(inout) :: file_error  !< set on a file error
+    type(nml_file) :: f
+    type(run_config) :: run
+    type(scenario_config) :: cfg
+    type(launch_result) :: res
+    type(error_type), allocatable :: error
+    character(len=:), allocatable :: echo
+    logical :: exists
+    written = .false.
+    call write_text_file(scratch, case_namelist(def, base, id, values), file_error)
+    if (allocated(file_error)) then
+      file_error%message = "case " // str(id) // ": " // file_error%message
+      return
+    end if
+    call f%load(scratch, error)
+    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
+    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    if (allocated(error)) return   ! an invalid case: no trajectory (the summary holds its message)
+    run%trajectory = .true.
+    run%output = trajectory
+    call run_launch(run, cfg, echo, res, error)
+    if (allocated(res%output_error)) then
+      call fatal_error(file_error, "case " // str(id) // ": cannot write its trajectory: " // res%output_error)
+      return
+    end if
+    inquire(file=trajectory, exist=exists)
+    written = exists
+  end subroutine run_trajectory
 
   !> Insert line(k) before the end of group groups(k) in `text` (appending
   !> the group if the text lacks it).  Comments and strings are respected.

@@ -1,12 +1,18 @@
 !> Small file-system helpers of the sweep: whole-file text, directories,
 !> deletion, renaming (through the C library: no shell is started inside an
-!> MPI process).
+!> MPI process).  The sweep's own files (journal rows, fingerprint, case
+!> namelists) are written with unbuffered POSIX calls (airlaunch_sweep_posix.c):
+!> gfortran's buffered writes do not report a full disk, these do, at once.
 module airlaunch_sweep_files
-  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_char, c_null_char
   use airlaunch_error, only: error_type, fatal_error
   implicit none
   private
-  public :: read_text_file, write_text_file, make_dir, file_exists, delete_file, rename_file
+  public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
+  public :: open_for_writing, write_bytes, close_file, remove_case_files
+
+  !> Length of the C library's message buffer.
+  integer, parameter :: msg_len = 256
 
   interface
     integer(c_int) function c_mkdir(path, mode) bind(C, name="mkdir")
@@ -18,6 +24,28 @@ module airlaunch_sweep_files
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: old(*), new(*)
     end function c_rename
+    integer(c_int) function c_file_open(path, append, msg, msglen) bind(C, name="airlaunch_file_open")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: append, msglen
+      character(kind=c_char), intent(inout) :: msg(*)
+    end function c_file_open
+    integer(c_int) function c_file_write(fd, data, n, msg, msglen) bind(C, name="airlaunch_file_write")
+      import :: c_int, c_long, c_char
+      integer(c_int), value :: fd, msglen
+      character(kind=c_char), intent(in) :: data(*)
+      integer(c_long), value :: n
+      character(kind=c_char), intent(inout) :: msg(*)
+    end function c_file_write
+    integer(c_int) function c_remove_case_files(dir) bind(C, name="airlaunch_remove_case_files")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: dir(*)
+    end function c_remove_case_files
+    integer(c_int) function c_file_close(fd, msg, msglen) bind(C, name="airlaunch_file_close")
+      import :: c_int, c_char
+      integer(c_int), value :: fd, msglen
+      character(kind=c_char), intent(inout) :: msg(*)
+    end function c_file_close
   end interface
 
 contains
@@ -48,22 +76,80 @@ contains
     close(unit)
   end subroutine read_text_file
 
-  !> Write `text` to `path` (replacing it).
+  !> Write `text` to `path` (replacing it).  Every byte is checked: a full
+  !> disk or any other write error sets `error` ("PATH: cannot write the
+  !> file (write: No space left on device)"); the file may then hold part of
+  !> `text`.
   subroutine write_text_file(path, text, error)
     character(len=*), intent(in) :: path                  !< file
     character(len=*), intent(in) :: text                  !< content
-    type(error_type), allocatable, intent(inout) :: error !< set if not writable
-    integer :: unit, ios
-    open(newunit=unit, file=path, access="stream", form="unformatted", status="replace", action="write", &
-      iostat=ios)
-    if (ios /= 0) then
-      call fatal_error(error, path // ": cannot write the file (directory missing or not writable?)")
-      return
-    end if
-    write(unit, iostat=ios) text
-    if (ios /= 0) call fatal_error(error, path // ": cannot write the file (disk full?)")
-    close(unit)
+    type(error_type), allocatable, intent(inout) :: error !< set if not written in full
+    integer :: fd
+    call open_for_writing(path, .false., fd, error)
+    call write_bytes(fd, text, error)
+    call close_file(fd, error)
+    if (allocated(error)) error%message = path // ": cannot write the file (" // error%message // ")"
   end subroutine write_text_file
+
+  !> Write `text` to `path` atomically: to `path`.part, renamed to `path`
+  !> once written in full.  On failure `path` is untouched and no .part is
+  !> left behind.
+  subroutine replace_text_file(path, text, error)
+    character(len=*), intent(in) :: path                  !< file
+    character(len=*), intent(in) :: text                  !< content
+    type(error_type), allocatable, intent(inout) :: error !< set if not written in full
+    call write_text_file(path // ".part", text, error)
+    if (.not. allocated(error)) call rename_file(path // ".part", path, error)
+    if (allocated(error)) call delete_file(path // ".part")
+  end subroutine replace_text_file
+
+  !> Open `path` for unbuffered writing: appending to it (`append`) or
+  !> replacing its content; created if missing.  `fd` is -1 on failure.
+  subroutine open_for_writing(path, append, fd, error)
+    character(len=*), intent(in) :: path                  !< file
+    logical, intent(in) :: append                         !< append (O_APPEND) or truncate
+    integer, intent(out) :: fd                            !< file descriptor
+    type(error_type), allocatable, intent(inout) :: error !< set on failure: the C library's reason
+    character(kind=c_char, len=msg_len) :: msg
+    msg = c_null_char
+    fd = int(c_file_open(path // c_null_char, merge(1_c_int, 0_c_int, append), msg, int(msg_len, c_int)))
+    if (fd < 0) call fatal_error(error, c_message(msg))
+  end subroutine open_for_writing
+
+  !> Write all of `text` to `fd` (nothing if `error` is already set).
+  subroutine write_bytes(fd, text, error)
+    integer, intent(in) :: fd                             !< from open_for_writing
+    character(len=*), intent(in) :: text                  !< bytes to write
+    type(error_type), allocatable, intent(inout) :: error !< set if a byte is not written: the reason
+    character(kind=c_char, len=msg_len) :: msg
+    if (allocated(error) .or. fd < 0) return
+    msg = c_null_char
+    if (c_file_write(int(fd, c_int), text, int(len(text), c_long), msg, int(msg_len, c_int)) /= 0) &
+      call fatal_error(error, c_message(msg))
+  end subroutine write_bytes
+
+  !> Close `fd`, checking the result; `error`, if already set, is kept.
+  subroutine close_file(fd, error)
+    integer, intent(inout) :: fd                          !< from open_for_writing; -1 after
+    type(error_type), allocatable, intent(inout) :: error !< set if close fails: the reason
+    character(kind=c_char, len=msg_len) :: msg
+    if (fd < 0) return
+    msg = c_null_char
+    if (c_file_close(int(fd, c_int), msg, int(msg_len, c_int)) /= 0) then
+      if (.not. allocated(error)) call fatal_error(error, c_message(msg))
+    end if
+    fd = -1
+  end subroutine close_file
+
+  !> The text of a NUL-terminated message buffer.
+  function c_message(msg) result(s)
+    character(len=*), intent(in) :: msg
+    character(len=:), allocatable :: s
+    integer :: n
+    n = index(msg, c_null_char) - 1
+    if (n < 0) n = len_trim(msg)
+    s = msg(:n)
+  end function c_message
 
   !> Create a directory and its parents (like mkdir -p).
   subroutine make_dir(path, error)
@@ -99,6 +185,23 @@ contains
     open(newunit=unit, file=path, status="old", iostat=ios)
     if (ios == 0) close(unit, status="delete")
   end subroutine delete_file
+
+  !> Remove every case_<digits>.nc and case_<digits>.nc.part file of `dir`
+  !> (a missing directory has none).
+  subroutine remove_case_files(dir, error)
+    character(len=*), intent(in) :: dir                   !< directory
+    type(error_type), allocatable, intent(inout) :: error !< set if one remains
+    integer(c_int) :: rc
+    rc = c_remove_case_files(dir // c_null_char)
+    if (rc < 0) call fatal_error(error, dir // ": cannot read the directory to remove its case files")
+    if (rc > 0) call fatal_error(error, dir // ": cannot remove " // trim(itoa(int(rc))) // " case files")
+  contains
+    function itoa(i) result(t)
+      integer, intent(in) :: i
+      character(len=16) :: t
+      write(t, '(i0)') i
+    end function itoa
+  end subroutine remove_case_files
 
   !> Rename `old` to `new` (atomic on one file system).
   subroutine rename_file(old, new, error)

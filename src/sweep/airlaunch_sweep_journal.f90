@@ -1,6 +1,8 @@
 !> The journal of a sweep: OUTPUT_DIR/journal/rank_NNNN.txt, one append-only
-!> file per rank, one line per finished case (airlaunch_sweep_row), flushed
-!> after each case, so a kill loses only the cases in flight.  Every run
+!> file per rank, one line per finished case (airlaunch_sweep_row), written
+!> with one unbuffered write(2) per row (O_APPEND), each byte count checked, so
+!> a kill loses only the cases in flight and a full disk is an error at the
+!> first row it would lose.  Every run
 !> creates the files of its ranks before any case runs, so the files present
 !> are always rank_0000 ... rank_M-1 and a reader finds them all by counting.
 !>
@@ -12,7 +14,8 @@ module airlaunch_sweep_journal
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_sweep_files, only: file_exists, delete_file, read_text_file, write_text_file
+  use airlaunch_sweep_files, only: file_exists, delete_file, read_text_file, replace_text_file, open_for_writing, &
+    write_bytes, close_file
   use airlaunch_sweep_row, only: sweep_row, format_row, parse_row
   implicit none
   private
@@ -23,7 +26,7 @@ module airlaunch_sweep_journal
 
   !> One rank's open journal.
   type :: journal_writer
-    integer :: unit = -1
+    integer :: fd = -1                        !< POSIX file descriptor (O_APPEND)
     character(len=:), allocatable :: path
   contains
     procedure :: open => jw_open
@@ -50,51 +53,56 @@ contains
     character(len=*), intent(in) :: dir                   !< journal directory
     integer, intent(in) :: rank                           !< MPI rank
     type(error_type), allocatable, intent(inout) :: error !< set if not writable
-    integer :: ios, fsize
+    integer :: ios, fsize, unit
     character(len=1) :: last
     self%path = journal_file(dir, rank)
     last = new_line("a")
     if (file_exists(self%path)) then
-      open(newunit=self%unit, file=self%path, access="stream", form="unformatted", status="old", &
+      open(newunit=unit, file=self%path, access="stream", form="unformatted", status="old", &
         action="read", iostat=ios)
       if (ios == 0) then
-        inquire(unit=self%unit, size=fsize)
-        if (fsize > 0) read(self%unit, pos=fsize, iostat=ios) last
-        close(self%unit)
+        inquire(unit=unit, size=fsize)
+        if (fsize > 0) read(unit, pos=fsize, iostat=ios) last
+        close(unit)
       end if
     end if
-    open(newunit=self%unit, file=self%path, access="stream", form="formatted", position="append", &
-      action="write", iostat=ios)
-    if (ios /= 0) then
-      call fatal_error(error, self%path // ": cannot open the journal for appending")
-      self%unit = -1
-      return
+    call open_for_writing(self%path, .true., self%fd, error)
+    if (.not. allocated(error) .and. last /= new_line("a")) call write_bytes(self%fd, new_line("a"), error)
+    if (allocated(error)) then
+      error%message = self%path // ": cannot open the journal for appending (" // error%message // ")"
+      call close_file(self%fd, error)
     end if
-    if (last /= new_line("a")) write(self%unit, '(a)') ""
-    flush(self%unit)
   end subroutine jw_open
 
-  !> Append one row and flush it to the operating system.
+  !> Append one row: one write(2) of the whole line, every byte checked (a
+  !> full disk is an error here, not a row lost in a buffer).
   subroutine jw_append(self, row, error)
     class(journal_writer), intent(inout) :: self
     type(sweep_row), intent(in) :: row                    !< finished case
     type(error_type), allocatable, intent(inout) :: error !< set if the write fails
-    integer :: ios
-    write(self%unit, '(a)', iostat=ios) format_row(row)
-    if (ios == 0) flush(self%unit, iostat=ios)
-    if (ios /= 0) call fatal_error(error, self%path // ": cannot write to the journal (disk full?)")
+    call write_bytes(self%fd, format_row(row) // new_line("a"), error)
+    if (allocated(error)) error%message = self%path // ": cannot append the row of case " // str(row%id) // &
+      " to the journal (" // error%message // ")"
   end subroutine jw_append
 
-  !> Close the journal.
-  subroutine jw_close(self)
+  !> Close the journal; a failure of close(2) sets `error` if present.
+  subroutine jw_close(self, error)
     class(journal_writer), intent(inout) :: self
-    if (self%unit >= 0) close(self%unit)
-    self%unit = -1
+    type(error_type), allocatable, intent(inout), optional :: error !< set if close fails
+    type(error_type), allocatable :: err
+    if (self%fd < 0) return
+    call close_file(self%fd, err)
+    if (allocated(err) .and. present(error)) then
+      if (.not. allocated(error)) call fatal_error(error, self%path // ": cannot close the journal (" // &
+        err%message // ")")
+    end if
   end subroutine jw_close
 
   !> Read every rank file of `dir`: rows(id+1) and done(id+1) for the valid
   !> rows with ids in [0, n_cases); a second valid row of an id counts in
-  !> `duplicates`, a torn or corrupt line in `bad`.
+  !> `duplicates`, a torn or corrupt line in `bad` - unless its case id can
+  !> still be read whole and that case has a valid row (a line torn by a kill
+  !> whose case ran again later: no longer news).
   subroutine read_journals(dir, n_cases, rows, done, duplicates, bad, error)
     character(len=*), intent(in) :: dir                   !< journal directory
     integer, intent(in) :: n_cases                        !< number of cases
@@ -103,11 +111,12 @@ contains
     integer, intent(out) :: duplicates                    !< extra rows of finished ids
     integer, intent(out) :: bad                           !< lines that are not rows
     type(error_type), allocatable, intent(inout) :: error !< set if a file is unreadable
-    integer :: r, unit, ios
+    integer :: r, unit, ios, torn_id
     character(len=:), allocatable :: path, line
     type(sweep_row) :: row
     logical :: ok
-    allocate(rows(n_cases), done(n_cases))
+    integer, allocatable :: torn(:)
+    allocate(rows(n_cases), done(n_cases), torn(0))
     done = .false.
     duplicates = 0
     bad = 0
@@ -126,7 +135,12 @@ contains
         call parse_row(line, row, ok)
         if (ok) ok = row%id < n_cases
         if (.not. ok) then
-          bad = bad + 1
+          torn_id = torn_line_id(line)
+          if (torn_id >= 0 .and. torn_id < n_cases) then
+            torn = [torn, torn_id]
+          else
+            bad = bad + 1
+          end if
         else if (done(row%id + 1)) then
           duplicates = duplicates + 1
         else
@@ -136,14 +150,38 @@ contains
       end do
       close(unit)
     end do
+    do r = 1, size(torn)
+      if (.not. done(torn(r) + 1)) bad = bad + 1
+    end do
   end subroutine read_journals
 
-  !> Compare the journal's fingerprint with `text`; write it if there is none.
-  subroutine check_fingerprint(dir, text, error)
+  !> The case id of a line that is not a valid row, if it can be read whole
+  !> (8 hex digits, a blank, the id's digits, a blank after them); else -1.
+  function torn_line_id(line) result(id)
+    character(len=*), intent(in) :: line
+    integer :: id
+    integer :: q, ios
+    id = -1
+    if (len(line) < 11) return
+    if (line(9:9) /= " " .or. verify(line(1:8), "0123456789abcdefABCDEF") /= 0) return
+    q = index(line(10:), " ")
+    if (q < 2 .or. q > 10) return   ! no blank after the id (cut inside it), or no id
+    if (verify(line(10:8+q), "0123456789") /= 0) return
+    read(line(10:8+q), *, iostat=ios) id
+    if (ios /= 0) id = -1
+  end function torn_line_id
+
+  !> Compare the journal's fingerprint with `text`; write it if there is none
+  !> (atomically: a fingerprint cut short by a full disk is never left).
+  !> `differs` (if present) tells a different sweep's journal (bad input)
+  !> from a file that cannot be read or written.
+  subroutine check_fingerprint(dir, text, error, differs)
     character(len=*), intent(in) :: dir                   !< journal directory
     character(len=*), intent(in) :: text                  !< this sweep's fingerprint
-    type(error_type), allocatable, intent(inout) :: error !< set if they differ
+    type(error_type), allocatable, intent(inout) :: error !< set if they differ or on a file error
+    logical, intent(out), optional :: differs             !< the error is a different fingerprint
     character(len=:), allocatable :: path, have
+    if (present(differs)) differs = .false.
     path = dir // "/fingerprint.txt"
     if (file_exists(path)) then
       call read_text_file(path, have, error)
@@ -151,9 +189,10 @@ contains
       if (have /= text) then
         call fatal_error(error, dir // ": the journal holds cases of a different sweep (" // &
           first_difference(have, text) // "); rerun with --restart to discard them, or use another output_dir")
+        if (present(differs)) differs = .true.
       end if
     else
-      call write_text_file(path, text, error)
+      call replace_text_file(path, text, error)
     end if
   end subroutine check_fingerprint
 

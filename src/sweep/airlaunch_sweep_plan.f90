@@ -11,7 +11,7 @@ module airlaunch_sweep_plan
   use airlaunch_sweep_case, only: base_scenario, load_base_scenario, check_varied_inputs, check_common_settings
   use airlaunch_sweep_files, only: make_dir
   use airlaunch_sweep_journal, only: fnv1a
-  use airlaunch_sweep_row, only: sweep_row, status_ok, metric_index
+  use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid, metric_index
   implicit none
   private
   public :: sweep_setup, load_sweep, fingerprint_text, trajectory_ids, make_output_dir
@@ -79,7 +79,8 @@ contains
 
   !> Cases that keep a full trajectory: failed ones (keep_failed), the
   !> keep_worst worst by worst_by among the ok ones, and keep_ids; sorted,
-  !> each once.
+  !> each once.  An invalid_input case is never one: its input cannot run,
+  !> so it can have no trajectory.
   function trajectory_ids(def, rows) result(ids)
     type(sweep_definition), intent(in) :: def   !< the sweep
     type(sweep_row), intent(in) :: rows(:)      !< all rows, by id
@@ -88,7 +89,7 @@ contains
     real(dp) :: key(size(rows)), sgn
     integer :: m, k, j, best
     keep = .false.
-    if (def%keep_failed) keep = rows%status /= status_ok
+    if (def%keep_failed) keep = rows%status == status_failed
     do k = 1, size(def%keep_ids)
       keep(def%keep_ids(k) + 1) = .true.
     end do
@@ -108,6 +109,7 @@ contains
         key(best) = huge(1.0_dp)
       end do
     end if
+    keep = keep .and. rows%status /= status_invalid
     ids = pack([(k - 1, k = 1, size(rows))], keep)
   end function trajectory_ids
 

@@ -2,7 +2,8 @@
 !> counter in an MPI window on rank 0, taken with MPI_Fetch_and_op (passive
 !> target, no master loop), so every rank - rank 0 included - computes cases
 !> and takes the next one the moment it is free.  Two more counters (cases
-!> done, cases failed) let rank 0 report progress.
+!> done, cases failed) let rank 0 report progress; a stop flag lets any rank
+!> end the pass (a file error): no rank takes a new case after it is set.
 !>
 !> With Open MPI on one node the window lives in shared memory (osc/sm) and
 !> the atomics never wait for rank 0.  On a cluster the osc/ucx or osc/rdma
@@ -16,7 +17,7 @@ module airlaunch_sweep_scheduler
   private
   public :: sweep_scheduler
 
-  integer, parameter :: slot_next = 0, slot_done = 1, slot_failed = 2, n_slots = 3
+  integer, parameter :: slot_next = 0, slot_done = 1, slot_failed = 2, slot_stop = 3, n_slots = 4
 
   !> The shared counters of one pass over a list of cases.
   type :: sweep_scheduler
@@ -30,6 +31,8 @@ module airlaunch_sweep_scheduler
     procedure :: next => sched_next
     procedure :: finished => sched_finished
     procedure :: counts => sched_counts
+    procedure :: stop => sched_stop
+    procedure :: stopped => sched_stopped
     procedure :: free => sched_free
   end type sweep_scheduler
 
@@ -63,12 +66,35 @@ contains
     self%active = .true.
   end subroutine sched_init
 
-  !> Take the next position in the list of cases (0, 1, 2, ... over all ranks).
+  !> Take the next position in the list of cases (0, 1, 2, ... over all ranks);
+  !> huge(0) once a rank has called `stop`.
   subroutine sched_next(self, position)
     class(sweep_scheduler), intent(inout) :: self
     integer, intent(out) :: position   !< 0-based position; >= list size means no work left
+    if (self%stopped()) then
+      position = huge(0)
+      return
+    end if
     call fetch_add(self, slot_next, 1, position)
   end subroutine sched_next
+
+  !> End the pass for every rank: no case is taken after this (the cases in
+  !> flight on the other ranks finish).
+  subroutine sched_stop(self)
+    class(sweep_scheduler), intent(inout) :: self
+    integer :: old
+    call fetch_add(self, slot_stop, 1, old)
+  end subroutine sched_stop
+
+  !> True once a rank has called `stop`.
+  logical function sched_stopped(self)
+    class(sweep_scheduler), intent(inout) :: self
+    integer :: dummy, flag
+    dummy = 0
+    call MPI_Fetch_and_op(dummy, flag, MPI_INTEGER, 0, int(slot_stop, MPI_ADDRESS_KIND), MPI_NO_OP, self%win)
+    call MPI_Win_flush(0, self%win)
+    sched_stopped = flag > 0
+  end function sched_stopped
 
   !> Count a finished case (and a failure).
   subroutine sched_finished(self, failed)

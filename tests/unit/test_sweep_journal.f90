@@ -1,7 +1,9 @@
 !> Sweep journal rows and files: checksums against published test vectors,
 !> rows that read back bit for bit (NaN, -0, subnormals, extremes), every
 !> truncation of a line rejected (a kill mid-write never yields a wrong row),
-!> a torn last line closed before the next row, duplicates counted.
+!> a torn last line closed before the next row, duplicates counted; a full
+!> device (/dev/full: every write(2) fails with ENOSPC) is an error at once for
+!> a whole file and for a journal row, and a large file is written in full.
 program test_sweep_journal
   use, intrinsic :: iso_fortran_env, only: int64
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
@@ -9,7 +11,8 @@ program test_sweep_journal
   use airlaunch_error, only: error_type
   use airlaunch_sweep_row
   use airlaunch_sweep_journal
-  use airlaunch_sweep_files, only: make_dir, delete_file
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use airlaunch_sweep_files, only: make_dir, delete_file, write_text_file, read_text_file
   use testing
   implicit none
   type(sweep_row) :: row, back
@@ -21,6 +24,17 @@ program test_sweep_journal
   type(error_type), allocatable :: error
   integer :: i, k, dup, bad, u
   real(dp) :: nan
+  character(len=:), allocatable :: big, back_text
+  interface
+    integer(c_int) function c_symlink(target, linkpath) bind(C, name="symlink")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: target(*), linkpath(*)
+    end function c_symlink
+    integer(c_int) function c_unlink(path) bind(C, name="unlink")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function c_unlink
+  end interface
 
   call section("checksums: published test vectors")
   ! Adler-32 of "Wikipedia" is 0x11E60398 (RFC 1950 algorithm, Wikipedia's example)
@@ -104,6 +118,19 @@ program test_sweep_journal
   call check(bad == 1, "one torn line ignored")
   call check(dup == 1, "one duplicate counted")
   call check(rows(5)%id == 4 .and. rows(6)%id == 5, "rows stored by id")
+  ! case 3 runs again later: its torn line is no longer counted; a line cut
+  ! inside its id (no blank after it) still is
+  call jw%open(dir, 1, error)
+  row%id = 3
+  call jw%append(row, error)
+  call jw%close()
+  open(newunit=u, file=journal_file(dir, 1), access="stream", form="unformatted", position="append")
+  write(u) "0A1B2C3D 3"
+  close(u)
+  call read_journals(dir, 6, rows, done, dup, bad, error)
+  call check(all(done), "every case done once case 3 has a row")
+  call check(bad == 1, "the torn row of case 3 (which has a row now) not counted; a line cut inside its id is: " &
+    // trim(itoa(bad)))
   call remove_journal(dir)
   call delete_file(dir // "/fingerprint.txt")
 
@@ -117,6 +144,38 @@ program test_sweep_journal
   if (allocated(error)) call check(index(error%message, "was a = 1, now a = 2") > 0, "message names the change: " &
     // error%message)
   call remove_journal(dir)
+
+  call section("write errors: a full device, a large file")
+  ! 20000 bytes: more than any buffer of 4 or 8 KiB, so a buffered write would
+  ! hold part of it until close
+  big = repeat("0123456789abcdefghi" // new_line("a"), 1000)
+  if (allocated(error)) deallocate(error)
+  call write_text_file("/dev/full", big, error)
+  call check(allocated(error), "write_text_file to /dev/full: an error")
+  if (allocated(error)) call check(index(error%message, "/dev/full") > 0 .and. &
+    index(error%message, "No space left on device") > 0, "it names the file and ENOSPC: " // error%message)
+  if (allocated(error)) deallocate(error)
+  call write_text_file("sweep_journal_big.txt", big, error)
+  call check(.not. allocated(error), "write_text_file of 20000 bytes: no error")
+  call read_text_file("sweep_journal_big.txt", back_text, error)
+  call check(.not. allocated(error) .and. back_text == big, "the 20000 bytes read back unchanged")
+  call delete_file("sweep_journal_big.txt")
+  ! a journal whose rank file is /dev/full: the first row is an error
+  dir = "sweep_journal_full"
+  call make_dir(dir, error)
+  k = c_unlink(dir // "/rank_0000.txt" // c_null_char)
+  call check(c_symlink("/dev/full" // c_null_char, dir // "/rank_0000.txt" // c_null_char) == 0, &
+    "rank_0000.txt -> /dev/full")
+  call jw%open(dir, 0, error)
+  call check(.not. allocated(error), "the journal opens")
+  row = sweep_row(id=7)
+  call jw%append(row, error)
+  call check(allocated(error), "appending a row to a full device: an error")
+  if (allocated(error)) call check(index(error%message, "rank_0000.txt") > 0 .and. &
+    index(error%message, "case 7") > 0 .and. index(error%message, "No space left on device") > 0, &
+    "it names the file, the case and ENOSPC: " // error%message)
+  call jw%close()
+  k = c_unlink(dir // "/rank_0000.txt" // c_null_char)
   call finish()
 contains
   function itoa(i) result(s)

@@ -1,0 +1,272 @@
+"""airlaunch-sweep's file errors while running (docs/sweep.md: exit status 4):
+a case's scratch namelist that cannot be written, a journal row or the
+journal's fingerprint lost to a full disk, a trajectory that cannot be written.
+Each stops the sweep with one line naming the file and exit status 4, records
+nothing false in the journal, and a rerun once the cause is gone ends with
+every case ok.  Also: --restart removes every kept trajectory, and a torn
+journal line whose case has run again is not reported again."""
+import contextlib
+import os
+import pathlib
+import shutil
+import subprocess
+import zlib
+
+import pytest
+
+from test_sweep_support import SWEEP_EXE, journal_rows, make_table, run_sweep, small_definition
+
+
+@pytest.fixture(scope="module")
+def exes():
+    if not SWEEP_EXE.exists():
+        pytest.fail(f"{SWEEP_EXE} is missing: run scripts/setup release first")
+
+
+def _errors(res):
+    """The program's own error lines (mpirun adds its banner for a non-zero exit)."""
+    return [x for x in res.stderr.splitlines() if x.startswith("airlaunch-sweep:")]
+
+
+def _statuses(journal_dir):
+    """Status field of every valid journal row."""
+    out = []
+    for path in sorted(pathlib.Path(journal_dir).glob("rank_*.txt")):
+        for line in path.read_text().splitlines():
+            head, _, body = line.partition(" ")
+            if len(head) == 8 and int(head, 16) == zlib.adler32(body.encode()):
+                out.append(int(body.split()[1]))
+    return out
+
+
+def test_unwritable_case_namelist_stops_the_sweep(tmp_path, exes):
+    """A directory in the way of the ranks' scratch namelists: every case was
+    journaled as invalid_input ("cannot write the file") and the sweep ended
+    with status 0; a rerun kept the false rows.  Now the first such case stops
+    the sweep (exit 4, one line naming the file), no row is written for it,
+    and the rerun runs every case."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=12)
+    make_table(definition, tmp_path)
+    work = tmp_path / "out" / "work"
+    for r in (0, 1):   # both ranks: whichever takes a case meets the error
+        (work / f"case_rank{r}.nml").mkdir(parents=True)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 4, res.stdout + res.stderr
+    errors = _errors(res)
+    assert len(errors) == 1 and "case_rank" in errors[0] and "cannot write" in errors[0], res.stderr
+    assert "invalid input" not in res.stdout, res.stdout
+    assert not (tmp_path / "out" / "summary.nc").exists()
+    assert _statuses(tmp_path / "out" / "journal") == [], "a file error was journaled as a result"
+    for r in (0, 1):
+        (work / f"case_rank{r}.nml").rmdir()
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "12 cases: 12 ok, 0 failed, 0 invalid input; 12 run now" in res.stdout, res.stdout
+
+
+# --- a full disk: a small tmpfs (root only) -----------------------------------
+
+PAGE = 4096
+TMPFS_PAGES = 16
+
+
+@contextlib.contextmanager
+def small_tmpfs(path, free_pages):
+    """A 64 KiB tmpfs mounted at `path` with `free_pages` pages left free (a
+    filler file takes the rest); unmounted on exit.  Skips the test where
+    mounting is impossible (not root, no tmpfs, a container without
+    CAP_SYS_ADMIN)."""
+    path = pathlib.Path(path)
+    path.mkdir(parents=True, exist_ok=True)
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("a full disk is made with a small tmpfs: needs root and mount(8)")
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={TMPFS_PAGES * PAGE}", "tmpfs", str(path)],
+                         capture_output=True, text=True)
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs to make a full disk: {res.stderr.strip()}")
+    try:
+        filler = path / ".filler"
+        with open(filler, "wb") as f:
+            f.write(b"\0" * ((TMPFS_PAGES - free_pages) * PAGE))
+        st = os.statvfs(path)
+        assert st.f_bavail * st.f_frsize == free_pages * PAGE, "the tmpfs does not count pages as expected"
+        yield filler
+    finally:
+        if subprocess.run(["umount", str(path)], capture_output=True).returncode != 0:
+            subprocess.run(["umount", "-l", str(path)], capture_output=True)
+
+
+def test_full_disk_stops_the_sweep_at_the_first_lost_journal_row(tmp_path, exes):
+    """The journal on a full disk: gfortran's buffered write, flush and close
+    reported no error, rows were lost while the cases went on, and the loss was
+    found only after the last case ("N cases have no row after the run").  Now
+    the first row that cannot be written in full stops the sweep (exit 4, one
+    line naming the journal file and ENOSPC); every row the journal holds is
+    whole or torn (never a wrong row), and a rerun from it ends with every case."""
+    n = 40
+    definition = small_definition(tmp_path / "s.nml", n_cases=n)
+    make_table(definition, tmp_path)
+    journal = tmp_path / "out" / "journal"
+    saved = tmp_path / "journal_saved"
+    # 3 free pages: the fingerprint, and one page (about 5 rows) per rank file
+    with small_tmpfs(journal, free_pages=3):
+        res = run_sweep(definition, tmp_path, 2)
+        shutil.copytree(journal, saved, ignore=shutil.ignore_patterns(".filler"))
+    assert res.returncode == 4, res.stdout + res.stderr
+    errors = _errors(res)
+    assert len(errors) == 1, res.stderr
+    assert "rank_000" in errors[0] and "No space left on device" in errors[0], errors[0]
+    assert not (tmp_path / "out" / "summary.nc").exists()
+    ids, _ = journal_rows(saved)
+    assert 0 < len(ids) < n // 2, f"{len(ids)} rows: the sweep did not stop at the first lost row"
+    assert len(set(ids)) == len(ids)
+    # the journal kept on a real disk: the rerun resumes from its rows
+    shutil.rmtree(journal)
+    shutil.copytree(saved, journal)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert f"resuming: {len(ids)} of {n}" in res.stdout, res.stdout
+    assert f"{n} cases: {n} ok" in res.stdout, res.stdout
+
+
+def test_fingerprint_on_a_full_disk_is_an_error_and_leaves_no_empty_file(tmp_path, exes):
+    """The fingerprint written to a full disk was left as a 0-byte file without
+    an error, and every later run refused "fingerprints differ".  Now the run
+    stops before any case (exit 4, one line naming the file and ENOSPC), no
+    fingerprint is left, and once there is space the run ends with every case."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    journal = tmp_path / "out" / "journal"
+    with small_tmpfs(journal, free_pages=0) as filler:
+        res = run_sweep(definition, tmp_path, 2)
+        assert res.returncode == 4, res.stdout + res.stderr
+        errors = _errors(res)
+        assert len(errors) == 1 and "fingerprint.txt" in errors[0] and "No space left on device" in errors[0], \
+            res.stderr
+        assert "cases to run" not in res.stdout, res.stdout
+        assert sorted(p.name for p in journal.iterdir()) == [".filler"], "a partial fingerprint was left"
+        filler.unlink()
+        res = run_sweep(definition, tmp_path, 2)
+        assert res.returncode == 0, res.stdout + res.stderr
+        assert "4 cases: 4 ok" in res.stdout, res.stdout
+        assert (journal / "fingerprint.txt").stat().st_size > 0
+
+
+def test_case_namelist_cut_by_a_full_disk_stops_the_sweep(tmp_path, exes):
+    """A case namelist cut short by a full disk (gfortran: no error) could be
+    read and run on the base's defaults: a wrong row.  Now the first case whose
+    namelist cannot be written in full stops the sweep (exit 4, one line naming
+    the namelist and ENOSPC) and nothing is journaled.  The tmpfs on work/
+    leaves room for the ranks' check namelists (written before any case) and
+    one page less than a case namelist needs."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 0, res.stderr
+    check_size = (tmp_path / "out" / "work" / "check_rank0.nml").stat().st_size
+    res = run_sweep(definition, tmp_path, None, "--case-namelist", 0)
+    case_size = len(res.stdout.encode())
+
+    def pages(n):
+        return -(-n // PAGE)
+
+    shutil.rmtree(tmp_path / "out" / "work")
+    with small_tmpfs(tmp_path / "out" / "work", free_pages=2 * pages(check_size) + pages(case_size) - 1):
+        res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 4, res.stdout + res.stderr
+    errors = _errors(res)
+    assert len(errors) == 1 and "case_rank" in errors[0] and "No space left on device" in errors[0], res.stderr
+    assert journal_rows(tmp_path / "out" / "journal")[0] == [], "a case was run from a cut namelist"
+
+
+# --- trajectories ---------------------------------------------------------------
+
+FAILING_INPUTS = """
+&input name = 'flight%altitude', distribution = 'list', values = 300.0, 3000.0, units = 'm' /
+&input name = 'parachute%drag_area', distribution = 'list', values = 0.0, 10.0, units = 'm2' /
+"""
+
+
+def test_unwritable_trajectories_are_an_error_not_written_files(tmp_path, exes):
+    """Directories in the way of the kept trajectories (their .part names): the
+    sweep printed "trajectories: 3 written", exit 0, and no file existed.  Now
+    the write failure stops the pass (exit 4, one line naming the file); once
+    the way is clear, the rerun writes them and counts the files it wrote."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=12, extra_sweep="keep_ids = 1, 2, 3")
+    make_table(definition, tmp_path)
+    traj = tmp_path / "out" / "trajectories"
+    for k in (1, 2, 3):
+        (traj / f"case_{k:06d}.nc.part").mkdir(parents=True)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 4, res.stdout + res.stderr
+    errors = _errors(res)
+    assert len(errors) == 1 and ".nc.part" in errors[0] and "trajector" in errors[0], res.stderr
+    assert "written" not in res.stdout, res.stdout
+    assert sorted(p.name for p in traj.glob("*.nc")) == []
+    for k in (1, 2, 3):
+        (traj / f"case_{k:06d}.nc.part").rmdir()
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "trajectories: 3 written" in res.stdout, res.stdout
+    assert sorted(p.name for p in traj.glob("*.nc")) == [f"case_{k:06d}.nc" for k in (1, 2, 3)]
+
+
+def test_keep_failed_keeps_failed_cases_only_and_counts_files(tmp_path, exes):
+    """keep_failed selected invalid_input cases too, which can never have a
+    trajectory: "3 written" for 1 file, and every rerun tried them again.  Grid
+    of altitude {300, 3000} m x drag area {0, 10} m^2 (statuses invalid, failed,
+    invalid, ok): only the failed case 1 is kept, the count is the files on
+    disk, and a rerun has nothing left to write."""
+    definition = small_definition(tmp_path / "f.nml", n_cases=4, design="grid", inputs=FAILING_INPUTS,
+                                  t_end=40.0, extra_sweep="keep_failed = .true.")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "4 cases: 1 ok, 1 failed, 2 invalid input" in res.stdout, res.stdout
+    assert "trajectories: 1 written" in res.stdout, res.stdout
+    traj = tmp_path / "out" / "trajectories"
+    assert sorted(p.name for p in traj.iterdir()) == ["case_000001.nc"]
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "trajectories:" not in res.stdout, res.stdout
+
+
+def test_restart_removes_every_kept_trajectory(tmp_path, exes):
+    """--restart removed the kept trajectories only for ids below the new
+    sweep's n_cases: a restart with fewer cases left the earlier sweep's
+    case_000010.nc beside the new ones.  Now every case file goes (a stray
+    .part too); other files in the directory stay."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=12, extra_sweep="keep_ids = 1, 10")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    traj = tmp_path / "out" / "trajectories"
+    assert sorted(p.name for p in traj.iterdir()) == ["case_000001.nc", "case_000010.nc"]
+    (traj / "case_000011.nc.part").write_text("an interrupted write\n")
+    (traj / "notes.txt").write_text("not a case file\n")
+    definition = small_definition(tmp_path / "s.nml", n_cases=4, seed=11)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2, "--restart")
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert sorted(p.name for p in traj.iterdir()) == ["notes.txt"]
+
+
+def test_torn_line_of_a_case_run_again_is_not_reported_again(tmp_path, exes):
+    """"N torn journal lines ignored (their cases run again)" was printed on
+    every later run, after those cases had run again.  Now a torn line whose
+    case has a valid row is not counted; one whose case has none still is."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    assert run_sweep(definition, tmp_path, None).returncode == 0
+    rank0 = tmp_path / "out" / "journal" / "rank_0000.txt"
+    lines = rank0.read_text().splitlines()
+    # the row of the first case cut by a "kill" in its metrics: it ran again since
+    rank0.write_text("\n".join(lines + [lines[0][:60]]) + "\n")
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "resuming: 4 of 4" in res.stdout and "torn" not in res.stdout, res.stdout
+    # the row of the last case torn, with no whole row left: reported, and the case runs again
+    rank0.write_text("\n".join(lines[:-1] + [lines[-1][:60]]) + "\n")
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "resuming: 3 of 4" in res.stdout and "1 torn journal lines ignored" in res.stdout, res.stdout
