@@ -49,7 +49,7 @@ program test_rigidized_coupling
   use airlaunch_rotation, only: quat_from_euler
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_multibody
-  use airlaunch_line, only: line_model, line_params, line_end, end_body
+  use airlaunch_line, only: line_model, line_params, line_end
   use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_ode, only: node_blocks
   use airlaunch_rigidized_coupling
