@@ -332,7 +332,6 @@ contains
     character(len=*), intent(in) :: trajectory  !< trajectory file ("" for summary mode)
     type(sweep_row), intent(out) :: row         !< the result
     type(error_type), allocatable, intent(inout) :: file_error  !< set if the scratch file cannot be written
-    type(nml_file) :: f
     type(run_config) :: run
     type(scenario_config) :: cfg
     type(launch_result) :: res
@@ -341,14 +340,8 @@ contains
     integer(int64) :: c0, c1, rate
 
     call system_clock(c0, rate)
-    call write_text_file(scratch, case_namelist(def, base, id, values), file_error)
-    if (allocated(file_error)) then
-      file_error%message = "case " // str(id) // ": " // file_error%message
-      return
-    end if
-    call f%load(scratch, error)
-    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
-    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    call load_case(def, base, id, values, scratch, run, cfg, echo, error, file_error)
+    if (allocated(file_error)) return
     if (allocated(error)) then
       call system_clock(c1)
       row = invalid_row(id, replace(error%message, scratch, "case " // str(id)), real(c1 - c0, dp)/rate)
@@ -382,7 +375,6 @@ contains
     character(len=*), intent(in) :: trajectory  !< trajectory file
     logical, intent(out) :: written             !< the trajectory file exists
     type(error_type), allocatable, intent(inout) :: file_error  !< set on a file error
-    type(nml_file) :: f
     type(run_config) :: run
     type(scenario_config) :: cfg
     type(launch_result) :: res
@@ -390,14 +382,8 @@ contains
     character(len=:), allocatable :: echo
     logical :: exists
     written = .false.
-    call write_text_file(scratch, case_namelist(def, base, id, values), file_error)
-    if (allocated(file_error)) then
-      file_error%message = "case " // str(id) // ": " // file_error%message
-      return
-    end if
-    call f%load(scratch, error)
-    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
-    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    call load_case(def, base, id, values, scratch, run, cfg, echo, error, file_error)
+    if (allocated(file_error)) return
     if (allocated(error)) return   ! an invalid case: no trajectory (the summary holds its message)
     run%trajectory = .true.
     run%output = trajectory
@@ -409,6 +395,30 @@ contains
     inquire(file=trajectory, exist=exists)
     written = exists
   end subroutine run_trajectory
+
+  !> Write case `id`'s namelist to `scratch` and read it: a write failure is
+  !> `file_error` (not a result of the case), bad input `error`.
+  subroutine load_case(def, base, id, values, scratch, run, cfg, echo, error, file_error)
+    type(sweep_definition), intent(in) :: def   !< the sweep
+    type(base_scenario), intent(in) :: base     !< its base scenario
+    integer, intent(in) :: id                   !< case id
+    real(dp), intent(in) :: values(:)           !< the case's values
+    character(len=*), intent(in) :: scratch     !< per-rank scratch file for the namelist
+    type(run_config), intent(out) :: run        !< its &run
+    type(scenario_config), intent(out) :: cfg   !< its scenario
+    character(len=:), allocatable, intent(out) :: echo          !< resolved input
+    type(error_type), allocatable, intent(inout) :: error       !< set on bad input
+    type(error_type), allocatable, intent(inout) :: file_error  !< set if the scratch file cannot be written
+    type(nml_file) :: f
+    call write_text_file(scratch, case_namelist(def, base, id, values), file_error)
+    if (allocated(file_error)) then
+      file_error%message = "case " // str(id) // ": " // file_error%message
+      return
+    end if
+    call f%load(scratch, error)
+    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
+    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+  end subroutine load_case
 
   !> Insert line(k) before the end of group groups(k) in `text` (appending
   !> the group if the text lacks it).  Comments and strings are respected.

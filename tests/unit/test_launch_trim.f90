@@ -102,19 +102,4 @@ program test_launch_trim
     end do
   end do
   call finish()
-contains
-
-  !> The paper's input: $AIRLAUNCH_SOURCE_DIR/input/airlaunch_paper.nml (set by
-  !> ctest), else relative to the working directory.
-  function paper_input() result(p)
-    character(len=:), allocatable :: p
-    character(len=4096) :: dir
-    integer :: n, stat
-    call get_environment_variable("AIRLAUNCH_SOURCE_DIR", dir, n, stat)
-    if (stat == 0 .and. n > 0) then
-      p = trim(dir) // "/input/airlaunch_paper.nml"
-    else
-      p = "input/airlaunch_paper.nml"
-    end if
-  end function paper_input
 end program test_launch_trim

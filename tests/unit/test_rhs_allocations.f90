@@ -111,20 +111,6 @@ program test_rhs_allocations
 
 contains
 
-  !> The paper's input: $AIRLAUNCH_SOURCE_DIR/input/airlaunch_paper.nml (set by
-  !> ctest), else relative to the working directory.
-  function paper_input() result(p)
-    character(len=:), allocatable :: p
-    character(len=4096) :: dir
-    integer :: n, stat
-    call get_environment_variable("AIRLAUNCH_SOURCE_DIR", dir, n, stat)
-    if (stat == 0 .and. n > 0) then
-      p = trim(dir) // "/input/airlaunch_paper.nml"
-    else
-      p = "input/airlaunch_paper.nml"
-    end if
-  end function paper_input
-
   !> Integrate to tout, switching the phase at the events (as the program's
   !> direct coupling does).
   subroutine integrate_to(tout)

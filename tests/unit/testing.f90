@@ -6,7 +6,7 @@ module testing
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: check, check_close, finish, section, fixed_seed
+  public :: check, check_close, finish, section, fixed_seed, paper_input
 
   integer, save :: n_pass = 0, n_fail = 0
 
@@ -20,6 +20,20 @@ contains
     call random_seed(size=n)
     call random_seed(put=[(12345 + 7*i, i = 1, n)])
   end subroutine fixed_seed
+
+  !> The paper's input: $AIRLAUNCH_SOURCE_DIR/input/airlaunch_paper.nml (set by
+  !> ctest), else relative to the working directory.
+  function paper_input() result(p)
+    character(len=:), allocatable :: p
+    character(len=4096) :: dir
+    integer :: n, stat
+    call get_environment_variable("AIRLAUNCH_SOURCE_DIR", dir, n, stat)
+    if (stat == 0 .and. n > 0) then
+      p = trim(dir) // "/input/airlaunch_paper.nml"
+    else
+      p = "input/airlaunch_paper.nml"
+    end if
+  end function paper_input
 
   !> Print a heading.
   subroutine section(name)
