@@ -24,6 +24,11 @@ WORST_BY = ("min_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excurs
 
 SWEEP_VARS = ("name", "base", "output_dir", "design", "n_cases", "seed", "t_end", "keep_failed",
               "keep_worst", "worst_by", "keep_ids", "criteria", "progress_interval")
+#: variables the sweep sets for every case (airlaunch_sweep_definition.f90, owned_by_sweep)
+OWNED_BY_SWEEP = ("run%scene", "run%output", "run%trajectory")
+OWNED_NOTE = ("the sweep sets it for every case (the scene is the base's airlaunch scene; the output and "
+              "whether there is one are the sweep's: summary mode, keep_failed, keep_worst)")
+
 INPUT_VARS = ("name", "distribution", "lower", "upper", "mean", "std", "values", "levels", "units",
               "description")
 FIXED_VARS = ("name", "value")
@@ -556,6 +561,8 @@ def _read_fixed(path, index, group_vars, varied):
     if not _valid_name(name):
         raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, e.g. "
                               "'flight%trim_mode')")
+    if name in OWNED_BY_SWEEP:
+        raise DefinitionError(f"{where}name = '{name}' is not allowed: {OWNED_NOTE}")
     where = f"{path}: &fixed #{index} '{name}': "
     value = _str(where, group_vars, "value", "")
     if not value:
@@ -575,6 +582,8 @@ def _read_input(path, index, group_vars, design):
     if not _valid_name(name):
         raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, "
                               "e.g. 'bay%release_time')")
+    if name in OWNED_BY_SWEEP:
+        raise DefinitionError(f"{where}name = '{name}' is not allowed: {OWNED_NOTE}")
     dist = ascii_lower(_str(where, group_vars, "distribution"))
     _choice(where, "distribution", dist, DISTRIBUTIONS)
     spec = dict(name=name, distribution=dist, units=_str(where, group_vars, "units", ""),
@@ -644,7 +653,8 @@ def parse_definition(text, path="<sweep>"):
     base = _str(where, sweep, "base")
     if not base:
         raise DefinitionError(f"{where}base = '' is not allowed (the base scenario file)")
-    name = _str(where, sweep, "name", pathlib.Path(path).stem)
+    # '' as absent: the file's stem (airlaunch-sweep's rule too)
+    name = _str(where, sweep, "name", "") or pathlib.Path(path).stem
     output_dir = _str(where, sweep, "output_dir", f"output/sweep_{name}")
     if not output_dir:
         raise DefinitionError(f"{where}output_dir = '' is not allowed (a directory, e.g. 'output/sweep_{name}')")

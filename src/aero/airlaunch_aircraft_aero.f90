@@ -21,7 +21,7 @@
 !> (quasi-steady: alpha_dot ~ q in the short-period motion), since alpha_dot
 !> is not a state.
 module airlaunch_aircraft_aero
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, deg2rad
   implicit none
   private
   public :: aircraft_aero, aircraft_aero_eval, aircraft_aero_out
@@ -50,7 +50,7 @@ module airlaunch_aircraft_aero
     real(dp) :: cn_r = -0.30_dp           !< Cn_r
     real(dp) :: thrust = 0.0_dp           !< along body x through the CG [N] (set by trim)
     real(dp) :: delta_e_trim = 0.0_dp     !< elevator at trim [rad]
-    real(dp) :: delta_e_max = 0.4363_dp   !< elevator limit [rad] (25 deg)
+    real(dp) :: delta_e_max = 25.0_dp*deg2rad   !< elevator limit [rad] (25 deg)
     logical :: attitude_hold = .false.    !< elevator pitch-attitude hold
     real(dp) :: k_theta = 2.0_dp          !< hold gain [rad elevator / rad pitch error]
     real(dp) :: k_q = 0.5_dp              !< hold gain [rad elevator / (rad/s) pitch rate]

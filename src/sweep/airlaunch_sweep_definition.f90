@@ -43,6 +43,7 @@ module airlaunch_sweep_definition
     real(dp) :: mean = unset_real, std = unset_real      !< normal, truncnorm
     real(dp), allocatable :: values(:)                   !< list
     integer :: levels = 0                                !< grid levels (design = 'grid')
+    logical :: levels_given = .false.                    !< levels was assigned (refused but by 'grid')
     integer :: line = 0                                  !< line of the group in the file
   end type sweep_input
 
@@ -267,11 +268,11 @@ contains
     if (len(def%output_dir) == 0) def%output_dir = "output/sweep_" // def%name
     do i = 1, size(def%inputs)
       associate(s => def%inputs(i))
-        if (s%levels > 0 .and. s%distribution == "list") then
+        if (s%levels_given .and. s%distribution == "list") then
           call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
             "': levels is not used by distribution = 'list' (its values are the grid's levels)")
           return
-        else if (s%levels > 0 .and. def%design /= "grid") then
+        else if (s%levels_given .and. def%design /= "grid") then
           call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
             "': levels is not used with design = '" // def%design // "' (only with 'grid')")
           return
@@ -395,7 +396,7 @@ contains
     do k = 1, n_input
       name = ""; distribution = ""; units = ""; description = ""
       lower = unset_real; upper = unset_real; mean = unset_real; std = unset_real
-      values = unset_real; levels = 0
+      values = unset_real; levels = -huge(1)   ! -huge: not assigned
       read(u, nml=input, iostat=ios, iomsg=msg)
       if (ios /= 0) then
         close(u)
@@ -425,6 +426,8 @@ contains
         s%distribution = lower_trim(distribution)
         s%units = trim(units)
         s%description = trim(description)
+        s%levels_given = levels /= -huge(1)
+        if (.not. s%levels_given) levels = 0
         s%levels = levels
         if (len(s%distribution) == 0) then
           call fatal_error(error, where // "missing required value distribution (one of: uniform, normal, " // &

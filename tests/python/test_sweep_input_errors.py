@@ -263,6 +263,41 @@ def test_levels_with_lhs(tmp_path):
                  "only by design = 'grid'", tmp_path=tmp_path)
 
 
+@pytest.mark.parametrize("levels", ["0", "3"])
+def test_levels_with_lhs_refused_by_both_steps(tmp_path, levels):
+    """levels = 0 given with design = 'lhs' is as much an error as 3 (sweep.md): the
+    check step took 0 for 'not given' and accepted it while the table step refused."""
+    d = definition(tmp_path, inputs=ONE_INPUT.replace("upper = 1.0", f"upper = 1.0, levels = {levels}"))
+    assert_error(table(tmp_path, d), "levels is not used by design = 'lhs'", tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+@pytest.mark.parametrize("where", ["input", "fixed"])
+@pytest.mark.parametrize("name", ["run%scene", "run%output", "run%trajectory"])
+def test_variables_the_sweep_sets_are_refused_by_both_steps(tmp_path, where, name):
+    """sweep.md: the scene, the output and whether there is one are the sweep's; the
+    check step refused them, the table step drew a table with them."""
+    if where == "input":
+        d = definition(tmp_path, inputs=f"&input name = '{name}', distribution = 'list', values = 1.0 /\n")
+    else:
+        d = definition(tmp_path, fixed=f"&fixed name = '{name}', value = \"'x'\" /")
+    assert_error(table(tmp_path, d), f"name = '{name}' is not allowed: the sweep sets it", tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+
+
+def test_empty_name_is_the_file_stem_in_both_steps(tmp_path):
+    """sweep.md: name defaults to the definition's file name without extension, ''
+    included - the check step did so and the table step wrote to output/sweep_."""
+    d = definition(tmp_path, name="stemmed.nml", output_dir="",
+                   text=lambda t: t.replace("name = 'small'", "name = ''").replace("  output_dir = ''\n", ""))
+    res = table(tmp_path, d)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "output" / "sweep_stemmed" / "table.nc").is_file()
+    if SWEEP_EXE.exists():
+        res = run_sweep(d, tmp_path, None, "--check")
+        assert res.returncode == 0, res.stderr
+
+
 def test_levels_with_a_list(tmp_path):
     inputs = "&input name = 'flight%mach', distribution = 'list', values = 0.6, 0.7, levels = 2 /\n"
     d = definition(tmp_path, design="grid", inputs=inputs, text=lambda t: t.replace("n_cases = 6", ""))
