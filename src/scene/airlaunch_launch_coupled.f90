@@ -45,7 +45,6 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     ! --- the automatic choice and the switches
     type(auto_switch) :: auto                         !< hysteresis state
     real(dp) :: next_check = 0.0_dp                   !< next check of the indicator (direct engine) [s]
-    real(dp) :: direct_steps = 0.0_dp                 !< direct steps before the solver's last restart
     real(dp) :: chk_steps = 0.0_dp, chk_t = 0.0_dp    !< line-carrying steps and time at the last check
     real(dp) :: rec_steps = 0.0_dp, rec_t = 0.0_dp    !< the same at the last record
     integer :: switches = 0                           !< hand-overs so far
@@ -338,10 +337,8 @@ contains
           switch = .true.
           return
         end if
-        ! the constraint set changed: restart CVODE from the event (its
-        ! counters restart too, so keep the totals)
-        call add_stats(res%stats, r%dsolver%stats())
-        r%direct_steps = r%direct_steps + solver_steps(r%dsolver)
+        ! the constraint set changed: restart CVODE from the event (the
+        ! solver keeps its counters' totals over the restart)
         y = r%dsolver%y
         call r%dsolver%reinit(r%dsolver%t, y, err)
         if (allocated(err)) return
@@ -572,13 +569,13 @@ contains
     type(coupled_run), intent(in) :: r
     real(dp) :: n
     if (r%active == coupling_direct) then
-      n = r%direct_steps + solver_steps(r%dsolver)
+      n = real(r%dsolver%steps_taken(), dp)
     else
       n = solver_steps(r%cpl%line_solver)
     end if
   end function line_steps
 
-  !> Steps of a solver since its last (re)start.
+  !> Steps of a solver since its init (over its restarts).
   function solver_steps(solver) result(n)
     type(cvode_solver), intent(in) :: solver
     real(dp) :: n
@@ -638,8 +635,8 @@ contains
     from = r%active
     if (from == coupling_direct) then
       t = r%dsolver%t
-      call add_stats(res%stats, r%dsolver%stats())
-      r%direct_steps = r%direct_steps + solver_steps(r%dsolver)
+      ! the direct solver's counters go into the result once, at the end
+      ! (finish_result): it keeps them over its restarts and stints
       call r%dsys%prepare(t, r%dsolver%y, status)
       call rigidized_resume(r, t, err)
       r%active = coupling_rigidized
@@ -801,8 +798,9 @@ contains
   subroutine finish_result(r, res)
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(inout) :: res
+    ! the direct solver's totals over all its stints (it is initialised once)
+    if (r%dsolver_started) call add_stats(res%stats, r%dsolver%stats())
     if (r%active == coupling_direct) then
-      if (r%dsolver_started) call add_stats(res%stats, r%dsolver%stats())
       res%end_time = r%dsolver%t
       call events_of(r%dsys%sep)
     else

@@ -208,7 +208,6 @@ module airlaunch_rigidized_coupling
     real(dp) :: momentum_jump(3) = 0.0_dp
     real(dp) :: angular_momentum_jump(3) = 0.0_dp
     real(dp) :: kinetic_energy_jump = 0.0_dp        !< the same for the chain's kinetic energy [J]
-    type(cvode_stats) :: chain_totals               !< chain counters before the last restart
     ! samples of the current outer step (relative frame)
     real(dp), private :: tie_x(3) = 0.0_dp, tie_v(3) = 0.0_dp, b3_x(3) = 0.0_dp, b3_v(3) = 0.0_dp
     real(dp), private :: tie0_x(3) = 0.0_dp, tie0_v(3) = 0.0_dp, b30_x(3) = 0.0_dp, b30_v(3) = 0.0_dp
@@ -708,7 +707,6 @@ contains
     call self%free()
     self%opts = opts
     ! a fresh start: counters and books of a previous run of this coupling go
-    self%chain_totals = cvode_stats()
     self%n_refresh = 0
     self%n_guard_mass = 0
     self%n_guard_inertia = 0
@@ -899,13 +897,12 @@ contains
     if (self%opts%restart_on_refresh) call self%restart_chain(error)
   end subroutine coupling_refresh
 
-  !> Restart the chain's CVODE at self%t (after an event or a refresh); its
-  !> counters are kept in chain_totals.
+  !> Restart the chain's CVODE at self%t (after an event or a refresh); the
+  !> solver keeps its counters' totals over the restart.
   subroutine coupling_restart_chain(self, error)
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     real(dp), allocatable :: y(:)
-    call add_stats(self%chain_totals, self%chain_solver%stats())
     y = self%chain_solver%y
     call self%chain_solver%reinit(self%t, y, error)
   end subroutine coupling_restart_chain
@@ -944,7 +941,8 @@ contains
       deallocate(self%saved_y, self%saved_t)
       allocate(self%saved_y(chain_size, nt), self%saved_t(nt))
     end if
-    call self%chain_solver%set_stop_time(t_target)
+    call self%chain_solver%set_stop_time(t_target, error)
+    if (allocated(error)) return
     do j = 1, nt
       if (t_out(j) <= self%t + eps) cycle
       if (t_out(j) >= t_target - eps) exit
@@ -980,7 +978,11 @@ contains
       call self%line%near%set_body_motion(self%step_t0, self%tie0_x, self%tie0_v, t1, self%tie_x, self%tie_v)
       if (self%line%far_kinematic) call self%line%far%set_body_motion(self%step_t0, self%b30_x, self%b30_v, t1, &
         self%b3_x, self%b3_v)
-      call self%line_solver%set_stop_time(t1)
+      call self%line_solver%set_stop_time(t1, error)
+      if (allocated(error)) then
+        error%message = "line sub-steps: " // error%message
+        return
+      end if
       self%motion_set = .true.
     end if
     if (self%line_solver%t >= t) return
@@ -1029,12 +1031,11 @@ contains
     tension = self%line%tension
   end subroutine coupling_line_state
 
-  !> Counters: chain (all restarts) and line summed.
+  !> Counters: chain (all restarts: the solver keeps the totals) and line summed.
   function coupling_stats(self) result(s)
     class(rigidized_coupling), intent(in) :: self   !< the coupling
     type(cvode_stats) :: s
-    s = self%chain_totals
-    call add_stats(s, self%chain_solver%stats())
+    s = self%chain_solver%stats()
     call add_stats(s, self%line_solver%stats())
   end function coupling_stats
 

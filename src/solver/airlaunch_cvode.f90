@@ -46,7 +46,8 @@ module airlaunch_cvode
     real(dp) :: max_step = 0.0_dp                !< largest step [s]; 0 = unlimited
     real(dp) :: initial_step = 0.0_dp            !< first step [s]; 0 = CVODE's estimate
     integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
-    integer :: max_num_steps = 200000            !< steps allowed between two outputs
+    !> steps allowed between two outputs; <= 0 = no limit (not CVODE's default 500)
+    integer :: max_num_steps = 200000
     !> steps allowed over the solver's life, re-initialisations included (a run's
     !> budget: `&run max_steps`); 0 = no limit
     integer :: max_total_steps = 0
@@ -88,7 +89,11 @@ module airlaunch_cvode
     real(c_double), pointer :: y(:) => null()
     type(callback_data), pointer :: cb => null()
     real(dp) :: t = 0.0_dp   !< time of `y`
-    integer(c_long) :: steps_before = 0    !< steps before the last re-initialisation
+    !> counters before the last re-initialisation (CVODE restarts its own)
+    type(cvode_stats) :: stats_before
+    !> re-initialised and not advanced since: CVODE's linear-solver counters
+    !> still hold the previous segment's (they restart at the next step)
+    logical :: restarted = .false.
     integer(c_long) :: max_total = 0       !< cvode_options%max_total_steps
     integer(c_long) :: max_interval = 0    !< cvode_options%max_num_steps
   contains
@@ -105,8 +110,25 @@ module airlaunch_cvode
 
 contains
 
-  !> Create the integrator for `sys` from state y0 at time t0.
+  !> Create the integrator for `sys` from state y0 at time t0.  On failure
+  !> everything allocated so far is released (the solver is as after `free`).
   subroutine solver_init(self, sys, t0, y0, opts, error)
+    class(cvode_solver), intent(inout) :: self            !< solver (re-initialised)
+    class(ode_system), target, intent(inout) :: sys       !< the system (must outlive the solver)
+    real(dp), intent(in) :: t0                            !< initial time [s]
+    real(dp), intent(in) :: y0(:)                         !< initial state
+    type(cvode_options), intent(in) :: opts               !< method and tolerances
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    type(error_type), allocatable :: init_error
+    call init_parts(self, sys, t0, y0, opts, init_error)
+    if (allocated(init_error)) then
+      call self%free()
+      call move_alloc(init_error, error)
+    end if
+  end subroutine solver_init
+
+  !> solver_init's work; returns at the first failure (solver_init frees).
+  subroutine init_parts(self, sys, t0, y0, opts, error)
     class(cvode_solver), intent(inout) :: self            !< solver (re-initialised)
     class(ode_system), target, intent(inout) :: sys       !< the system (must outlive the solver)
     real(dp), intent(in) :: t0                            !< initial time [s]
@@ -150,9 +172,11 @@ contains
       return
     end if
     ierr = FCVodeSetErrHandlerFn(self%mem, c_funloc(error_handler), c_loc(self%cb))
+    if (failed(ierr, "cannot install the error handler", error)) return
     ierr = FCVodeInit(self%mem, c_funloc(rhs_callback), real(t0, c_double), self%nv_y)
     if (failed(ierr, "FCVodeInit failed", error)) return
     ierr = FCVodeSetUserData(self%mem, c_loc(self%cb))
+    if (failed(ierr, "cannot set the user data", error)) return
     if (allocated(opts%atol_vector)) then
       if (size(opts%atol_vector) /= neq) then
         call fatal_error(error, "CVODE: atol_vector has " // str(size(opts%atol_vector)) // &
@@ -255,23 +279,43 @@ contains
         if (failed(ierr, "cannot install the analytic Jacobian", error)) return
       end select
     end if
-    ierr = FCVodeSetMaxNumSteps(self%mem, int(opts%max_num_steps, c_long))
-    self%max_interval = int(opts%max_num_steps, c_long)
+    ! max_num_steps <= 0: no per-output limit.  CVODE itself reads 0 as its
+    ! default of 500 and a negative value as no limit, so <= 0 goes in as -1.
+    self%max_interval = max(0_c_long, int(opts%max_num_steps, c_long))
     self%max_total = int(max(0, opts%max_total_steps), c_long)
-    self%steps_before = 0
-    if (opts%max_step > 0.0_dp) ierr = FCVodeSetMaxStep(self%mem, real(opts%max_step, c_double))
-    if (opts%initial_step > 0.0_dp) ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
-    if (opts%max_order > 0) ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
-    if (opts%newton_coefficient > 0.0_dp) &
+    self%stats_before = cvode_stats()
+    self%restarted = .false.
+    ierr = FCVodeSetMaxNumSteps(self%mem, merge(self%max_interval, -1_c_long, self%max_interval > 0))
+    if (failed(ierr, "max_num_steps = " // str(opts%max_num_steps) // " rejected", error)) return
+    if (opts%max_step > 0.0_dp) then
+      ierr = FCVodeSetMaxStep(self%mem, real(opts%max_step, c_double))
+      if (failed(ierr, "max_step = " // str(opts%max_step) // " s rejected", error)) return
+    end if
+    if (opts%initial_step > 0.0_dp) then
+      ierr = FCVodeSetInitStep(self%mem, real(opts%initial_step, c_double))
+      if (failed(ierr, "initial_step = " // str(opts%initial_step) // " s rejected", error)) return
+    end if
+    if (opts%max_order > 0) then
+      ierr = FCVodeSetMaxOrd(self%mem, int(opts%max_order, c_int))
+      if (failed(ierr, "max_order = " // str(opts%max_order) // " rejected (at most 5 for bdf, 12 for adams)", &
+        error)) return
+    end if
+    if (opts%newton_coefficient > 0.0_dp) then
       ierr = FCVodeSetNonlinConvCoef(self%mem, real(opts%newton_coefficient, c_double))
+      if (failed(ierr, "newton_coefficient = " // str(opts%newton_coefficient) // " rejected", error)) return
+    end if
     ierr = FCVodeSetMaxHnilWarns(self%mem, -1_c_int)
+    if (failed(ierr, "cannot silence the t + h = t warnings", error)) return
     if (sys%has_projection() .and. lmm == CV_BDF) then
       ierr = FCVodeSetProjFn(self%mem, c_funloc(proj_callback))
       if (failed(ierr, "cannot install the projection", error)) return
     end if
-    if (opts%stability_limit_detection) ierr = FCVodeSetStabLimDet(self%mem, 1_c_int)
+    if (opts%stability_limit_detection) then
+      ierr = FCVodeSetStabLimDet(self%mem, 1_c_int)
+      if (failed(ierr, "cannot switch on stability limit detection", error)) return
+    end if
     call self%set_roots(sys%nroots(), error)
-  end subroutine solver_init
+  end subroutine init_parts
 
   !> True (and `error` set to "CVODE: <what> (flag <ierr>)") if a SUNDIALS call
   !> returned a nonzero flag.
@@ -314,20 +358,30 @@ contains
     real(c_double) :: tret(1)
     integer(c_long) :: left
     if (present(event)) event = .false.
+    if (.not. c_associated(self%mem)) then
+      call fatal_error(error, "CVODE: advance called on a solver that is not initialised")
+      return
+    end if
+    ! a message CVODE kept from an earlier call belongs to no failure of this one
+    if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
     if (self%max_total > 0) then
       ! this call may take what is left of the budget (and no more than the
-      ! per-output limit)
+      ! per-output limit, if there is one: max_interval = 0 is none)
       left = self%max_total - self%steps_taken()
       if (left <= 0) then
         call fatal_error(error, failure_message(self, CV_TOO_MUCH_WORK))
         return
       end if
-      ierr = FCVodeSetMaxNumSteps(self%mem, min(self%max_interval, left))
+      if (self%max_interval > 0) left = min(self%max_interval, left)
+      ierr = FCVodeSetMaxNumSteps(self%mem, left)
+      if (failed(ierr, "cannot set the step limit (" // str(int(left)) // ")", error)) return
     end if
     ierr = FCVode(self%mem, real(tout, c_double), self%nv_y, tret, CV_NORMAL)
+    self%restarted = .false.
     self%t = tret(1)
     if (ierr < 0) then
       call fatal_error(error, failure_message(self, ierr))
+      if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
       return
     end if
     if (ierr == CV_ROOT_RETURN) then
@@ -348,27 +402,70 @@ contains
     real(dp), intent(in) :: y(:)                          !< new state
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer(c_int) :: ierr
-    self%steps_before = self%steps_taken()
+    type(cvode_stats) :: so_far
+    if (.not. c_associated(self%mem)) then
+      call fatal_error(error, "CVODE: reinit called on a solver that is not initialised")
+      return
+    end if
+    if (size(y) /= size(self%y)) then
+      call fatal_error(error, "CVODE: reinit with " // str(size(y)) // " states for a solver of " // &
+        str(size(self%y)))
+      return
+    end if
+    if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
+    so_far = self%stats()
     self%y = y
     self%t = t
     ierr = FCVodeReInit(self%mem, real(t, c_double), self%nv_y)
-    if (ierr /= 0) call fatal_error(error, "CVODE: re-initialisation failed at t = " // str(t) // " s")
+    if (ierr /= 0) then
+      call fatal_error(error, "CVODE: re-initialisation failed at t = " // str(t) // " s" // cvode_said(self))
+      return
+    end if
+    ! CVODE's counters restart: keep the run's totals
+    self%stats_before = so_far
+    self%restarted = .true.
   end subroutine solver_reinit
 
-  !> Do not step past tstop (for discontinuities known in advance).
-  subroutine solver_set_stop_time(self, tstop)
+  !> " [CVODE: <its last message>]" (and the message cleared), or "".
+  function cvode_said(self) result(s)
     class(cvode_solver), intent(inout) :: self  !< solver
-    real(dp), intent(in) :: tstop               !< stop time [s]
+    character(len=:), allocatable :: s
+    s = ""
+    if (.not. associated(self%cb)) return
+    if (.not. allocated(self%cb%last_message)) return
+    s = " [CVODE: " // self%cb%last_message // "]"
+    deallocate(self%cb%last_message)
+  end function cvode_said
+
+  !> Do not step past tstop (for discontinuities known in advance).  A stop
+  !> time CVODE has already passed (behind its internal time) is an error.
+  subroutine solver_set_stop_time(self, tstop, error)
+    class(cvode_solver), intent(inout) :: self            !< solver
+    real(dp), intent(in) :: tstop                         !< stop time [s]
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer(c_int) :: ierr
+    if (.not. c_associated(self%mem)) then
+      call fatal_error(error, "CVODE: set_stop_time called on a solver that is not initialised")
+      return
+    end if
     ierr = FCVodeSetStopTime(self%mem, real(tstop, c_double))
+    if (ierr /= 0) call fatal_error(error, "CVODE: stop time " // str(tstop) // " s rejected at t = " // &
+      str(self%t) // " s (flag " // str(int(ierr)) // ")" // cvode_said(self))
   end subroutine solver_set_stop_time
 
   !> Change the largest step (0 = unlimited).
-  subroutine solver_set_max_step(self, hmax)
-    class(cvode_solver), intent(inout) :: self  !< solver
-    real(dp), intent(in) :: hmax                !< largest step [s]
+  subroutine solver_set_max_step(self, hmax, error)
+    class(cvode_solver), intent(inout) :: self            !< solver
+    real(dp), intent(in) :: hmax                          !< largest step [s]
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer(c_int) :: ierr
+    if (.not. c_associated(self%mem)) then
+      call fatal_error(error, "CVODE: set_max_step called on a solver that is not initialised")
+      return
+    end if
     ierr = FCVodeSetMaxStep(self%mem, real(hmax, c_double))
+    if (ierr /= 0) call fatal_error(error, "CVODE: largest step " // str(hmax) // " s rejected (flag " // &
+      str(int(ierr)) // ")" // cvode_said(self))
   end subroutine solver_set_max_step
 
   !> Steps taken since `init`, over every re-initialisation.
@@ -376,19 +473,24 @@ contains
     class(cvode_solver), intent(in) :: self  !< solver
     integer(c_int) :: ierr
     integer(c_long) :: nst(1)
-    n = self%steps_before
+    n = self%stats_before%steps
     if (.not. c_associated(self%mem)) return
     ierr = FCVodeGetNumSteps(self%mem, nst)
     if (ierr == 0) n = n + nst(1)
   end function solver_steps_taken
 
-  !> Integration counters so far.
+  !> Integration counters since `init`, over every re-initialisation (CVODE
+  !> restarts its own at each; the totals are kept here).
   function solver_stats(self) result(s)
     class(cvode_solver), intent(in) :: self  !< solver
     type(cvode_stats) :: s
     integer(c_int) :: ierr
     integer(c_long) :: n(1)
-    if (.not. c_associated(self%mem)) return
+    s = self%stats_before
+    ! just re-initialised: CVODE's counters are zero (its linear-solver ones
+    ! restart at the next step and still hold what stats_before has)
+    if (.not. c_associated(self%mem) .or. self%restarted) return
+    s = cvode_stats()
     ierr = FCVodeGetNumSteps(self%mem, n); s%steps = n(1)
     ierr = FCVodeGetNumRhsEvals(self%mem, n); s%rhs_evals = n(1)
     ierr = FCVodeGetNumLinSolvSetups(self%mem, n); s%lin_setups = n(1)
@@ -399,6 +501,7 @@ contains
     if (associated(self%mat)) then
       ierr = FCVodeGetNumJacEvals(self%mem, n); s%jac_evals = n(1)
     end if
+    call add_stats(s, self%stats_before)
   end function solver_stats
 
   !> Accumulate counters (a solver's restart at an event resets its own): total += part.
@@ -434,6 +537,11 @@ contains
       if (associated(self%cb%blocks)) deallocate(self%cb%blocks)
       deallocate(self%cb)
     end if
+    self%t = 0.0_dp
+    self%stats_before = cvode_stats()
+    self%restarted = .false.
+    self%max_total = 0
+    self%max_interval = 0
   end subroutine solver_free
 
   !> One line that says when and why CVODE stopped.
@@ -456,8 +564,12 @@ contains
       why = "error test failed repeatedly or at the minimum step (CV_ERR_FAILURE)"
     case (CV_CONV_FAILURE)
       why = "nonlinear solver failed to converge repeatedly (CV_CONV_FAILURE)"
-    case (CV_LSETUP_FAIL, CV_LSOLVE_FAIL)
-      why = "linear solver failed (singular iteration matrix)"
+    case (CV_LSETUP_FAIL)
+      ! a singular Newton matrix is recoverable (CVODE retries, then reports
+      ! CV_CONV_FAILURE); this is a structure check or a fatal Jacobian
+      why = "linear solver setup failed (unrecoverable, CV_LSETUP_FAIL" // linear_flag(self) // ")"
+    case (CV_LSOLVE_FAIL)
+      why = "linear solve failed (unrecoverable, CV_LSOLVE_FAIL" // linear_flag(self) // ")"
     case (CV_RHSFUNC_FAIL, CV_UNREC_RHSFUNC_ERR, CV_FIRST_RHSFUNC_ERR, CV_REPTD_RHSFUNC_ERR)
       why = "right-hand side failed"
     case (CV_RTFUNC_FAIL)
@@ -474,8 +586,19 @@ contains
       if (len(self%cb%sys%failure) > 0) msg = msg // ": " // self%cb%sys%failure
     end if
     if (allocated(self%cb%last_message)) msg = msg // " [CVODE: " // self%cb%last_message // "]"
-
   end function failure_message
+
+  !> ", linear solver flag <n>" (CVodeGetLastLinFlag), or "" if unavailable.
+  function linear_flag(self) result(s)
+    type(cvode_solver), intent(in) :: self
+    character(len=:), allocatable :: s
+    integer(c_long) :: flag(1)
+    integer(c_int) :: ierr
+    s = ""
+    if (.not. c_associated(self%mem)) return
+    ierr = FCVodeGetLastLinFlag(self%mem, flag)
+    if (ierr == 0) s = ", linear solver flag " // str(int(flag(1)))
+  end function linear_flag
 
   !> The step size and the state with the largest weighted local error
   !> estimate of the last step: the quantity the integrator could not follow.

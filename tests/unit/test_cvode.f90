@@ -6,23 +6,38 @@ module oscillator_system
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
   implicit none
   private
-  public :: oscillator
+  public :: oscillator, jacobian_failing_oscillator
 
-  !> x'' = -w^2 x as [x, v]; event at x = 0; fails after t_fail if set.
+  !> x'' = -w^2 x as [x, v]; event at x = 0; fails after t_fail if set;
+  !> counts its right-hand side calls.
   type, extends(ode_system) :: oscillator
     real(dp) :: omega = 2.0_dp
     real(dp) :: t_fail = huge(1.0_dp)
+    integer :: n_rhs = 0
   contains
     procedure :: rhs
     procedure :: nroots
     procedure :: roots
   end type oscillator
+
+  !> The oscillator declaring an analytic Jacobian it does not have: the
+  !> inherited ode_jacobian returns rhs_fatal (an unrecoverable setup failure).
+  type, extends(oscillator) :: jacobian_failing_oscillator
+  contains
+    procedure :: has_jacobian => failing_has_jacobian
+  end type jacobian_failing_oscillator
 contains
+  logical function failing_has_jacobian(self)
+    class(jacobian_failing_oscillator), intent(in) :: self
+    failing_has_jacobian = self%omega > -huge(1.0_dp)
+  end function failing_has_jacobian
+
   subroutine rhs(self, t, y, ydot, status)
     class(oscillator), intent(inout) :: self
     real(dp), intent(in) :: t, y(:)
     real(dp), intent(out) :: ydot(:)
     integer, intent(out) :: status
+    self%n_rhs = self%n_rhs + 1
     ydot = [y(2), -self%omega**2*y(1)]
     status = rhs_ok
     if (t > self%t_fail) then
@@ -97,6 +112,7 @@ end module spring_chain_system
 program test_cvode
   use airlaunch_kinds, only: dp, pi
   use airlaunch_error, only: error_type
+  use airlaunch_strings, only: str
   use airlaunch_cvode
   use oscillator_system
   use spring_chain_system
@@ -116,6 +132,7 @@ program test_cvode
   type(oscillator), target :: osc
   type(cvode_solver) :: solver
   type(cvode_options) :: opts, saved_opts
+  type(cvode_stats) :: st
   type(error_type), allocatable :: error
   character(len=16), parameter :: solvers(4) = [character(len=16) :: "dense", "band", "sundials_band", "none"]
   character(len=8), parameter :: methods(4) = [character(len=8) :: "bdf", "bdf", "bdf", "adams"]
@@ -493,6 +510,173 @@ program test_cvode
     call solver%init(chain, 0.0_dp, y0, opts, error)
     call check(allocated(error), "a band too narrow for the node structure is rejected")
     if (allocated(error)) deallocate(error)
+    call solver%free()
+  end block
+  opts = saved_opts
+
+  call section("step budget with no per-output limit (max_num_steps 0 and -1)")
+  ! CVODE reads a step limit of 0 as its default 500 and a negative one as no
+  ! limit; the wrapper must hand it what is left of the budget instead.  CVODE
+  ! tests the limit before each step, so a budget of 20 allows exactly 20 steps
+  ! (the oscillator over 1000 s at rtol 1e-10 needs thousands).
+  block
+    integer :: m
+    integer(c_long) :: taken
+    integer, parameter :: per_output(2) = [0, -1]
+    do m = 1, 2
+      opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp, max_num_steps=per_output(m), max_total_steps=20)
+      call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+      call check(.not. allocated(error), "init with max_num_steps " // str(per_output(m)))
+      call solver%set_roots(0, error)
+      call solver%advance(1000.0_dp, error)
+      call check(allocated(error), "max_num_steps " // str(per_output(m)) // ": the budget stops the run")
+      if (allocated(error)) then
+        call check(index(error%message, "budget is spent") > 0, "message: " // error%message)
+        deallocate(error)
+      end if
+      st = solver%stats()
+      taken = solver%steps_taken()
+      call check(st%steps == 20 .and. taken == 20, "max_num_steps " // &
+        str(per_output(m)) // ": exactly 20 steps (stats " // str(int(st%steps)) // ", steps_taken " // &
+        str(int(taken)) // ")")
+      call solver%free()
+    end do
+  end block
+
+  call section("a stop time behind the solver is an error; no stale CVODE text later")
+  ! CVODE rejects (CV_ILL_INPUT) a stop time it has passed; the wrapper must say
+  ! so.  Its message must not be attached to the next, unrelated failure (the
+  ! budget's early exit, which involves no CVODE call).
+  opts = cvode_options(rtol=1e-8_dp, atol=1e-10_dp)
+  call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+  call solver%set_roots(0, error)
+  call solver%advance(1.0_dp, error)
+  call check(.not. allocated(error), "advance to t = 1")
+  call solver%set_stop_time(0.5_dp, error)
+  call check(allocated(error), "set_stop_time(0.5) at t = 1 is refused")
+  if (allocated(error)) then
+    call check(index(error%message, "stop time") > 0 .and. index(error%message, "tstop") > 0, &
+      "message (with CVODE's reason): " // error%message)
+    deallocate(error)
+  end if
+  call solver%set_stop_time(2.0_dp, error)
+  call check(.not. allocated(error), "set_stop_time(2) at t = 1 is accepted")
+  call solver%set_max_step(-1.0_dp, error)
+  call check(allocated(error), "set_max_step(-1) is refused")
+  if (allocated(error)) deallocate(error)
+  call solver%free()
+  opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp, max_total_steps=20)
+  call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+  call solver%set_roots(0, error)
+  call solver%advance(1000.0_dp, error)
+  call check(allocated(error), "the budget of 20 steps is spent")
+  if (allocated(error)) deallocate(error)
+  call solver%set_stop_time(0.0_dp, error)
+  call check(allocated(error), "a stop time behind t is refused (CVODE keeps a message)")
+  if (allocated(error)) deallocate(error)
+  call solver%advance(1000.0_dp, error)
+  call check(allocated(error), "advance with the budget spent fails")
+  if (allocated(error)) then
+    call check(index(error%message, "budget is spent") > 0 .and. index(error%message, "[CVODE") == 0, &
+      "budget message without stale CVODE text: " // error%message)
+    deallocate(error)
+  end if
+  call solver%free()
+
+  call section("a failed init releases everything; init again and free twice")
+  opts = cvode_options(rtol=1e-8_dp, atol=1e-10_dp)
+  opts%atol_vector = [1e-10_dp, 1e-10_dp, 1e-10_dp]
+  call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+  call check(allocated(error), "atol_vector of 3 entries for 2 states: refused")
+  if (allocated(error)) deallocate(error)
+  call check(.not. c_associated(solver%mem) .and. .not. c_associated(solver%ctx) .and. &
+    .not. associated(solver%nv_y) .and. .not. associated(solver%y), &
+    "no CVODE memory, context, vector or state left allocated")
+  opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp, max_order=7)
+  call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+  call check(allocated(error), "max_order 7 for BDF (at most 5): refused")
+  if (allocated(error)) deallocate(error)
+  call check(.not. c_associated(solver%mem), "and released")
+  opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp)
+  call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+  call solver%set_roots(0, error)
+  call solver%advance(1.0_dp, error)
+  call check(.not. allocated(error), "the next init on the same object works")
+  call check_close(solver%y(1), cos(2.0_dp), "x(1) = cos(2)", abs=1e-7_dp)
+  call solver%reinit(solver%t, [1.0_dp, 0.0_dp, 0.0_dp], error)
+  call check(allocated(error), "reinit with 3 states for a 2-state solver: refused")
+  if (allocated(error)) deallocate(error)
+  call solver%free()
+  call solver%free()
+  call check(.not. c_associated(solver%mem), "free twice is safe")
+
+  call section("an unrecoverable linear-solver setup is not called singular")
+  ! a Jacobian callback returning fatal makes CVODE stop with CV_LSETUP_FAIL
+  block
+    type(jacobian_failing_oscillator), target :: jfo
+    opts = cvode_options(linear_solver="band", upper_bandwidth=1, lower_bandwidth=1, rtol=1e-8_dp, atol=1e-10_dp)
+    call solver%init(jfo, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    call solver%set_roots(0, error)
+    call check(.not. allocated(error), "init with the declared Jacobian")
+    call solver%advance(1.0_dp, error)
+    call check(allocated(error), "the fatal Jacobian stops the run")
+    if (allocated(error)) then
+      call check(index(error%message, "linear solver setup failed (unrecoverable") > 0 .and. &
+        index(error%message, "linear solver flag") > 0 .and. index(error%message, "singular") == 0, &
+        "message: " // error%message)
+      deallocate(error)
+    end if
+    call solver%free()
+  end block
+
+  call section("counters are the run's totals over re-initialisations")
+  ! Adams with the fixed-point solver: every call of the right-hand side is one
+  ! of CVODE's counted evaluations (no difference-quotient Jacobian), so the
+  ! system's own count is an independent total.  Re-initialise at each of the
+  ! oscillator's events over 5 s (pi/4 + k pi/2: 3 events).
+  block
+    type(cvode_stats) :: before, after
+    integer :: restarts
+    logical :: same
+    opts = cvode_options(method="adams", linear_solver="none", rtol=1e-8_dp, atol=1e-10_dp)
+    call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    osc%n_rhs = 0
+    restarts = 0
+    same = .true.
+    do while (solver%t < 5.0_dp .and. .not. allocated(error))
+      call solver%advance(5.0_dp, error, event, which)
+      if (.not. event) exit
+      before = solver%stats()
+      call solver%reinit(solver%t, solver%y, error)
+      after = solver%stats()
+      same = same .and. after%steps == before%steps .and. after%rhs_evals == before%rhs_evals .and. &
+        after%nonlin_iters == before%nonlin_iters .and. after%root_evals == before%root_evals
+      restarts = restarts + 1
+    end do
+    call check(.not. allocated(error) .and. restarts == 3, "3 events and restarts over 5 s (" // str(restarts) // ")")
+    call check(same, "a re-initialisation changes no counter")
+    st = solver%stats()
+    call check(st%steps == solver%steps_taken(), "stats%steps = steps_taken (" // &
+      str(int(st%steps)) // ", " // str(int(solver%steps_taken())) // ")")
+    call check(st%rhs_evals == osc%n_rhs, "stats%rhs_evals = the system's own count (" // &
+      str(int(st%rhs_evals)) // ", " // str(osc%n_rhs) // ")")
+    call solver%free()
+  end block
+  ! a band solver's Jacobian counter (restarted by CVODE at the step after a
+  ! re-initialisation, not at it) is not counted twice
+  block
+    type(cvode_stats) :: before, after
+    opts = cvode_options(linear_solver="band", upper_bandwidth=1, lower_bandwidth=1, rtol=1e-8_dp, atol=1e-10_dp)
+    call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    call solver%advance(2.0_dp, error, event, which)
+    before = solver%stats()
+    call solver%reinit(solver%t, solver%y, error)
+    after = solver%stats()
+    call check(before%jac_evals > 0 .and. after%jac_evals == before%jac_evals, &
+      "Jacobian evaluations unchanged by the re-initialisation (" // str(int(after%jac_evals)) // ")")
+    call solver%advance(2.0_dp, error, event, which)
+    after = solver%stats()
+    call check(after%jac_evals > before%jac_evals .and. after%steps > before%steps, "and growing after it")
     call solver%free()
   end block
   opts = saved_opts

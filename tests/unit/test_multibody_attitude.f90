@@ -73,7 +73,8 @@ contains
     worst_att = 0.0_dp; worst_norm = 0.0_dp; worst_drift = 0.0_dp; worst_pos = 0.0_dp; max_pitch = -huge(1.0_dp); worst_elev = 0.0_dp
     do i = 1, 160
       t = 0.05_dp*i
-      call solver%set_stop_time(t)
+      call solver%set_stop_time(t, error)
+      if (allocated(error)) exit
       call sys%advance(solver, t, error)
       if (allocated(error)) exit
       qn = norm2(solver%y(20:23))
