@@ -903,7 +903,7 @@ contains
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     real(dp), allocatable :: y(:)
-    y = self%chain_solver%y
+    allocate(y, source=self%chain_solver%y)
     call self%chain_solver%reinit(self%t, y, error)
   end subroutine coupling_restart_chain
 

@@ -550,9 +550,11 @@ contains
     integer(c_int), intent(in) :: flag
     character(len=:), allocatable :: msg
     character(len=:), allocatable :: why
+    integer(c_long) :: taken
     select case (flag)
     case (CV_TOO_MUCH_WORK)
-      if (self%max_total > 0 .and. self%steps_taken() >= self%max_total) then
+      taken = self%steps_taken()
+      if (self%max_total > 0 .and. taken >= self%max_total) then
         why = "the step budget is spent (" // str(int(self%max_total)) // " steps in total, &run max_steps)"
       else
         why = "too many steps between two outputs (" // str(int(self%max_interval)) // &
