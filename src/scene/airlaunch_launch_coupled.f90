@@ -571,18 +571,9 @@ contains
     if (r%active == coupling_direct) then
       n = real(r%dsolver%steps_taken(), dp)
     else
-      n = solver_steps(r%cpl%line_solver)
+      n = real(r%cpl%line_solver%steps_taken(), dp)
     end if
   end function line_steps
-
-  !> Steps of a solver since its init (over its restarts).
-  function solver_steps(solver) result(n)
-    type(cvode_solver), intent(in) :: solver
-    real(dp) :: n
-    type(cvode_stats) :: st
-    st = solver%stats()
-    n = real(st%steps, dp)
-  end function solver_steps
 
   !> Steps per outer step of the line-carrying integrator since (n0, t0).
   function steps_per_outer_step(r, n0, t0, t) result(rate)

@@ -137,10 +137,11 @@ contains
         if (tr%infeasible) then
           ! an equilibrium the aircraft cannot fly: the scenario is impossible (bad input)
           res%status = "invalid_input"
+          if (index(error%message, "trim: ") == 1) error%message = error%message(len("trim: ")+1:)
           error%message = "&flight: trim_mode = '" // trim(cfg%flight%trim_mode) // "' cannot trim the Case 0 " // &
             "flight at mach = " // str(cfg%flight%mach) // " (&aircraft cl0 = " // str(cfg%aircraft%aero%cl0) // &
             ", cm0 = " // str(cfg%aircraft%aero%cm0) // ", delta_e_max_deg = " // &
-            str(cfg%aircraft%aero%delta_e_max*rad2deg) // "): " // error%message(len("trim: ")+1:) // &
+            str(cfg%aircraft%aero%delta_e_max*rad2deg) // "): " // error%message // &
             "; give cl0, cm0 that trim this flight or trim_mode = 'calibrate'"
           return
         end if

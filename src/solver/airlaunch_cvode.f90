@@ -374,7 +374,9 @@ contains
       end if
       if (self%max_interval > 0) left = min(self%max_interval, left)
       ierr = FCVodeSetMaxNumSteps(self%mem, left)
-      if (failed(ierr, "cannot set the step limit (" // str(int(left)) // ")", error)) return
+      if (ierr /= 0) then   ! (no message built on the per-output path unless it fails)
+        if (failed(ierr, "cannot set the step limit (" // str(int(left)) // ")", error)) return
+      end if
     end if
     ierr = FCVode(self%mem, real(tout, c_double), self%nv_y, tret, CV_NORMAL)
     self%restarted = .false.

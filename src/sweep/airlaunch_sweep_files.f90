@@ -6,6 +6,7 @@
 module airlaunch_sweep_files
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_char, c_null_char
   use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_strings, only: str
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
@@ -194,13 +195,7 @@ contains
     integer(c_int) :: rc
     rc = c_remove_case_files(dir // c_null_char)
     if (rc < 0) call fatal_error(error, dir // ": cannot read the directory to remove its case files")
-    if (rc > 0) call fatal_error(error, dir // ": cannot remove " // trim(itoa(int(rc))) // " case files")
-  contains
-    function itoa(i) result(t)
-      integer, intent(in) :: i
-      character(len=16) :: t
-      write(t, '(i0)') i
-    end function itoa
+    if (rc > 0) call fatal_error(error, dir // ": cannot remove " // str(int(rc)) // " case files")
   end subroutine remove_case_files
 
   !> Rename `old` to `new` (atomic on one file system).

@@ -67,9 +67,13 @@ contains
       end if
     end if
     call open_for_writing(self%path, .true., self%fd, error)
-    if (.not. allocated(error) .and. last /= new_line("a")) call write_bytes(self%fd, new_line("a"), error)
     if (allocated(error)) then
       error%message = self%path // ": cannot open the journal for appending (" // error%message // ")"
+      return
+    end if
+    if (last /= new_line("a")) call write_bytes(self%fd, new_line("a"), error)
+    if (allocated(error)) then
+      error%message = self%path // ": cannot end the journal's torn last line (" // error%message // ")"
       call close_file(self%fd, error)
     end if
   end subroutine jw_open

@@ -53,7 +53,6 @@ program test_launch_trim
     "trim and settling agree (" // str(res%trim_passes) // " passes, last change " // &
     str(res%trim_line_force_change_n) // " N)")
   call check(sys%f(2, 0) < -100.0_dp, "the settled line pulls the tie-down down: " // str(sys%f(2, 0)) // " N")
-  call check_close(res%trim_alpha_deg, 1.2174_dp, "calibrated at the paper's alpha [deg]", abs=1.0e-9_dp)
 
   call section("t = 0: nothing accelerates")
   allocate(ydot(size(y0)))
