@@ -21,7 +21,7 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -54,6 +54,7 @@ program airlaunch_sweep
   call MPI_Comm_size(MPI_COMM_WORLD, nranks)
   call parse_arguments()
   t_start = MPI_Wtime()
+  if (.not. check_only .and. case_id < 0 .and. nranks == 1) call check_slurm_tasks()
 
   ! --- rank 0 validates everything before any case runs
   status = exit_ok
@@ -207,10 +208,21 @@ contains
     type(sweep_row), allocatable :: old(:)
     integer :: duplicates, bad
     logical :: differs
+    logical :: held_elsewhere
     call make_output_dir(s%def, s%def%journal_dir(), error)
     if (.not. allocated(error)) call make_output_dir(s%def, s%def%work_dir(), error)
     if (allocated(error)) then
       status = exit_runtime
+      return
+    end if
+    ! one run per output directory: a second would interleave the journals
+    ! (held until this process ends; only rank 0 writes the shared files)
+    call lock_file(s%def%journal_dir() // "/lock", held_elsewhere, error)
+    if (held_elsewhere) call fatal_error(error, s%def%journal_dir() // ": another airlaunch-sweep is " // &
+      "running this sweep (its lock file 'lock' is held): wait for it to end, or give this run another " // &
+      "output_dir")
+    if (allocated(error)) then
+      status = merge(exit_input, exit_runtime, held_elsewhere)
       return
     end if
     if (restart) then
@@ -380,6 +392,20 @@ contains
     if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // msg
     call finish(exit_input)
   end subroutine fail_input
+
+  !> Under Slurm with several tasks but an MPI world of one rank, srun did not
+  !> start one MPI job: each task would be an independent one-rank sweep on
+  !> the same output directory.  Refused (the lock would also stop all but one).
+  subroutine check_slurm_tasks()
+    character(len=32) :: text
+    integer :: n, stat, ios
+    call get_environment_variable("SLURM_NTASKS", text, status=stat)
+    if (stat /= 0) return
+    read(text, *, iostat=ios) n
+    if (ios /= 0 .or. n <= 1) return
+    call fail_input("SLURM_NTASKS = " // trim(text) // " but MPI started one rank: srun did not start one " // &
+      "MPI job (use srun --mpi=pmix or mpirun -np " // trim(text) // "; scripts/sweep.slurm)")
+  end subroutine check_slurm_tasks
 
   !> A file or MPI failure while running: stop every rank.
   subroutine die(msg)

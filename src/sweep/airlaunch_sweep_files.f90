@@ -10,7 +10,7 @@ module airlaunch_sweep_files
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
-  public :: open_for_writing, write_bytes, close_file, remove_case_files
+  public :: open_for_writing, write_bytes, close_file, remove_case_files, lock_file
 
   !> Length of the C library's message buffer.
   integer, parameter :: msg_len = 256
@@ -42,6 +42,12 @@ module airlaunch_sweep_files
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: dir(*)
     end function c_remove_case_files
+    integer(c_int) function c_lock_file(path, msg, msglen) bind(C, name="airlaunch_lock_file")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      character(kind=c_char), intent(inout) :: msg(*)
+      integer(c_int), value :: msglen
+    end function c_lock_file
     integer(c_int) function c_file_close(fd, msg, msglen) bind(C, name="airlaunch_file_close")
       import :: c_int, c_char
       integer(c_int), value :: fd, msglen
@@ -141,6 +147,20 @@ contains
     end if
     fd = -1
   end subroutine close_file
+
+  !> Hold an exclusive lock on `path` (created if missing) until the process
+  !> ends.  `held_elsewhere`: another process holds it (no error set then).
+  subroutine lock_file(path, held_elsewhere, error)
+    character(len=*), intent(in) :: path                  !< lock file
+    logical, intent(out) :: held_elsewhere                !< another process has it
+    type(error_type), allocatable, intent(inout) :: error !< set on another failure: the reason
+    character(kind=c_char, len=msg_len) :: msg
+    integer(c_int) :: fd
+    msg = c_null_char
+    fd = c_lock_file(path // c_null_char, msg, int(msg_len, c_int))
+    held_elsewhere = fd == -2
+    if (fd == -1) call fatal_error(error, path // ": cannot lock (" // c_message(msg) // ")")
+  end subroutine lock_file
 
   !> The text of a NUL-terminated message buffer.
   function c_message(msg) result(s)

@@ -17,6 +17,7 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/types.h>
 #include <unistd.h>
 
@@ -102,4 +103,28 @@ int airlaunch_remove_case_files(const char *dir) {
   }
   closedir(d);
   return failed;
+}
+
+/* Take an exclusive advisory lock (flock) on `path`, created if missing, and
+ * keep it for the life of the process (the descriptor stays open).  Returns
+ * the descriptor, -2 if another process holds the lock, -1 on another failure
+ * (with the reason in msg).  Two airlaunch-sweep runs on one output directory
+ * would interleave their journals: the second is refused. */
+int airlaunch_lock_file(const char *path, char *msg, int msglen) {
+  int fd;
+  do {
+    fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  } while (fd < 0 && errno == EINTR);
+  if (fd < 0) {
+    set_message(msg, msglen, "open", errno);
+    return -1;
+  }
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    int err = errno;
+    close(fd);
+    if (err == EWOULDBLOCK) return -2;
+    set_message(msg, msglen, "flock", err);
+    return -1;
+  }
+  return fd;
 }

@@ -284,3 +284,42 @@ def test_summary_attributes_describe_inputs_and_clearance(tmp_path, exes):
         long_name = ds["min_clearance_m"].attrs["long_name"]
         assert "empennage" in long_name and "ramp edge" not in long_name, long_name
         assert ds["flight%mach"].attrs["long_name"] == "varied input flight%mach (uniform)"
+
+
+def test_a_second_run_on_the_same_output_is_refused(tmp_path, exes):
+    """Two airlaunch-sweep runs on one output directory interleaved their journals
+    and both ended with 'a journal write was lost' (exit 4); the run now holds a
+    lock on OUTPUT_DIR/journal/lock, and a second run is refused at once (exit 2,
+    one line) while the first holds it.  The lock is taken here with flock, as a
+    running sweep holds it; released, the same command runs."""
+    import fcntl
+    definition = small_definition(tmp_path / "lock.nml", n_cases=2)
+    make_table(definition, tmp_path)
+    (tmp_path / "out" / "journal").mkdir(parents=True, exist_ok=True)
+    with open(tmp_path / "out" / "journal" / "lock", "w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        res = run_sweep(definition, tmp_path, None)
+        assert res.returncode == 2, res.stdout + res.stderr
+        line = res.stderr.strip().splitlines()[-1]
+        assert "another airlaunch-sweep is running this sweep" in line, res.stderr
+        assert journal_rows(tmp_path / "out" / "journal") == ([], 0)
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "2 cases: 2 ok" in res.stdout, res.stdout
+
+
+def test_one_rank_in_a_multi_task_slurm_job_is_refused(tmp_path, exes):
+    """srun without the MPI plug-in starts every task as its own one-rank job: with
+    SLURM_NTASKS > 1 and an MPI world of one rank the run is refused with the fix
+    (exit 2, one line) before any case; --check is not affected."""
+    definition = small_definition(tmp_path / "slurm.nml", n_cases=2)
+    make_table(definition, tmp_path)
+    env = dict(ENV, SLURM_NTASKS="4")
+    res = subprocess.run([str(SWEEP_EXE), str(definition)], cwd=tmp_path, capture_output=True, text=True,
+                         env=env, timeout=120)
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert "SLURM_NTASKS = 4 but MPI started one rank" in res.stderr and "srun --mpi=pmix" in res.stderr
+    assert not (tmp_path / "out" / "journal").exists()
+    res = subprocess.run([str(SWEEP_EXE), str(definition), "--check"], cwd=tmp_path, capture_output=True,
+                         text=True, env=env, timeout=120)
+    assert res.returncode == 0, res.stdout + res.stderr
