@@ -183,12 +183,6 @@ def test_case_namelist_cut_by_a_full_disk_stops_the_sweep(tmp_path, exes):
 
 # --- trajectories ---------------------------------------------------------------
 
-FAILING_INPUTS = """
-&input name = 'flight%altitude', distribution = 'list', values = 300.0, 3000.0, units = 'm' /
-&input name = 'parachute%drag_area', distribution = 'list', values = 0.0, 10.0, units = 'm2' /
-"""
-
-
 def test_unwritable_trajectories_are_an_error_not_written_files(tmp_path, exes):
     """Directories in the way of the kept trajectories (their .part names): the
     sweep printed "trajectories: 3 written", exit 0, and no file existed.  Now
@@ -211,26 +205,6 @@ def test_unwritable_trajectories_are_an_error_not_written_files(tmp_path, exes):
     assert res.returncode == 0, res.stdout + res.stderr
     assert "trajectories: 3 written" in res.stdout, res.stdout
     assert sorted(p.name for p in traj.glob("*.nc")) == [f"case_{k:06d}.nc" for k in (1, 2, 3)]
-
-
-def test_keep_failed_keeps_failed_cases_only_and_counts_files(tmp_path, exes):
-    """keep_failed selected invalid_input cases too, which can never have a
-    trajectory: "3 written" for 1 file, and every rerun tried them again.  Grid
-    of altitude {300, 3000} m x drag area {0, 10} m^2 (statuses invalid, failed,
-    invalid, ok): only the failed case 1 is kept, the count is the files on
-    disk, and a rerun has nothing left to write."""
-    definition = small_definition(tmp_path / "f.nml", n_cases=4, design="grid", inputs=FAILING_INPUTS,
-                                  t_end=40.0, extra_sweep="keep_failed = .true.")
-    make_table(definition, tmp_path)
-    res = run_sweep(definition, tmp_path, 2)
-    assert res.returncode == 0, res.stdout + res.stderr
-    assert "4 cases: 1 ok, 1 failed, 2 invalid input" in res.stdout, res.stdout
-    assert "trajectories: 1 written" in res.stdout, res.stdout
-    traj = tmp_path / "out" / "trajectories"
-    assert sorted(p.name for p in traj.iterdir()) == ["case_000001.nc"]
-    res = run_sweep(definition, tmp_path, 2)
-    assert res.returncode == 0, res.stdout + res.stderr
-    assert "trajectories:" not in res.stdout, res.stdout
 
 
 def test_restart_removes_every_kept_trajectory(tmp_path, exes):

@@ -134,13 +134,18 @@ def test_failed_and_invalid_cases_are_recorded_and_the_sweep_goes_on(tmp_path, e
     """Grid of altitude {300, 3000} m x drag area {0, 10} m^2 over 40 s: at 300 m
     the rocket falls below the atmosphere model (a numerical failure); a zero
     drag area is rejected by the scenario reader.  Every case gets its row and
-    the one good case completes; each row is what `airlaunch` gives alone."""
+    the one good case completes; each row is what `airlaunch` gives alone.
+    keep_failed keeps the failed case only (it also took the invalid ones, which
+    can never have a trajectory: "3 written" for 1 file, retried at every rerun):
+    the count is the files on disk, and a rerun has nothing left to write."""
     definition = small_definition(tmp_path / "fail.nml", n_cases=4, design="grid", inputs=FAILING_INPUTS,
                                   t_end=40.0, extra_sweep="keep_failed = .true.")
     make_table(definition, tmp_path)
     res = run_sweep(definition, tmp_path, 2)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "4 cases: 1 ok, 1 failed, 2 invalid input" in res.stdout, res.stdout
+    assert "trajectories: 1 written" in res.stdout, res.stdout
+    assert sorted(p.name for p in (tmp_path / "out" / "trajectories").iterdir()) == ["case_000001.nc"]
     with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
         alt = s["flight%altitude"].values
         area = s["parachute%drag_area"].values
@@ -172,6 +177,8 @@ def test_failed_and_invalid_cases_are_recorded_and_the_sweep_goes_on(tmp_path, e
         for name in ("separation_time_s", "edge_time_s", "peak_line_tension_N", "pitch_at_separation_deg",
                      "max_aircraft_pitch_excursion_deg", "trim_alpha_deg"):
             assert float(ds.attrs[name]) == float(s[name].values[3]), name
+    rerun = run_sweep(definition, tmp_path, 2)
+    assert rerun.returncode == 0 and "trajectories:" not in rerun.stdout, rerun.stdout + rerun.stderr
 
 
 def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):

@@ -36,7 +36,7 @@ program test_launch_trim
   character(len=:), allocatable :: echo, path
   real(dp), allocatable :: y0(:), ydot(:)
   real(dp) :: weight, a_tol, w_tol
-  integer :: status, i, k
+  integer :: status
 
   call section("the paper scenario, trimmed with its settled line")
   path = paper_input()
@@ -60,14 +60,7 @@ program test_launch_trim
   call check(status == 0, "rhs status")
   a_tol = 1.0e-8_dp*g0
   w_tol = 1.1e-9_dp*weight*10.0_dp/cfg%aircraft%inertia(3)
-  do k = 0, 1
-    do i = 1, 3
-      call check_close(ydot(13*k+3+i), 0.0_dp, trim(merge("aircraft", "rocket  ", k == 0)) // " acceleration " // &
-        char(ichar("w") + i), abs=a_tol)
-      call check_close(ydot(13*k+10+i), 0.0_dp, trim(merge("aircraft", "rocket  ", k == 0)) // &
-        " angular acceleration " // char(ichar("w") + i), abs=w_tol)
-    end do
-  end do
+  call check_bodies_at_rest(ydot, a_tol, w_tol)
   ! the line's nodes too: settled to 1e-9 of the largest tension, over the lightest node
   call check(maxval(abs(ydot(rigid_size+1:))) <= 1.0e-9_dp*maxval(sys%tension)/minval(sys%line%node_mass), &
     "line nodes at rest (settled): max " // str(maxval(abs(ydot(rigid_size+1:)))) // " m/s^2")
@@ -92,13 +85,23 @@ program test_launch_trim
   call check_close(res%trim_alpha_deg, 1.2174_dp, "alpha [deg]", abs=1.0e-6_dp)
   call check_close(res%trim_elevator_deg, 0.0_dp, "elevator [deg]", abs=1.0e-6_dp)
   call sys%rhs(0.0_dp, y0, ydot, status)
-  do k = 0, 1
-    do i = 1, 3
-      call check_close(ydot(13*k+3+i), 0.0_dp, trim(merge("aircraft", "rocket  ", k == 0)) // " acceleration " // &
-        char(ichar("w") + i), abs=a_tol)
-      call check_close(ydot(13*k+10+i), 0.0_dp, trim(merge("aircraft", "rocket  ", k == 0)) // &
-        " angular acceleration " // char(ichar("w") + i), abs=w_tol)
-    end do
-  end do
+  call check_bodies_at_rest(ydot, a_tol, w_tol)
   call finish()
+
+contains
+
+  !> The aircraft's and the rocket's linear and angular accelerations in
+  !> ydot (13 states per body: r, v, q, w) are zero to a_tol and w_tol.
+  subroutine check_bodies_at_rest(ydot, a_tol, w_tol)
+    real(dp), intent(in) :: ydot(:), a_tol, w_tol
+    integer :: k, i
+    do k = 0, 1
+      do i = 1, 3
+        call check_close(ydot(13*k+3+i), 0.0_dp, trim(merge("aircraft", "rocket  ", k == 0)) // &
+          " acceleration " // char(ichar("w") + i), abs=a_tol)
+        call check_close(ydot(13*k+10+i), 0.0_dp, trim(merge("aircraft", "rocket  ", k == 0)) // &
+          " angular acceleration " // char(ichar("w") + i), abs=w_tol)
+      end do
+    end do
+  end subroutine check_bodies_at_rest
 end program test_launch_trim

@@ -19,7 +19,7 @@ program test_multibody_kane
   integer :: n, trial
   real(dp) :: worst
 
-  call random_seed(put=[(12345 + 7*n, n = 1, 64)])
+  call fixed_seed()
   do n = 1, 3
     call section("Kane vs Newton-Euler with joint forces, " // achar(48 + n) // "-body chain")
     worst = 0.0_dp
