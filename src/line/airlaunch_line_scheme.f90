@@ -28,6 +28,10 @@ module airlaunch_line_scheme
     logical :: analytic_jacobian = .true.
     !> cvode: steps allowed over the whole run (`&run max_steps`); 0 = no limit
     integer :: max_steps = 0
+    !> cvode: end of the run [s]; the first step's estimate looks that far, not
+    !> to the first output time, so the steps do not depend on the output times
+    !> (0: the first output time)
+    real(dp) :: t_final = 0.0_dp
     ! marching
     real(dp) :: dt = 1.0e-4_dp              !< marching: fixed time step [s]
     real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]

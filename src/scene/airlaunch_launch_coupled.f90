@@ -228,6 +228,7 @@ contains
     opts%rtol = run%rtol
     opts%atol = run%atol
     opts%max_total_steps = run%max_steps
+    opts%t_final = run%t_end   ! the steps do not depend on the output times
     ! Newton's band system with the positions (bodies' and nodes', x' = v)
     ! eliminated: 65 of the paper scenario's 116 unknowns, and LAPACK's partial
     ! pivoting no longer swaps the line's rows (airlaunch_lapack_band;

@@ -82,6 +82,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error  !< set on bad input
     integer :: n, n_max, k
     real(dp) :: xa(3), xb(3), va(3), vb(3), sep, strain
+    type(line_scheme_options) :: opts
 
     call self%free()
     self%cfg = cfg
@@ -156,8 +157,12 @@ contains
     ! initial velocities: linear between the ends' initial velocities
     call straight_shape(n, va, vb, self%v)
 
+    ! CVODE's first step sized for the run, not the first output (the steps do
+    ! not depend on the output times) unless the caller chose otherwise
+    opts = cfg%integration
+    if (.not. (opts%t_final > 0.0_dp)) opts%t_final = cfg%t_end
     call new_line_scheme(self%scheme, self%model, cfg%end_a, cfg%end_b, self%x, self%v, 0.0_dp, &
-      cfg%integration, error)
+      opts, error)
     if (allocated(error)) return
 
     n_max = ceiling(cfg%t_end/cfg%output_interval - 1.0e-9_dp) + 1

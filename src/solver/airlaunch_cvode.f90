@@ -45,6 +45,10 @@ module airlaunch_cvode
     real(dp), allocatable :: atol_vector(:)      !< per-component absolute tolerance
     real(dp) :: max_step = 0.0_dp                !< largest step [s]; 0 = unlimited
     real(dp) :: initial_step = 0.0_dp            !< first step [s]; 0 = CVODE's estimate
+    !> end of the run [s]: CVODE's estimate of the first step after each (re)start
+    !> looks as far as this instead of the first output time, so that the steps
+    !> do not depend on the output times; <= the start time: the first output time
+    real(dp) :: t_final = 0.0_dp
     integer :: max_order = 0                     !< 0 = CVODE's default (5 BDF, 12 Adams)
     !> steps allowed between two outputs; <= 0 = no limit (not CVODE's default 500)
     integer :: max_num_steps = 200000
@@ -94,6 +98,19 @@ module airlaunch_cvode
     !> re-initialised and not advanced since: CVODE's linear-solver counters
     !> still hold the previous segment's (they restart at the next step)
     logical :: restarted = .false.
+    !> no step taken since the last (re)start: the next one is the first
+    logical :: fresh = .false.
+    !> the last CVODE return was an event inside a step: the rest of that step
+    !> has not been searched for further events yet
+    logical :: after_root = .false.
+    !> an event CVODE located after the output time it was stepping towards, to
+    !> be reported by the next `advance` (its time, state and CVodeGetRootInfo)
+    logical :: root_pending = .false.
+    real(dp) :: root_t = 0.0_dp
+    real(dp) :: root_tol = 0.0_dp          !< CVODE's accuracy of root_t
+    real(dp), allocatable :: root_y(:)
+    integer(c_int), allocatable :: root_which(:)
+    real(dp) :: t_final = 0.0_dp           !< cvode_options%t_final
     integer(c_long) :: max_total = 0       !< cvode_options%max_total_steps
     integer(c_long) :: max_interval = 0    !< cvode_options%max_num_steps
   contains
@@ -146,6 +163,7 @@ contains
       return
     end if
     allocate(self%y(neq))
+    allocate(self%root_y(neq))
     self%y = y0
     self%t = t0
     allocate(self%cb)
@@ -285,6 +303,8 @@ contains
     self%max_total = int(max(0, opts%max_total_steps), c_long)
     self%stats_before = cvode_stats()
     self%restarted = .false.
+    call forget_steps(self)
+    self%t_final = opts%t_final
     ierr = FCVodeSetMaxNumSteps(self%mem, merge(self%max_interval, -1_c_long, self%max_interval > 0))
     if (failed(ierr, "max_num_steps = " // str(opts%max_num_steps) // " rejected", error)) return
     if (opts%max_step > 0.0_dp) then
@@ -336,6 +356,9 @@ contains
     self%cb%nroots = n
     if (allocated(self%cb%root_info)) deallocate(self%cb%root_info)
     allocate(self%cb%root_info(max(1, n)))
+    if (allocated(self%root_which)) deallocate(self%root_which)
+    allocate(self%root_which(max(1, n)), source=0_c_int)
+    self%root_pending = .false.
     if (n > 0) then
       ierr = FCVodeRootInit(self%mem, int(n, c_int), c_funloc(root_callback))
       if (ierr == 0) ierr = FCVodeSetNoInactiveRootWarn(self%mem)
@@ -355,8 +378,8 @@ contains
     logical, intent(out), optional :: event               !< an event stopped the step
     integer, intent(out), optional :: which(:)            !< CVodeGetRootInfo
     integer(c_int) :: ierr
-    real(c_double) :: tret(1)
-    integer(c_long) :: left
+    real(c_double) :: tret(1), tn(1), target, hlast(1)
+    integer(c_long) :: first, limit
     if (present(event)) event = .false.
     if (.not. c_associated(self%mem)) then
       call fatal_error(error, "CVODE: advance called on a solver that is not initialised")
@@ -364,37 +387,99 @@ contains
     end if
     ! a message CVODE kept from an earlier call belongs to no failure of this one
     if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
-    if (self%max_total > 0) then
-      ! this call may take what is left of the budget (and no more than the
-      ! per-output limit, if there is one: max_interval = 0 is none)
-      left = self%max_total - self%steps_taken()
-      if (left <= 0) then
-        call fatal_error(error, failure_message(self, CV_TOO_MUCH_WORK))
+    ! CVODE steps one step per call (CV_ONE_STEP) and the state at tout is read
+    ! off its interpolant: its steps, and the events it locates within them
+    ! (each step searched whole), then do not depend on the output times (with
+    ! CV_NORMAL the event search stops at tout and the next one resumes there,
+    ! which moves the located times at round-off level, and the steps after them)
+    if (self%root_pending) then
+      if (self%root_t <= tout + self%root_tol) then
+        self%root_pending = .false.
+        self%t = min(self%root_t, tout)
+        self%y = self%root_y
+        call report_event(self, self%root_which, event, which)
         return
       end if
-      if (self%max_interval > 0) left = min(self%max_interval, left)
-      ierr = FCVodeSetMaxNumSteps(self%mem, left)
-      if (ierr /= 0) then   ! (no message built on the per-output path unless it fails)
-        if (failed(ierr, "cannot set the step limit (" // str(int(left)) // ")", error)) return
-      end if
     end if
-    ierr = FCVode(self%mem, real(tout, c_double), self%nv_y, tret, CV_NORMAL)
-    self%restarted = .false.
-    self%t = tret(1)
-    if (ierr < 0) then
-      call fatal_error(error, failure_message(self, ierr))
-      if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
+    ierr = FCVodeGetCurrentTime(self%mem, tn)
+    if (self%fresh) tn(1) = self%t
+    first = self%steps_taken()
+    ! steps this call may take: what is left of the budget, and no more than
+    ! the per-output limit (max_interval = 0 is none)
+    limit = huge(limit)
+    if (self%max_interval > 0) limit = self%max_interval
+    do while (tn(1) < tout .or. self%after_root)
+      if (.not. self%after_root) then
+        if (self%steps_taken() - first >= limit .or. &
+          (self%max_total > 0 .and. self%steps_taken() >= self%max_total)) then
+          self%t = tn(1)
+          call fatal_error(error, failure_message(self, CV_TOO_MUCH_WORK))
+          return
+        end if
+      end if
+      target = tout
+      if (self%fresh .and. self%t_final > tout) target = self%t_final
+      ierr = FCVode(self%mem, target, self%nv_y, tret, CV_ONE_STEP)
+      self%restarted = .false.
+      self%fresh = .false.
+      self%after_root = ierr == CV_ROOT_RETURN
+      if (ierr < 0) then
+        self%t = tret(1)
+        call fatal_error(error, failure_message(self, ierr))
+        if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
+        return
+      end if
+      if (ierr == CV_ROOT_RETURN) then
+        ierr = FCVodeGetRootInfo(self%mem, self%cb%root_info)
+        ierr = FCVodeGetLastStep(self%mem, hlast)
+        ! CVODE locates an event to 100 u (|t| + |h|) (its ttol): one that close
+        ! after tout is at tout (an event scheduled at an output time, like a
+        ! release at t0, belongs to that output: the record shows its new phase)
+        self%root_tol = 100*epsilon(1.0_dp)*(abs(tret(1)) + abs(hlast(1)))
+        if (tret(1) <= tout + self%root_tol) then
+          self%t = min(tret(1), real(tout, c_double))
+          call report_event(self, self%cb%root_info, event, which)
+          return
+        end if
+        ! after tout: report tout first, the event at the next call
+        self%root_pending = .true.
+        self%root_t = tret(1)
+        self%root_y = self%y
+        self%root_which = self%cb%root_info
+        self%after_root = .false.   ! (the rest of its step is searched when it is reported)
+        exit
+      end if
+      if (ierr == CV_TSTOP_RETURN) then   ! (the stop time before tout)
+        self%t = tret(1)
+        return
+      end if
+      tn = tret
+    end do
+    ierr = FCVodeGetDky(self%mem, real(tout, c_double), 0_c_int, self%nv_y)
+    if (ierr /= 0) then
+      call fatal_error(error, "CVODE: cannot interpolate at t = " // str(tout) // " s (flag " // &
+        str(int(ierr)) // ")" // cvode_said(self))
       return
     end if
-    if (ierr == CV_ROOT_RETURN) then
-      if (present(event)) event = .true.
-      if (present(which)) then
-        ierr = FCVodeGetRootInfo(self%mem, self%cb%root_info)
-        which = 0
-        which(1:min(size(which), self%cb%nroots)) = self%cb%root_info(1:min(size(which), self%cb%nroots))
-      end if
-    end if
+    self%t = tout
   end subroutine solver_advance
+
+  !> An event at self%t: `event` and `which` from CVodeGetRootInfo's `info`;
+  !> the rest of its step is searched at the next `advance`.
+  subroutine report_event(self, info, event, which)
+    class(cvode_solver), intent(inout) :: self     !< solver
+    integer(c_int), intent(in) :: info(:)          !< CVodeGetRootInfo
+    logical, intent(out), optional :: event        !< set
+    integer, intent(out), optional :: which(:)     !< +-1 per function that crossed
+    integer :: n
+    self%after_root = .true.
+    if (present(event)) event = .true.
+    if (present(which)) then
+      which = 0
+      n = min(size(which), self%cb%nroots)
+      which(1:n) = info(1:n)
+    end if
+  end subroutine report_event
 
   !> Restart from a changed state (after an event); tolerances, linear solver
   !> and event functions are kept.
@@ -426,6 +511,7 @@ contains
     ! CVODE's counters restart: keep the run's totals
     self%stats_before = so_far
     self%restarted = .true.
+    call forget_steps(self)
   end subroutine solver_reinit
 
   !> " [CVODE: <its last message>]" (and the message cleared), or "".
@@ -542,9 +628,20 @@ contains
     self%t = 0.0_dp
     self%stats_before = cvode_stats()
     self%restarted = .false.
+    call forget_steps(self)
+    if (allocated(self%root_y)) deallocate(self%root_y)
+    self%t_final = 0.0_dp
     self%max_total = 0
     self%max_interval = 0
   end subroutine solver_free
+
+  !> A (re)start: no step taken, no event pending.
+  subroutine forget_steps(self)
+    class(cvode_solver), intent(inout) :: self  !< solver
+    self%fresh = .true.
+    self%after_root = .false.
+    self%root_pending = .false.
+  end subroutine forget_steps
 
   !> One line that says when and why CVODE stopped.
   function failure_message(self, flag) result(msg)

@@ -167,6 +167,68 @@ program test_cvode
   call check_close(solver%t, 3*pi/4, "second zero at 3 pi/4", abs=1e-8_dp)
   call solver%free()
 
+  call section("the steps and the events do not depend on the output times")
+  ! The oscillator to 5 s with its event x = 0 (at pi/4 + k pi/2: three), the
+  ! events passed through without a restart, outputs every 0.5 s and every
+  ! 1/128 s (binary fractions: the common output times are the same numbers; several per step: rtol 1e-6 takes steps of ~0.05 s, so events fall
+  ! after an output inside the step that located them).  The same CVODE steps
+  ! must be taken: equal step counts, event times and states bit for bit (with
+  ! CVODE's CV_NORMAL mode they were not: its event search stops at each output
+  ! time, its first step is sized by the first output time).
+  block
+    real(dp) :: t_ev(2, 8), y_half(2, 2, 11), y_end(2, 2)
+    integer :: n_ev(2), c, n_half(2)
+    integer(c_long) :: steps(2)
+    logical :: ordered(2)
+    real(dp), parameter :: dts(2) = [0.5_dp, 0.0078125_dp]
+    real(dp) :: tout, t_prev
+    integer :: k_out
+    opts = cvode_options(rtol=1e-6_dp, atol=1e-8_dp, t_final=5.0_dp)
+    do c = 1, 2
+      call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+      n_ev(c) = 0
+      n_half(c) = 0
+      ordered(c) = .true.
+      t_prev = 0.0_dp
+      tout = 0.0_dp
+      k_out = 0
+      do while (tout < 5.0_dp - 1e-9_dp .and. .not. allocated(error))
+        k_out = k_out + 1
+        tout = min(5.0_dp, k_out*dts(c))
+        do
+          call solver%advance(tout, error, event, which)
+          if (allocated(error)) exit
+          ordered(c) = ordered(c) .and. solver%t >= t_prev
+          t_prev = solver%t
+          if (.not. event) exit
+          n_ev(c) = n_ev(c) + 1
+          if (n_ev(c) <= size(t_ev, 2)) t_ev(c, n_ev(c)) = solver%t
+        end do
+        if (abs(tout/0.5_dp - nint(tout/0.5_dp)) < 1e-9_dp .and. n_half(c) < size(y_half, 3)) then
+          n_half(c) = n_half(c) + 1
+          y_half(:, c, n_half(c)) = solver%y
+        end if
+      end do
+      call check(.not. allocated(error), "outputs every " // str(dts(c)) // " s: no error")
+      if (allocated(error)) deallocate(error)
+      y_end(:, c) = solver%y
+      steps(c) = solver%steps_taken()
+      call solver%free()
+    end do
+    call check(n_ev(1) == 3 .and. n_ev(2) == 3, "three events either way (" // str(n_ev(1)) // ", " // &
+      str(n_ev(2)) // ")")
+    call check(ordered(1) .and. ordered(2), "events and outputs come in time order")
+    ! rtol 1e-6 over ~100 steps: 1e-5 bounds the event times' error
+    call check_close(t_ev(2, 1), pi/4, "first event at pi/4", abs=1e-5_dp)
+    call check_close(t_ev(2, 3), 5*pi/4, "third event at 5 pi/4", abs=1e-5_dp)
+    call check(steps(1) == steps(2), "the same number of steps (" // str(int(steps(1))) // ", " // &
+      str(int(steps(2))) // ")")
+    call check(all(t_ev(1, 1:3) == t_ev(2, 1:3)), "the same event times, bit for bit")
+    call check(n_half(1) == 10 .and. n_half(2) == 10, "ten common output times")
+    call check(all(y_half(:, 1, 1:10) == y_half(:, 2, 1:10)) .and. all(y_end(:, 1) == y_end(:, 2)), &
+      "the same states at the common output times, bit for bit")
+  end block
+
   call section("velocity-reduced band solver: the same linear solve as the full band LU")
   block
     ! M = I - gamma J with the [x, v]-per-node structure (position rows exactly
