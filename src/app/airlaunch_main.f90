@@ -23,7 +23,7 @@ program airlaunch
   type(error_type), allocatable :: error
   character(len=:), allocatable :: path, echo, summary, output_override
   character(len=1024) :: arg
-  integer :: i, nargs, n_run_echo
+  integer :: i, nargs, n_run_echo, n_arg
   logical :: written
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
@@ -44,7 +44,10 @@ program airlaunch
     case ("-o", "--output")
       i = i + 1
       if (i > nargs) call fail_input("--output needs a file name")
-      call get_command_argument(i, arg)
+      call get_command_argument(i, arg, length=n_arg)
+      if (len_trim(arg) == 0) call fail_input("--output needs a file name (it is empty)")
+      if (n_arg > len(run%output)) call fail_input("--output is " // str(n_arg) // &
+        " characters long; at most " // str(len(run%output)) // " are allowed")
       output_override = trim(arg)
     case default
       if (arg(1:1) == "-") call fail_input("unknown option " // trim(arg) // " (see airlaunch --help)")

@@ -209,6 +209,7 @@ contains
     if (r%active == coupling_direct) then
       call r%dsolver%init(r%dsys, 0.0_dp, y0, r%dopts, error)
       r%dsolver_started = .true.
+      if (.not. allocated(error)) call stop_at_release(r, 0.0_dp, error)
       return
     end if
     call r%dsys%prepare(0.0_dp, y0, status)
@@ -389,7 +390,19 @@ contains
       call r%dsolver%init(r%dsys, t, y, r%dopts, err)
       r%dsolver_started = .true.
     end if
+    if (.not. allocated(err)) call stop_at_release(r, t, err)
   end subroutine direct_resume
+
+  !> In Case 0 the direct solver stops exactly at the release time t0: the
+  !> event is then at t0 itself, not at CVODE's root estimate (round-off
+  !> after t0), whatever the output times (an output at t0 shows Case 1).
+  subroutine stop_at_release(r, t, err)
+    type(coupled_run), intent(inout) :: r
+    real(dp), intent(in) :: t
+    type(error_type), allocatable, intent(inout) :: err
+    if (r%dsys%sep%phase == phase_preparation .and. r%dsys%sep%t0 > t) &
+      call r%dsolver%set_stop_time(r%dsys%sep%t0, err)
+  end subroutine stop_at_release
 
   ! ------------------------------------------------------------ rigidized engine
 

@@ -303,14 +303,14 @@ contains
       nml_var("settling_damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
       nml_var("cd_tangential", "real"), nml_var("gravity", "logical"), nml_var("air", "logical"), &
       nml_var("wind", "real3"), nml_var("air_density", "real"), nml_var("mass", "string", length=8)]
-    type(nml_var), parameter :: scene_vars(25) = [nml_var("a_kind", "string"), &
+    type(nml_var), parameter :: scene_vars(25) = [nml_var("a_kind", "string", 16), &
       nml_var("a_position", "real3"), nml_var("a_velocity", "real3"), &
       nml_var("a_amplitude", "real3"), nml_var("a_frequency", "real"), nml_var("a_phase_deg", "real"), &
       nml_var("a_t_start", "real"), nml_var("a_mass", "real"), nml_var("a_drag_area", "real"), &
-      nml_var("b_kind", "string"), nml_var("b_position", "real3"), nml_var("b_velocity", "real3"), &
+      nml_var("b_kind", "string", 16), nml_var("b_position", "real3"), nml_var("b_velocity", "real3"), &
       nml_var("b_amplitude", "real3"), nml_var("b_frequency", "real"), nml_var("b_phase_deg", "real"), &
       nml_var("b_t_start", "real"), nml_var("b_mass", "real"), nml_var("b_drag_area", "real"), &
-      nml_var("initial_shape", "string"), nml_var("initial_sag", "real"), nml_var("scheme", "string"), &
+      nml_var("initial_shape", "string", 16), nml_var("initial_sag", "real"), nml_var("scheme", "string", 16), &
       nml_var("dt", "real"), nml_var("force_tol", "real"), nml_var("max_iterations", "integer"), &
       nml_var("record_tensions", "logical")]
     character(len=16), parameter :: kinds(4) = [character(len=16) :: "fixed", "prescribed", "free", &

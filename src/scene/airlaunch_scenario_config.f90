@@ -26,8 +26,8 @@ module airlaunch_scenario_config
   type(nml_var), parameter :: line_vars(18) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
-    nml_var("cd_tangential", "real"), nml_var("coupling", "string"), nml_var("outer_dt", "real"), &
-    nml_var("inner_rtol", "real"), nml_var("far_end", "string"), nml_var("coupling_by_phase", "string"), &
+    nml_var("cd_tangential", "real"), nml_var("coupling", "string", 16), nml_var("outer_dt", "real"), &
+    nml_var("inner_rtol", "real"), nml_var("far_end", "string", 16), nml_var("coupling_by_phase", "string"), &
     nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real"), &
     nml_var("auto_min_steps", "real")]
 
@@ -178,7 +178,7 @@ contains
     character(len=256) :: msg
     namelist /flight/ altitude, mach, trim_mode, trim_alpha_deg
     type(nml_var), parameter :: vars(4) = [nml_var("altitude", "real"), nml_var("mach", "real"), &
-      nml_var("trim_mode", "string"), nml_var("trim_alpha_deg", "real")]
+      nml_var("trim_mode", "string", 16), nml_var("trim_alpha_deg", "real")]
     altitude = c%altitude; mach = c%mach; trim_mode = c%trim_mode; trim_alpha_deg = c%trim_alpha*rad2deg
     call open_group(f, "flight", vars, u, present, error)
     if (allocated(error)) return
@@ -220,7 +220,7 @@ contains
       nml_var("chord", "real"), nml_var("cl0", "real"), nml_var("cl_alpha", "real"), nml_var("cl_de", "real"), &
       nml_var("cd0", "real"), nml_var("k_induced", "real"), nml_var("cm0", "real"), &
       nml_var("cm_alpha", "real"), nml_var("cm_q", "real"), nml_var("cm_de", "real"), &
-      nml_var("dynamics", "string"), nml_var("control", "string"), nml_var("k_theta", "real"), &
+      nml_var("dynamics", "string", 16), nml_var("control", "string", 16), nml_var("k_theta", "real"), &
       nml_var("k_q", "real"), nml_var("delta_e_max_deg", "real")]
     associate(a => c%aero)
       mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
@@ -284,7 +284,7 @@ contains
     type(nml_var), parameter :: vars(11) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
       nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
       nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real"), &
-      nml_var("edge_contact", "string")]
+      nml_var("edge_contact", "string", 16)]
     ramp_edge_x = c%ramp_edge_x; floor_y = c%floor_y; length = c%length; width = c%width
     height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0
     edge_contact = c%edge_contact; tail_x = c%tail_x; tail_y = c%tail_y

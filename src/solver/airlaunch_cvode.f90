@@ -107,7 +107,9 @@ module airlaunch_cvode
     !> be reported by the next `advance` (its time, state and CVodeGetRootInfo)
     logical :: root_pending = .false.
     real(dp) :: root_t = 0.0_dp
-    real(dp) :: root_tol = 0.0_dp          !< CVODE's accuracy of root_t
+    !> the stop time CVODE holds (set_stop_time; CVODE clears it when it stops
+    !> there); huge = none
+    real(dp) :: stop_time = huge(1.0_dp)
     real(dp), allocatable :: root_y(:)
     integer(c_int), allocatable :: root_which(:)
     real(dp) :: t_final = 0.0_dp           !< cvode_options%t_final
@@ -304,6 +306,7 @@ contains
     self%stats_before = cvode_stats()
     self%restarted = .false.
     call forget_steps(self)
+    self%stop_time = huge(1.0_dp)
     self%t_final = opts%t_final
     ierr = FCVodeSetMaxNumSteps(self%mem, merge(self%max_interval, -1_c_long, self%max_interval > 0))
     if (failed(ierr, "max_num_steps = " // str(opts%max_num_steps) // " rejected", error)) return
@@ -378,7 +381,7 @@ contains
     logical, intent(out), optional :: event               !< an event stopped the step
     integer, intent(out), optional :: which(:)            !< CVodeGetRootInfo
     integer(c_int) :: ierr
-    real(c_double) :: tret(1), tn(1), target, hlast(1)
+    real(c_double) :: tret(1), tn(1), target
     integer(c_long) :: first, limit
     if (present(event)) event = .false.
     if (.not. c_associated(self%mem)) then
@@ -393,13 +396,20 @@ contains
     ! CV_NORMAL the event search stops at tout and the next one resumes there,
     ! which moves the located times at round-off level, and the steps after them)
     if (self%root_pending) then
-      if (self%root_t <= tout + self%root_tol) then
+      if (self%root_t <= tout) then
         self%root_pending = .false.
-        self%t = min(self%root_t, tout)
+        self%t = self%root_t
         self%y = self%root_y
         call report_event(self, self%root_which, event, which)
         return
       end if
+    end if
+    if (self%fresh .and. .not. (tout > self%t)) then
+      ! no step since the (re)start: y is the state at self%t (CVODE cannot
+      ! interpolate before its first step)
+      if (tout < self%t) call fatal_error(error, "CVODE: output time " // str(tout) // &
+        " s is behind the solver's t = " // str(self%t) // " s")
+      return
     end if
     ierr = FCVodeGetCurrentTime(self%mem, tn)
     if (self%fresh) tn(1) = self%t
@@ -431,13 +441,8 @@ contains
       end if
       if (ierr == CV_ROOT_RETURN) then
         ierr = FCVodeGetRootInfo(self%mem, self%cb%root_info)
-        ierr = FCVodeGetLastStep(self%mem, hlast)
-        ! CVODE locates an event to 100 u (|t| + |h|) (its ttol): one that close
-        ! after tout is at tout (an event scheduled at an output time, like a
-        ! release at t0, belongs to that output: the record shows its new phase)
-        self%root_tol = 100*epsilon(1.0_dp)*(abs(tret(1)) + abs(hlast(1)))
-        if (tret(1) <= tout + self%root_tol) then
-          self%t = min(tret(1), real(tout, c_double))
+        if (tret(1) <= tout) then
+          self%t = tret(1)
           call report_event(self, self%cb%root_info, event, which)
           return
         end if
@@ -449,7 +454,8 @@ contains
         self%after_root = .false.   ! (the rest of its step is searched when it is reported)
         exit
       end if
-      if (ierr == CV_TSTOP_RETURN) then   ! (the stop time before tout)
+      if (ierr == CV_TSTOP_RETURN) then   ! (the stop time before tout; CVODE has cleared it)
+        self%stop_time = huge(1.0_dp)
         self%t = tret(1)
         return
       end if
@@ -512,6 +518,16 @@ contains
     self%stats_before = so_far
     self%restarted = .true.
     call forget_steps(self)
+    ! a stop time at or behind the restart (an event exactly at it) would be
+    ! refused by CVODE's first step: moved out of the way (SUNDIALS 6.4 cannot clear it)
+    if (self%stop_time <= t) then
+      ierr = FCVodeSetStopTime(self%mem, huge(1.0_dp))
+      if (ierr /= 0) then
+        call fatal_error(error, "CVODE: cannot clear the stop time at t = " // str(t) // " s" // cvode_said(self))
+        return
+      end if
+      self%stop_time = huge(1.0_dp)
+    end if
   end subroutine solver_reinit
 
   !> " [CVODE: <its last message>]" (and the message cleared), or "".
@@ -537,6 +553,7 @@ contains
       return
     end if
     ierr = FCVodeSetStopTime(self%mem, real(tstop, c_double))
+    if (ierr == 0) self%stop_time = tstop
     if (ierr /= 0) call fatal_error(error, "CVODE: stop time " // str(tstop) // " s rejected at t = " // &
       str(self%t) // " s (flag " // str(int(ierr)) // ")" // cvode_said(self))
   end subroutine solver_set_stop_time
@@ -631,6 +648,7 @@ contains
     call forget_steps(self)
     if (allocated(self%root_y)) deallocate(self%root_y)
     self%t_final = 0.0_dp
+    self%stop_time = huge(1.0_dp)
     self%max_total = 0
     self%max_interval = 0
   end subroutine solver_free

@@ -162,6 +162,33 @@ def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
     assert "HDF5" not in res.stderr
 
 
+@pytest.mark.parametrize("kind", ["empty", "too long"])
+def test_an_output_option_the_run_cannot_hold_is_an_input_error(airlaunch_exe, tmp_path, kind):
+    """`--output ""` was ignored (the namelist's file written instead) and a path
+    longer than the 256 characters &run output holds was cut silently (exit 0, a
+    file under the first 256 characters); both are refused like the namelist's."""
+    nml, _ = drop_nml(tmp_path)
+    long = tmp_path / ("x" * (300 - len(str(tmp_path))) + ".nc")
+    out, fragment = {"empty": ("", "--output needs a file name (it is empty)"),
+                     "too long": (long, f"--output is {len(str(long))} characters long; at most 256 are allowed")}[kind]
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert_input_error(res, fragment, tmp_path / "drop.nc")
+    assert not list(tmp_path.glob("x*"))
+
+
+@pytest.mark.parametrize("edit", [("edge_contact = 'bilateral'", "edge_contact = 'one_sided       bilateral'"),
+                                  ("dynamics = 'free'", "dynamics = 'prescribed       junk'")])
+def test_a_choice_longer_than_its_variable_is_an_input_error(airlaunch_exe, tmp_path, edit):
+    """A choice longer than the 16 characters its variable holds was cut to its
+    first 16 and then accepted ('one_sided       bilateral' ran as one_sided)."""
+    old, new = edit
+    nml = nml_variant(tmp_path, edits=[(r"^  " + re.escape(old) + ".*$", "  " + new)])
+    name = old.split()[0]
+    assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc"),
+                       f"'{name}' is {len(new.split(' = ')[1]) - 2} characters long; at most 16 are allowed",
+                       tmp_path / "x.nc")
+
+
 @pytest.mark.parametrize("kind", ["directory", "directory/", "file as directory", "unwritable"])
 def test_an_output_that_cannot_be_written_is_an_input_error(airlaunch_exe, tmp_path, kind):
     """An output naming a directory, inside a regular file or where no file can

@@ -626,6 +626,18 @@ program test_cvode
   call solver%set_max_step(-1.0_dp, error)
   call check(allocated(error), "set_max_step(-1) is refused")
   if (allocated(error)) deallocate(error)
+  ! a restart exactly at the stop time (an event there, like the release at t0
+  ! of the launch scene): CVODE would refuse its first step (tstop - t = 0)
+  call solver%reinit(2.0_dp, solver%y, error)
+  call check(.not. allocated(error), "reinit at the stop time")
+  call solver%advance(2.5_dp, error)
+  call check(.not. allocated(error) .and. solver%t == 2.5_dp, "and on past it")
+  if (allocated(error)) deallocate(error)
+  ! a stop time is landed on exactly
+  call solver%set_stop_time(2.75_dp, error)
+  call solver%advance(3.0_dp, error)
+  call check(.not. allocated(error) .and. solver%t == 2.75_dp, "the solver stops at the stop time exactly")
+  if (allocated(error)) deallocate(error)
   call solver%free()
   opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp, max_total_steps=20)
   call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
