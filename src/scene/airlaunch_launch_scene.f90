@@ -188,6 +188,8 @@ contains
       sys%h_ref = cfg%flight%altitude
       n = merge(sys%line%n, 0, sys%has_line)
       allocate(y0(rigid_size + 6*n), sys%yabs(rigid_size + 6*n), sys%ydabs(rigid_size + 6*n))
+      allocate(sys%jac_y(rigid_size + 6*n), sys%jac_f0(rigid_size + 6*n), sys%jac_f1(rigid_size + 6*n), &
+        sys%jac_inc(rigid_size + 6*n))
       call sys%sep%pack_state(y0(1:rigid_size))
       do i = 0, 1
         y0(13*i+1:13*i+3) = y0(13*i+1:13*i+3) - [0.0_dp, sys%h_ref, 0.0_dp]

@@ -28,7 +28,7 @@ module airlaunch_launch_system
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: dcm_to_euler
-  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
+  use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal, band_view
   use airlaunch_separation, only: separation_system, separation_nroots
   use airlaunch_cut_joint, only: phase_free, phase_rotation
   use airlaunch_line_model, only: line_model, node_state_name
@@ -58,6 +58,9 @@ module airlaunch_launch_system
     ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
     real(dp), allocatable :: yabs(:), ydabs(:)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)
+    !> work of the difference-quotient Jacobian (state, its right-hand side,
+    !> the perturbed ones, the increments); allocated by the scene with yabs
+    real(dp), allocatable :: jac_y(:), jac_f0(:), jac_f1(:), jac_inc(:)
     real(dp) :: chute_drag(3) = 0.0_dp
   contains
     procedure :: rhs => launch_rhs
@@ -69,6 +72,8 @@ module airlaunch_launch_system
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
+    procedure :: has_jacobian => launch_has_jacobian
+    procedure :: jacobian => launch_jacobian
     procedure :: project => launch_project
     procedure :: state_name => launch_state_name
   end type launch_system
@@ -234,6 +239,72 @@ contains
       end do
     end do
   end subroutine launch_velocity_partners
+
+  !> With the line, the band Jacobian is the system's own difference quotients
+  !> (launch_jacobian); without it CVODE's dense ones.
+  logical function launch_has_jacobian(self)
+    class(launch_system), intent(in) :: self
+    launch_has_jacobian = self%has_line
+  end function launch_has_jacobian
+
+  !> Band Jacobian by difference quotients, CVODE's column grouping (ml + mu + 1
+  !> right-hand sides), each state's increment sqrt(eps) times the number the
+  !> right-hand side works with: max(|y_j|, |y_j + offset_j|, 1), the offset
+  !> being V0 t, h0 or V0 for the x, y positions and the x velocity of the
+  !> frame moving with the carrier (prepare adds it back).  CVODE's own
+  !> increment for a state near 0 is 1000 h u N |f| / ewt_j: with the system at
+  !> rest (the trimmed Case 0) it fell below the rounding of V0 + v, and the
+  !> line's dashpot (its stiffest term) vanished from the Newton matrix - at
+  !> N = 240, rtol 1e-9 the run took 293 893 steps with 107 183 Newton failures
+  !> in Case 0 (helper-33's diagnosis; docs/performance.md).
+  subroutine launch_jacobian(self, t, y, jac, status)
+    class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t
+    real(dp), intent(in) :: y(:)
+    type(band_view), intent(inout) :: jac
+    integer, intent(out) :: status
+    real(dp), parameter :: srur = sqrt(epsilon(1.0_dp))
+    real(dp) :: offset
+    integer :: n, width, g, i, j, c
+    n = size(y)
+    width = jac%ml + jac%mu + 1
+    do j = 1, n
+      ! component within its body (13 states) or node (6 states)
+      if (j <= rigid_size) then
+        c = 1 + modulo(j - 1, 13)
+      else
+        c = 1 + modulo(j - rigid_size - 1, 6)
+      end if
+      select case (c)
+      case (1)
+        offset = self%v_ref*t
+      case (2)
+        offset = self%h_ref
+      case (4)
+        offset = self%v_ref
+      case default
+        offset = 0.0_dp
+      end select
+      self%jac_y(j) = y(j) + srur*max(abs(y(j)), abs(y(j) + offset), 1.0_dp)
+      self%jac_inc(j) = self%jac_y(j) - y(j)   ! the increment as represented
+    end do
+    call self%rhs(t, y, self%jac_f0, status)
+    if (status /= rhs_ok) return
+    self%jac_y(1:n) = y
+    do g = 1, min(width, n)
+      do j = g, n, width
+        self%jac_y(j) = y(j) + self%jac_inc(j)
+      end do
+      call self%rhs(t, self%jac_y(1:n), self%jac_f1, status)
+      if (status /= rhs_ok) return
+      do j = g, n, width
+        self%jac_y(j) = y(j)
+        do i = max(1, j - jac%mu), min(n, j + jac%ml)
+          call jac%set(i, j, (self%jac_f1(i) - self%jac_f0(i))/self%jac_inc(j))
+        end do
+      end do
+    end do
+  end subroutine launch_jacobian
 
   !> Unit quaternions after every step (the rigid part's projection).
   logical function launch_has_projection(self)

@@ -780,6 +780,8 @@ contains
     y => FN_VGetArrayPointer(nv_y)
     jac%ldim = int(FSUNBandMatrix_LDim(mat))
     jac%smu = int(FSUNBandMatrix_StoredUpperBandwidth(mat))
+    jac%mu = int(FSUNBandMatrix_UpperBandwidth(mat))
+    jac%ml = int(FSUNBandMatrix_LowerBandwidth(mat))
     jac%ab => band_data(mat, jac%ldim)
     call cb%sys%jacobian(t, y, jac, status)
     ierr = int(status, c_int)

@@ -18,6 +18,8 @@ module airlaunch_ode
     real(dp), pointer :: ab(:) => null()   !< the storage, column by column
     integer :: ldim = 0                    !< leading dimension (rows stored per column)
     integer :: smu = 0                     !< stored upper bandwidth
+    integer :: mu = 0                      !< upper bandwidth of the structure
+    integer :: ml = 0                      !< lower bandwidth of the structure
   contains
     procedure :: set => band_view_set
     procedure :: set_block => band_view_set_block
