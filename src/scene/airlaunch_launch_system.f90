@@ -43,6 +43,11 @@ module airlaunch_launch_system
   integer, parameter :: launch_nroots = separation_nroots + 1
   !> Rigid part of the state (aircraft + rocket).
   integer, parameter :: rigid_size = 26
+  !> Largest distance in the state vector between a state and one its rate
+  !> depends on: the aircraft (1-13), the rocket (14-26) and node 1 (27-32)
+  !> are coupled through the rail constraint and the line's pull, a node with
+  !> its neighbours (6 states apart)
+  integer, parameter :: coupling_reach = rigid_size + 6 - 1
 
   !> The whole system.
   type, extends(ode_system) :: launch_system
@@ -247,8 +252,12 @@ contains
     launch_has_jacobian = self%has_line
   end function launch_has_jacobian
 
-  !> Band Jacobian by difference quotients, CVODE's column grouping (ml + mu + 1
-  !> right-hand sides), each state's increment sqrt(eps) times the number the
+  !> Band Jacobian by difference quotients, columns perturbed together when no
+  !> state depends on two of them (every state depends on those at most
+  !> `coupling_reach` away: the aircraft's first on node 1's last, through the
+  !> rocket's constraint and the line's pull; CVODE grouped by the stored band,
+  !> 18, and the couplings beyond it were read into other columns' entries: the
+  !> planar paper scenario drifted 4 mm out of its plane), each state's increment sqrt(eps) times the number the
   !> right-hand side works with: max(|y_j|, |y_j + offset_j|, 1), the offset
   !> being V0 t, h0 or V0 for the x, y positions and the x velocity of the
   !> frame moving with the carrier (prepare adds it back).  CVODE's own
@@ -267,7 +276,7 @@ contains
     real(dp) :: offset
     integer :: n, width, g, i, j, c
     n = size(y)
-    width = jac%ml + jac%mu + 1
+    width = 2*coupling_reach + 1
     do j = 1, n
       ! component within its body (13 states) or node (6 states)
       if (j <= rigid_size) then

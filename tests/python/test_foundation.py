@@ -291,7 +291,11 @@ def test_step_budget_stops_a_run_that_cannot_progress(airlaunch_exe, tmp_path):
     out = tmp_path / "kq.nc"
     nml, res, first = failed_paper_run(airlaunch_exe, tmp_path, "kq", (r"^  k_q = .*$", "  k_q = 1.0e30"),
                                        f"  output = '{out}'\n  max_steps = 3000")
-    assert first.startswith("airlaunch: error: phase 0 (preparation"), first
+    # the loop is at rest in the trimmed Case 0 and starts chattering at the release
+    # (with CVODE's own difference-quotient Jacobian, which lost the line's dashpot
+    # at rest, it chattered from t = 0.17 s)
+    assert first.startswith("airlaunch: error: phase 1 (extraction on the rail), t = 0.72") or \
+        first.startswith("airlaunch: error: phase 1 (extraction on the rail): integration failed at t = 0.72"), first
     assert "the step budget is spent (3000 steps in total, &run max_steps)" in first, first
     assert "largest local error estimate in aircraft angular velocity z (body axes)" in first, first
     assert "step size " in first
