@@ -245,9 +245,10 @@ contains
     allocate(opts%atol_vector(n_state))
     opts%atol_vector(:) = atol_scaling(run%atol, n_state)
     ! BDF orders above 2 are not A-stable: on the line's lightly damped axial
-    ! modes they force tiny steps (measured: 6.2k steps at order 2, 40k at 4,
-    ! 72k at 3 for the paper scenario, same milestones), so the scene default
-    ! is order 2 (&run max_order = 0).
+    ! modes they force many more steps (measured on input/airlaunch_paper.nml:
+    ! 678 steps at order 2, 12 140 at 3, 8 132 at 4, 7 760 at 5, every milestone
+    ! within 6e-4 of the converged reference), so the scene default is order 2
+    ! (&run max_order = 0).
     opts%max_order = run%max_order
     if (opts%max_order == 0) opts%max_order = 2
     if (.not. has_line) call rigid_only_options(run, opts)

@@ -2,11 +2,13 @@
 !>
 !> input/airlaunch_paper.nml is built as the program builds it
 !> (read_scenario_config, setup_launch).  The settled line does not only pull
-!> aft: its weight pulls the rocket's nose tie-down down (~250 N; the first
-!> segment hangs at ~-0.003 rad).  A trim fed with the aft pull alone left
-!> that force and its ~1.5 kN m moment unbalanced: the run started with a
-!> pitch acceleration of -1e-3 rad/s^2 (-0.06 deg/s^2) and a vertical one of
-!> 2e-4 g instead of at rest.
+!> aft: its weight pulls the rocket's nose tie-down down (254 N, the test prints it;
+!> the first segment hangs at ~-0.003 rad).  A trim fed with the aft pull alone
+!> left that force and its ~1.6 kN m moment about the aircraft CG (the nose
+!> 6.25 m ahead of it) unbalanced: the run started with a pitch acceleration of
+!> about -2.0e-3 rad/s^2 (-0.11 deg/s^2) and a vertical one of about
+!> 3.6e-3 m/s^2 (3.7e-4 g) at the aircraft CG instead of at rest (hand estimate
+!> for the locked pair, 117 t and ~8.8e5 kg m^2 about its CG; docs/model.md).
 !>
 !> Reference: steady level flight, so every body's linear and angular
 !> acceleration vanishes at t = 0.
