@@ -21,6 +21,8 @@ the chain) must show why it is not the default: d_rigid frozen and the line's
 tension stuck near its initial stretch.
 """
 
+import re
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -150,3 +152,27 @@ def test_far_end_chain_needs_two_segments(airlaunch_exe, tmp_path):
     res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc")
     assert res.returncode == 2
     assert "n_seg = 1 is not allowed with far_end = 'chain'" in res.stderr
+
+
+def test_output_cadence_changes_no_step(airlaunch_exe, tmp_path):
+    """The rigidized coupling's steps do not depend on output_dt: its outer steps
+    end on the grid k outer_dt (they ended on an output time a rounding away from
+    it) and both solvers size their first step after a restart by the outer step,
+    not by the next output (2985 / 2784 / 2709 / 2455 steps at output_dt 0.1 /
+    0.02 / 0.005 / 0.003 s before): the same steps and event times with outputs
+    every 0.1 s (fewer than the outer steps) and every 0.004 s (several per outer
+    step)."""
+    runs = {}
+    for dt in ("0.1", "0.004"):
+        out = tmp_path / f"r{dt}.nc"
+        nml = nml_variant(tmp_path, f"r{dt}", edits=[(r"^  output_dt = \S+", f"  output_dt = {dt}")],
+                          line=("  coupling = 'rigidized'",))
+        res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+        assert res.returncode == 0, res.stderr
+        runs[dt] = (re.search(r"^integration: .*$", res.stdout, flags=re.M).group(0), xr.open_dataset(out))
+    (steps_a, a), (steps_b, b) = runs["0.1"], runs["0.004"]
+    assert steps_a == steps_b
+    for key in ("release_time_s", "edge_time_s", "edge_pull_time_s", "separation_time_s", "pitch_max_time_s"):
+        assert a.attrs[key] == b.attrs[key], key
+    a.close()
+    b.close()
