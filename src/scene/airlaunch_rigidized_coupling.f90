@@ -66,6 +66,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
     line_force_jacobian, node_state_name
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, canopy_node_acceleration, &
+    parachute_added_mass_rate, &
     canopy_node_jacobian, parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -385,7 +386,9 @@ contains
         return
       end if
       vp = b3%v + self%v_eps
-      self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp
+      ! drag and the filling canopy's apparent-mass momentum (canopy_node_acceleration)
+      self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp - &
+        parachute_added_mass_rate(self%chute, air%density, t)*vp
       force(:, 3) = force(:, 3) + self%chute_drag
     end associate
   end subroutine rigidized_add_loads
