@@ -176,3 +176,20 @@ def test_output_cadence_changes_no_step(airlaunch_exe, tmp_path):
         assert a.attrs[key] == b.attrs[key], key
     a.close()
     b.close()
+
+
+def test_records_inside_an_outer_step(airlaunch_exe, tmp_path):
+    """outer_dt 0.1 s with outputs every 0.02 s: the records inside an outer step
+    are the chain's and the line's states at their own times.  A solver step
+    that landed on the outer step's end returned that end's state for an earlier
+    output time: the line's far end read 15.6 m from the parachute (helper-34).
+    The two parachutes (B3 in the chain, node N in the line) part within an outer
+    step and meet at its end: 5 mm at the default 0.02 s, 26 mm at 0.1 s (measured;
+    bound 0.05 m)."""
+    out = tmp_path / "outer.nc"
+    nml = nml_variant(tmp_path, "outer", line=("  coupling = 'rigidized'", "  outer_dt = 0.1"))
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes["time"] == 751
+        assert ds["line_end_mismatch_m"].values.max() < 0.05
