@@ -16,6 +16,7 @@ module airlaunch_parachute
   implicit none
   private
   public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter, &
+    parachute_added_mass_rate, &
     canopy_node_acceleration, canopy_node_jacobian
 
   !> Canopy data.
@@ -52,6 +53,18 @@ contains
     end if
   end function inflation
 
+  !> Rate of the inflation fraction, d/dt ((t - t_d)/t_f)^j [1/s] (0 outside the filling).
+  pure real(dp) function inflation_rate(p, t) result(r)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: t
+    real(dp) :: tau
+    r = 0.0_dp
+    if (p%deploy_time < 0.0_dp .or. p%fill_time <= 0.0_dp) return
+    tau = (t - p%deploy_time)/p%fill_time
+    if (tau <= 0.0_dp .or. tau >= 1.0_dp) return
+    r = p%inflation_exponent*tau**(p%inflation_exponent - 1.0_dp)/p%fill_time
+  end function inflation_rate
+
   !> Drag area at time t [m^2].
   pure real(dp) function parachute_drag_area(p, t) result(cds)
     type(parachute), intent(in) :: p
@@ -68,10 +81,25 @@ contains
     ma = p%added_mass_factor*rho*pi/6*dp_**3*inflation(p, t)
   end function parachute_added_mass
 
+  !> Rate of the apparent mass while the canopy fills, dm_a/dt at time t in air
+  !> of density rho [kg/s] (the density's change along the path left out).
+  pure real(dp) function parachute_added_mass_rate(p, rho, t) result(rate)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: rho, t
+    real(dp) :: dp_
+    dp_ = 0.7_dp*parachute_nominal_diameter(p)
+    rate = p%added_mass_factor*rho*pi/6*dp_**3*inflation_rate(p, t)
+  end function parachute_added_mass_rate
+
   !> Acceleration of the line's last node, which carries the canopy (both line
   !> couplings, DESIGN §4): mass = the node's share of the line + canopy +
   !> apparent mass; loads = the line's force on the node, the canopy's drag in
   !> still air (if `with_drag`) and the canopy's weight (if `with_weight`).
+  !> While the canopy fills, its apparent mass grows and the air it entrains
+  !> must be brought to the canopy's velocity: d((m + m_a) v)/dt = F, i.e.
+  !> (m + m_a) a = F - (dm_a/dt) v (with the drag: the air's momentum; Knacke,
+  !> NWC TP 6575, ch. 5, apparent mass in the opening force) - `drag` holds
+  !> both.
   !> `ok` is false if the node left the atmosphere model (then acc = 0).
   pure subroutine canopy_node_acceleration(p, t, x, v, node_mass, line_force, with_drag, with_weight, &
       acc, drag, ok)
@@ -91,7 +119,8 @@ contains
     air = isa(x(2))
     ok = air%in_range
     if (.not. ok) return
-    if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(v)*v
+    if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(v)*v - &
+      parachute_added_mass_rate(p, air%density, t)*v
     w = 0.0_dp
     if (with_weight) w(2) = -g0*p%mass
     acc = (line_force + drag + w)/canopy_node_mass(p, t, air%density, node_mass)
@@ -100,7 +129,8 @@ contains
   !> What the Jacobian of canopy_node_acceleration needs at (t, x, v): the
   !> node's whole mass (its share of the line + canopy + apparent mass) and the
   !> velocity derivative of the canopy's drag, d/dv (-1/2 rho CdS |v| v) =
-  !> -1/2 rho CdS (|v| I + v v^T/|v|) (zero without drag).  The altitude
+  !> -1/2 rho CdS (|v| I + v v^T/|v|), and of the apparent mass's momentum
+  !> term, -(dm_a/dt) I (zero without drag).  The altitude
   !> dependence of the density (in drag and apparent mass) is left out: an
   !> approximate Newton matrix, off by (d rho/dh)/rho ~ 1e-4 per metre.
   !> `ok` is false if the node left the atmosphere model.
@@ -122,8 +152,12 @@ contains
     ok = air%in_range
     if (.not. ok) return
     mass = canopy_node_mass(p, t, air%density, node_mass)
+    if (.not. with_drag) return
+    do j = 1, 3   ! the apparent mass's momentum, - (dm_a/dt) v
+      drag_dv(j, j) = -parachute_added_mass_rate(p, air%density, t)
+    end do
     speed = norm2(v)
-    if (.not. with_drag .or. speed <= 0.0_dp) return
+    if (speed <= 0.0_dp) return
     c = -0.5_dp*air%density*parachute_drag_area(p, t)
     do j = 1, 3
       do i = 1, 3

@@ -163,6 +163,7 @@ contains
     ropt%chain_max_order = 2
     ropt%inner_max_order = 2
     ropt%max_steps = run%max_steps
+    ropt%t_end = run%t_end
     if (run%max_order > 0) then
       ropt%chain_max_order = run%max_order
       ropt%inner_max_order = run%max_order
@@ -428,10 +429,9 @@ contains
       ! outer steps end on the grid k*h (an event's short step realigns the next)
       t_target = min(next_grid_time(r%cpl%t, h), run%t_end)
       if (run%t_end - t_target < 1.0e-6_dp*h) t_target = run%t_end
-      ! end on an output time when the step reaches it (no round-off slivers)
-      if (r%iout <= r%nout) then
-        if (abs(r%t_out(r%iout) - t_target) < 1.0e-6_dp*h) t_target = r%t_out(r%iout)
-      end if
+      ! (the steps end on the grid, not on output times a rounding away from it:
+      ! an output that close is recorded at the step's end; the steps then do not
+      ! depend on the output times)
       call r%cpl%begin_step(t_target, event, which, err, r%t_out(r%iout:r%nout))
       do j = 1, r%cpl%n_saved
         if (allocated(err)) exit

@@ -66,6 +66,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
     line_force_jacobian, node_state_name
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, canopy_node_acceleration, &
+    parachute_added_mass_rate, &
     canopy_node_jacobian, parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -99,6 +100,10 @@ module airlaunch_rigidized_coupling
     !> Steps each of the two integrators (chain, line) may take over the run
     !> (`&run max_steps`); 0 = no limit.
     integer :: max_steps = 0
+    !> end of the run [s]: the first step after each (re)start of either solver
+    !> is sized towards it (cut at the outer step's stop time), not towards the
+    !> next output time (cvode_options%t_final)
+    real(dp) :: t_end = 0.0_dp
   end type rigidized_settings
 
   !> The virtual rigid body of the line (§2.4) as the chain uses it.
@@ -381,7 +386,9 @@ contains
         return
       end if
       vp = b3%v + self%v_eps
-      self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp
+      ! drag and the filling canopy's apparent-mass momentum (canopy_node_acceleration)
+      self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp - &
+        parachute_added_mass_rate(self%chute, air%density, t)*vp
       force(:, 3) = force(:, 3) + self%chute_drag
     end associate
   end subroutine rigidized_add_loads
@@ -780,7 +787,7 @@ contains
     if (allocated(error)) return
     copt = cvode_options(method="bdf", linear_solver="dense", rtol=opts%chain_rtol, &
       atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000, \
-      max_total_steps=opts%max_steps)
+      max_total_steps=opts%max_steps, t_final=opts%t_end)
     call self%chain_solver%init(self%chain, t0, y, copt, error)
     if (allocated(error)) return
     ! --- the line's integrator
@@ -789,7 +796,7 @@ contains
     atol_l = opts%inner_atol
     lopt = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%inner_rtol, atol_vector=atol_l, &
-      max_order=opts%inner_max_order, max_num_steps=1000000, max_total_steps=opts%max_steps)
+      max_order=opts%inner_max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, t_final=opts%t_end)
     self%t = t0
     call sample_ends(self, t0, self%chain_solver%y)
     call self%line%near%set_body_motion(t0, self%tie_x, self%tie_v, t0 + opts%outer_dt, &
@@ -954,13 +961,16 @@ contains
     end do
     call self%chain_solver%advance(t_target, error, event, which)
     if (allocated(error) .or. event) return
-    if (nt > 0) then
-      if (any(abs(t_out(1:nt) - t_target) <= eps)) then
+    ! an output time at the step's end, to rounding (the grid's k h and the
+    ! outputs' m output_dt): recorded there, under its own time
+    do j = 1, nt
+      if (abs(t_out(j) - t_target) <= eps) then
         self%n_saved = self%n_saved + 1
-        self%saved_t(self%n_saved) = t_target
+        self%saved_t(self%n_saved) = t_out(j)
         self%saved_y(:, self%n_saved) = self%chain_solver%y
+        exit
       end if
-    end if
+    end do
   end subroutine coupling_begin_step
 
   !> Step 5 up to time t inside the current outer step (a saved output time):

@@ -454,9 +454,11 @@ contains
         self%after_root = .false.   ! (the rest of its step is searched when it is reported)
         exit
       end if
-      if (ierr == CV_TSTOP_RETURN) then   ! (the stop time before tout; CVODE has cleared it)
+      if (ierr == CV_TSTOP_RETURN) then   ! (CVODE has cleared it)
         self%stop_time = huge(1.0_dp)
-        self%t = tret(1)
+        ! at or after tout: the step ended there, tout is read off it below
+        if (tret(1) >= tout) exit
+        self%t = tret(1)    ! before tout: the caller's stop
         return
       end if
       tn = tret

@@ -21,6 +21,8 @@ the chain) must show why it is not the default: d_rigid frozen and the line's
 tension stuck near its initial stretch.
 """
 
+import re
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -150,3 +152,44 @@ def test_far_end_chain_needs_two_segments(airlaunch_exe, tmp_path):
     res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc")
     assert res.returncode == 2
     assert "n_seg = 1 is not allowed with far_end = 'chain'" in res.stderr
+
+
+def test_output_cadence_changes_no_step(airlaunch_exe, tmp_path):
+    """The rigidized coupling's steps do not depend on output_dt: its outer steps
+    end on the grid k outer_dt (they ended on an output time a rounding away from
+    it) and both solvers size their first step after a restart by the outer step,
+    not by the next output (2985 / 2784 / 2709 / 2455 steps at output_dt 0.1 /
+    0.02 / 0.005 / 0.003 s before): the same steps and event times with outputs
+    every 0.1 s (fewer than the outer steps) and every 0.004 s (several per outer
+    step)."""
+    runs = {}
+    for dt in ("0.1", "0.004"):
+        out = tmp_path / f"r{dt}.nc"
+        nml = nml_variant(tmp_path, f"r{dt}", edits=[(r"^  output_dt = \S+", f"  output_dt = {dt}")],
+                          line=("  coupling = 'rigidized'",))
+        res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+        assert res.returncode == 0, res.stderr
+        runs[dt] = (re.search(r"^integration: .*$", res.stdout, flags=re.M).group(0), xr.open_dataset(out))
+    (steps_a, a), (steps_b, b) = runs["0.1"], runs["0.004"]
+    assert steps_a == steps_b
+    for key in ("release_time_s", "edge_time_s", "edge_pull_time_s", "separation_time_s", "pitch_max_time_s"):
+        assert a.attrs[key] == b.attrs[key], key
+    a.close()
+    b.close()
+
+
+def test_records_inside_an_outer_step(airlaunch_exe, tmp_path):
+    """outer_dt 0.1 s with outputs every 0.02 s: the records inside an outer step
+    are the chain's and the line's states at their own times.  A solver step
+    that landed on the outer step's end returned that end's state for an earlier
+    output time: the line's far end read 15.6 m from the parachute (helper-34).
+    The two parachutes (B3 in the chain, node N in the line) part within an outer
+    step and meet at its end: 5 mm at the default 0.02 s, 26 mm at 0.1 s (measured;
+    bound 0.05 m)."""
+    out = tmp_path / "outer.nc"
+    nml = nml_variant(tmp_path, "outer", line=("  coupling = 'rigidized'", "  outer_dt = 0.1"))
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes["time"] == 751
+        assert ds["line_end_mismatch_m"].values.max() < 0.05

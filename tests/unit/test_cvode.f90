@@ -633,10 +633,38 @@ program test_cvode
   call solver%advance(2.5_dp, error)
   call check(.not. allocated(error) .and. solver%t == 2.5_dp, "and on past it")
   if (allocated(error)) deallocate(error)
-  ! a stop time is landed on exactly
+  ! a stop time is landed on exactly; an output before it is interpolated (a
+  ! step that landed on the stop time returned the stop time's state for an
+  ! earlier output: the rigidized coupling recorded wrong states, helper-34)
   call solver%set_stop_time(2.75_dp, error)
+  call solver%advance(2.7_dp, error)
+  call check(.not. allocated(error) .and. solver%t == 2.7_dp, "an output before the stop time: t = 2.7 (" // &
+    str(solver%t) // ")")
+  call check_close(solver%y(1), cos(2*1.7_dp), "x(2.7) = cos(3.4) (restarted at 2 from x(1))", abs=1e-6_dp)
   call solver%advance(3.0_dp, error)
   call check(.not. allocated(error) .and. solver%t == 2.75_dp, "the solver stops at the stop time exactly")
+  call check_close(solver%y(1), cos(2*1.75_dp), "x(2.75) = cos(3.5)", abs=1e-6_dp)
+  if (allocated(error)) deallocate(error)
+  call solver%free()
+  ! one step over both: the first step (0.3 s of a slow oscillator, omega 0.1)
+  ! lands on the stop time 0.3 past the output time 0.1, which is read off it
+  block
+    integer(c_long) :: taken
+    osc%omega = 0.1_dp
+    opts = cvode_options(rtol=1e-2_dp, atol=1e-6_dp, initial_step=0.3_dp)
+    call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    call solver%set_roots(0, error)
+    call solver%set_stop_time(0.3_dp, error)
+    call solver%advance(0.1_dp, error)
+    taken = solver%steps_taken()
+    call check(.not. allocated(error) .and. solver%t == 0.1_dp .and. taken == 1, &
+      "one step to the stop time 0.3, the output time 0.1 before it returned (t = " // str(solver%t) // &
+      ", " // str(int(taken)) // " step)")
+    ! v(0.1) = -0.1 sin(0.01) = -1.0e-3 against v(0.3) = -3.0e-3; the first (order 1)
+    ! step's interpolant is linear in t, exact to O(h^2 omega^3) = 1e-5 here
+    call check_close(solver%y(2), -0.1_dp*sin(0.01_dp), "v(0.1) = -0.1 sin(0.01), not v(0.3)", abs=2e-4_dp)
+    osc%omega = 2.0_dp
+  end block
   if (allocated(error)) deallocate(error)
   call solver%free()
   opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp, max_total_steps=20)
