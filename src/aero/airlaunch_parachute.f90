@@ -72,13 +72,19 @@ contains
     cds = p%packed_drag_area + (p%drag_area - p%packed_drag_area)*inflation(p, t)
   end function parachute_drag_area
 
+  !> Apparent mass of the open canopy in air of density rho [kg]:
+  !> k_a rho pi/6 D_p^3, D_p = 0.7 D0.
+  pure real(dp) function open_added_mass(p, rho) result(ma)
+    type(parachute), intent(in) :: p
+    real(dp), intent(in) :: rho
+    ma = p%added_mass_factor*rho*pi/6*(0.7_dp*parachute_nominal_diameter(p))**3
+  end function open_added_mass
+
   !> Apparent mass at time t in air of density rho [kg].
   pure real(dp) function parachute_added_mass(p, rho, t) result(ma)
     type(parachute), intent(in) :: p
     real(dp), intent(in) :: rho, t
-    real(dp) :: dp_
-    dp_ = 0.7_dp*parachute_nominal_diameter(p)
-    ma = p%added_mass_factor*rho*pi/6*dp_**3*inflation(p, t)
+    ma = open_added_mass(p, rho)*inflation(p, t)
   end function parachute_added_mass
 
   !> Rate of the apparent mass while the canopy fills, dm_a/dt at time t in air
@@ -86,9 +92,7 @@ contains
   pure real(dp) function parachute_added_mass_rate(p, rho, t) result(rate)
     type(parachute), intent(in) :: p
     real(dp), intent(in) :: rho, t
-    real(dp) :: dp_
-    dp_ = 0.7_dp*parachute_nominal_diameter(p)
-    rate = p%added_mass_factor*rho*pi/6*dp_**3*inflation_rate(p, t)
+    rate = open_added_mass(p, rho)*inflation_rate(p, t)
   end function parachute_added_mass_rate
 
   !> Acceleration of the line's last node, which carries the canopy (both line
