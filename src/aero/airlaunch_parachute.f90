@@ -157,17 +157,18 @@ contains
     if (.not. ok) return
     mass = canopy_node_mass(p, t, air%density, node_mass)
     if (.not. with_drag) return
-    do j = 1, 3   ! the apparent mass's momentum, - (dm_a/dt) v
-      drag_dv(j, j) = -parachute_added_mass_rate(p, air%density, t)
-    end do
     speed = norm2(v)
-    if (speed <= 0.0_dp) return
-    c = -0.5_dp*air%density*parachute_drag_area(p, t)
-    do j = 1, 3
-      do i = 1, 3
-        drag_dv(i, j) = c*v(i)*v(j)/speed
+    if (speed > 0.0_dp) then
+      c = -0.5_dp*air%density*parachute_drag_area(p, t)
+      do j = 1, 3
+        do i = 1, 3
+          drag_dv(i, j) = c*v(i)*v(j)/speed
+        end do
+        drag_dv(j, j) = drag_dv(j, j) + c*speed
       end do
-      drag_dv(j, j) = drag_dv(j, j) + c*speed
+    end if
+    do j = 1, 3   ! the apparent mass's momentum, - (dm_a/dt) v
+      drag_dv(j, j) = drag_dv(j, j) - parachute_added_mass_rate(p, air%density, t)
     end do
   end subroutine canopy_node_jacobian
 

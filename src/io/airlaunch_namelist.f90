@@ -524,8 +524,8 @@ contains
         if (v(1:1) /= "'" .and. v(1:1) /= '"') then
           call fatal_error(error, self%where(item) // "variable '" // item%name // "' = " // item%value // &
             " is not a quoted string")
-        else if (var%length > 0 .and. len(v) - 2 > var%length) then
-          call fatal_error(error, self%where(item) // "'" // item%name // "' is " // str(len(v) - 2) // &
+        else if (var%length > 0 .and. longest_quoted(v) > var%length) then
+          call fatal_error(error, self%where(item) // "'" // item%name // "' is " // str(longest_quoted(v)) // &
             " characters long; at most " // str(var%length) // " are allowed")
         end if
       case ("real_list", "integer_list")
@@ -538,6 +538,40 @@ contains
           "' = " // v // " has " // str(n) // " values; a vector of 3 (x, y, z) is expected")
       end select
     end subroutine check_form
+
+    !> The longest quoted string of a value ('a', "b", 3*'c' ...: a list gives
+    !> each item's length; a doubled quote inside counts as one character).
+    pure integer function longest_quoted(v) result(longest)
+      character(len=*), intent(in) :: v
+      character :: q
+      integer :: i, n
+      longest = 0
+      q = " "
+      n = 0
+      i = 1
+      do while (i <= len(v))
+        if (q == " ") then
+          if (v(i:i) == "'" .or. v(i:i) == '"') then
+            q = v(i:i)
+            n = 0
+          end if
+        else if (v(i:i) == q) then
+          if (i < len(v)) then
+            if (v(i+1:i+1) == q) then   ! a doubled quote: one character
+              n = n + 1
+              i = i + 2
+              cycle
+            end if
+          end if
+          longest = max(longest, n)
+          q = " "
+        else
+          n = n + 1
+        end if
+        i = i + 1
+      end do
+      if (q /= " ") longest = max(longest, n)
+    end function longest_quoted
   end subroutine nml_check_group
 
   !> "file:line: &group: " prefix of a message about an assignment.

@@ -210,7 +210,7 @@ contains
     if (r%active == coupling_direct) then
       call r%dsolver%init(r%dsys, 0.0_dp, y0, r%dopts, error)
       r%dsolver_started = .true.
-      if (.not. allocated(error)) call stop_at_release(r, 0.0_dp, error)
+      if (.not. allocated(error)) call stop_at_next_kink(r, 0.0_dp, error)
       return
     end if
     call r%dsys%prepare(0.0_dp, y0, status)
@@ -331,7 +331,16 @@ contains
         err%message = phase_name(r%dsys%sep%phase) // ": " // err%message
         return
       end if
-      if (.not. event) return
+      if (.not. event) then
+        if (r%dsolver%t >= t_target) return
+        ! stopped at a scheduled kink (stop_at_next_kink): restart there, so that
+        ! no BDF step carries history across it, and stop at the next one
+        y = r%dsolver%y
+        call r%dsolver%reinit(r%dsolver%t, y, err)
+        if (.not. allocated(err)) call stop_at_next_kink(r, r%dsolver%t, err)
+        if (allocated(err)) return
+        cycle
+      end if
       call r%dsys%prepare(r%dsolver%t, r%dsolver%y, status)
       call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), which(1:launch_nroots-1), &
         which(launch_nroots), r%dsys%find_pitch_max, changed, err)
@@ -345,6 +354,7 @@ contains
         ! solver keeps its counters' totals over the restart)
         y = r%dsolver%y
         call r%dsolver%reinit(r%dsolver%t, y, err)
+        if (.not. allocated(err)) call stop_at_next_kink(r, r%dsolver%t, err)
         if (allocated(err)) return
       end if
       if (r%dsolver%t >= t_target) return
@@ -392,19 +402,30 @@ contains
       call r%dsolver%init(r%dsys, t, y, r%dopts, err)
       r%dsolver_started = .true.
     end if
-    if (.not. allocated(err)) call stop_at_release(r, t, err)
+    if (.not. allocated(err)) call stop_at_next_kink(r, t, err)
   end subroutine direct_resume
 
-  !> In Case 0 the direct solver stops exactly at the release time t0: the
-  !> event is then at t0 itself, not at CVODE's root estimate (round-off
-  !> after t0), whatever the output times (an output at t0 shows Case 1).
-  subroutine stop_at_release(r, t, err)
+  !> The direct solver stops at the next time after t at which its right-hand
+  !> side jumps or kinks on a schedule: the release t0 in Case 0 (the event is
+  !> then at t0 itself, not at CVODE's root estimate a rounding after it,
+  !> whatever the output times), the canopy's deployment and the end of its
+  !> filling (the apparent mass's momentum force starts and stops there).
+  subroutine stop_at_next_kink(r, t, err)
     type(coupled_run), intent(inout) :: r
     real(dp), intent(in) :: t
     type(error_type), allocatable, intent(inout) :: err
-    if (r%dsys%sep%phase == phase_preparation .and. r%dsys%sep%t0 > t) &
-      call r%dsolver%set_stop_time(r%dsys%sep%t0, err)
-  end subroutine stop_at_release
+    real(dp) :: next
+    next = huge(1.0_dp)
+    if (r%dsys%sep%phase == phase_preparation .and. r%dsys%sep%t0 > t) next = r%dsys%sep%t0
+    if (r%dsys%has_line) then
+      associate(c => r%dsys%chute)
+        if (c%deploy_time > t) next = min(next, c%deploy_time)
+        if (c%deploy_time >= 0.0_dp .and. c%fill_time > 0.0_dp .and. c%deploy_time + c%fill_time > t) &
+          next = min(next, c%deploy_time + c%fill_time)
+      end associate
+    end if
+    if (next < huge(1.0_dp)) call r%dsolver%set_stop_time(next, err)
+  end subroutine stop_at_next_kink
 
   ! ------------------------------------------------------------ rigidized engine
 

@@ -45,8 +45,11 @@ module airlaunch_launch_system
   integer, parameter :: rigid_size = 26
   !> Largest distance in the state vector between a state and one its rate
   !> depends on: the aircraft (1-13), the rocket (14-26) and node 1 (27-32)
-  !> are coupled through the rail constraint and the line's pull, a node with
-  !> its neighbours (6 states apart)
+  !> are coupled through the rail constraint and the line's pull (28 at most),
+  !> a node with its neighbours (within 11).  One weak exception: the line's
+  !> air density is fitted between its lowest and highest node (line_model's
+  !> air_density_fit), so every node's drag depends, by ~1e-8 of the entries,
+  !> on those two nodes' altitudes - left out, like the band's far couplings
   integer, parameter :: coupling_reach = rigid_size + 6 - 1
 
   !> The whole system.
@@ -253,7 +256,8 @@ contains
   end function launch_has_jacobian
 
   !> Band Jacobian by difference quotients, columns perturbed together when no
-  !> state depends on two of them (every state depends on those at most
+  !> state depends on two of them (but for the density fit, coupling_reach;
+  !> every state depends on those at most
   !> `coupling_reach` away: the aircraft's first on node 1's last, through the
   !> rocket's constraint and the line's pull; CVODE grouped by the stored band,
   !> 18, and the couplings beyond it were read into other columns' entries: the

@@ -27,7 +27,7 @@ module airlaunch_scenario_config
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
     nml_var("cd_tangential", "real"), nml_var("coupling", "string", 16), nml_var("outer_dt", "real"), &
-    nml_var("inner_rtol", "real"), nml_var("far_end", "string", 16), nml_var("coupling_by_phase", "string"), &
+    nml_var("inner_rtol", "real"), nml_var("far_end", "string", 16), nml_var("coupling_by_phase", "string", 16), &
     nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real"), &
     nml_var("auto_min_steps", "real")]
 
@@ -452,7 +452,9 @@ contains
     call require_positive(f, "parachute", "drag_area", drag_area, "m^2 (a parachute that never inflates cannot extract)", error)
     call require_range(f, "parachute", "cd0", cd0, 0.1_dp, 2.0_dp, "", error)
     call require_positive(f, "parachute", "fill_constant", fill_constant, "", error)
-    call require_range(f, "parachute", "inflation_exponent", inflation_exponent, 0.25_dp, 8.0_dp, "", error)
+    ! j >= 1: below, the filling rate d/dt ((t - t_d)/t_f)^j is infinite at the
+    ! deployment, and so is the apparent mass's momentum force (docs/model.md)
+    call require_range(f, "parachute", "inflation_exponent", inflation_exponent, 1.0_dp, 8.0_dp, "", error)
     call require_nonnegative(f, "parachute", "packed_drag_area", packed_drag_area, "m^2", error)
     call require_nonnegative(f, "parachute", "added_mass_factor", added_mass_factor, "", error)
     if (allocated(error)) return

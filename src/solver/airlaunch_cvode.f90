@@ -454,6 +454,13 @@ contains
         self%after_root = .false.   ! (the rest of its step is searched when it is reported)
         exit
       end if
+      if (ierr == CV_SUCCESS .and. tret(1) == self%stop_time) then
+        ! the rest of a step that ended on the stop time, searched after an event
+        ! in it: CVODE has not cleared the stop time (it would return it again,
+        ! with no step, at the next call): cleared here, and handled as reached
+        ierr = FCVodeSetStopTime(self%mem, huge(1.0_dp))
+        ierr = CV_TSTOP_RETURN
+      end if
       if (ierr == CV_TSTOP_RETURN) then   ! (CVODE has cleared it)
         self%stop_time = huge(1.0_dp)
         ! at or after tout: the step ended there, tout is read off it below

@@ -189,6 +189,25 @@ def test_a_choice_longer_than_its_variable_is_an_input_error(airlaunch_exe, tmp_
                        tmp_path / "x.nc")
 
 
+def test_a_listed_choice_longer_than_its_variable_is_an_input_error(airlaunch_exe, tmp_path):
+    """Each item of &line coupling_by_phase holds 16 characters: a longer one was
+    cut and accepted ('direct          rigidized' ran Case 0 as direct)."""
+    nml = nml_variant(tmp_path, line=("  coupling = 'per_phase', coupling_by_phase = "
+                                      "'direct          rigidized', 'direct', 'direct', 'direct'",))
+    assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc"),
+                       "'coupling_by_phase' is 25 characters long; at most 16 are allowed", tmp_path / "x.nc")
+
+
+def test_an_inflation_exponent_below_one_is_an_input_error(airlaunch_exe, tmp_path):
+    """With j < 1 the filling rate d/dt ((t - t_d)/t_f)^j is infinite at the
+    deployment, and so is the apparent mass's momentum force: the snatch run
+    failed at t = 1.0 s with a step of 1e-16 s (j = 0.25, helper-36)."""
+    nml = nml_variant(tmp_path, edits=[(r"^  inflation_exponent = .*$", "  inflation_exponent = 0.5"),
+                                       (r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0")])
+    assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc"),
+                       "inflation_exponent = 0.5 is not allowed (must be in [1.0, 8.0]", tmp_path / "x.nc")
+
+
 @pytest.mark.parametrize("kind", ["directory", "directory/", "file as directory", "unwritable"])
 def test_an_output_that_cannot_be_written_is_an_input_error(airlaunch_exe, tmp_path, kind):
     """An output naming a directory, inside a regular file or where no file can

@@ -203,6 +203,24 @@ program test_aero
     call check(ok, "inside the atmosphere")
     call check_close(norm2(p1 - p0 - impulse)/norm2(p0), 0.0_dp, "momentum change = the drag's impulse", abs=1e-8_dp)
     call check(abs(p1(1)) < 0.9_dp*abs(p0(1)), "the canopy lost momentum")
+    ! the Jacobian's velocity block: d(drag + momentum term)/dv against central
+    ! differences of the force canopy_node_acceleration reports (the momentum
+    ! term's -(dm_a/dt) I was overwritten by the drag's block, helper-36)
+    block
+      real(dp) :: jac(3, 3), fd(3, 3), dplus(3), dminus(3), mass, hv
+      integer :: jv
+      call canopy_node_jacobian(pc, 0.3_dp, xk, vel, 0.0_dp, .true., mass, jac, ok)
+      hv = 1e-4_dp
+      do jv = 1, 3
+        call canopy_node_acceleration(pc, 0.3_dp, xk, vel + hv*unit(jv), 0.0_dp, [0.0_dp, 0.0_dp, 0.0_dp], &
+          .true., .false., acc, dplus, ok)
+        call canopy_node_acceleration(pc, 0.3_dp, xk, vel - hv*unit(jv), 0.0_dp, [0.0_dp, 0.0_dp, 0.0_dp], &
+          .true., .false., acc, dminus, ok)
+        fd(:, jv) = (dplus - dminus)/(2*hv)
+      end do
+      ! central differences of a smooth quadratic force: exact to rounding (1e-8 relative)
+      call check_close(maxval(abs(jac - fd))/maxval(abs(fd)), 0.0_dp, "d(drag)/dv at mid-filling", abs=1e-7_dp)
+    end block
     pc%deploy_time = -1.0_dp
   end block
 
@@ -256,4 +274,12 @@ program test_aero
     call check(ac_lim%delta_e_trim == ac%delta_e_trim .and. ac_lim%thrust == ac%thrust, "aircraft left unchanged")
   end block
   call finish()
+contains
+  !> The unit vector along axis k.
+  pure function unit(k) result(e)
+    integer, intent(in) :: k
+    real(dp) :: e(3)
+    e = 0.0_dp
+    e(k) = 1.0_dp
+  end function unit
 end program test_aero

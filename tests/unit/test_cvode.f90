@@ -664,6 +664,25 @@ program test_cvode
     ! step's interpolant is linear in t, exact to O(h^2 omega^3) = 1e-5 here
     call check_close(solver%y(2), -0.1_dp*sin(0.01_dp), "v(0.1) = -0.1 sin(0.01), not v(0.3)", abs=2e-4_dp)
     osc%omega = 2.0_dp
+    call solver%free()
+  end block
+  ! an event inside the step that lands on the stop time, the output at the
+  ! stop time: the event, then the stop time, then on past it (the stop time was
+  ! returned a second time, short of the next output, helper-36)
+  block
+    logical :: ev1, ev2, ev3
+    opts = cvode_options(rtol=1e-3_dp, atol=1e-6_dp)
+    call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    call solver%set_stop_time(0.79_dp, error)
+    call solver%advance(0.79_dp, error, ev1, which)
+    call check(ev1 .and. abs(solver%t - pi/4) < 1e-3_dp, "the event at pi/4 first (" // str(solver%t) // ")")
+    call solver%advance(0.79_dp, error, ev2, which)
+    call check(.not. ev2 .and. solver%t == 0.79_dp, "then the stop time 0.79 (" // str(solver%t) // ")")
+    call solver%advance(1.2_dp, error, ev3, which)
+    call check(.not. ev3 .and. solver%t == 1.2_dp .and. .not. allocated(error), "then on to 1.2 (" // &
+      str(solver%t) // ")")
+    if (allocated(error)) deallocate(error)
+    call solver%free()
   end block
   if (allocated(error)) deallocate(error)
   call solver%free()
