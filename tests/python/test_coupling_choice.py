@@ -196,8 +196,8 @@ def test_auto_keeps_the_direct_coupling_where_it_is_cheaper(airlaunch_exe, tmp_p
 
 def test_auto_switches_where_the_direct_coupling_is_busy(tight):
     """At rtol 1e-7 the same line costs the direct coupling 8-26 steps per
-    outer step (there the rigidized coupling is 2x faster: docs/performance.md,
-    work-precision): auto takes the rigidized coupling, within its floor."""
+    outer step (there the three couplings take about the same time: docs/model.md,
+    "Choosing the coupling"): auto takes the rigidized coupling, within its floor."""
     ds = tight["auto"]
     assert ds.attrs["coupling_switches"] >= 1
     assert ds.attrs["coupling_switch_log"].split("; ")[0].endswith("direct -> rigidized")
@@ -227,8 +227,8 @@ def snatch(airlaunch_exe, tmp_path_factory):
 
 
 def test_auto_integrates_the_snatch_with_the_direct_coupling(snatch):
-    """Slack (packed canopy, strain 4e-4 < 1e-3) and the snatch (strain change
-    up to 1.6 per outer step) are direct; the switch to the rigidized coupling
+    """Slack (packed canopy, strain 4e-4 < 1e-3) and the snatch (its strain
+    changes far faster than auto_max_strain_change per outer step) are direct; the switch to the rigidized coupling
     comes once the line is taut and slow again, after the peak of the snatch,
     while its ringing costs the direct coupling 13-32 steps per outer step; the
     switch back comes when the ringing has died down (fewer than 4 line
