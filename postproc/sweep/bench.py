@@ -97,7 +97,7 @@ def main(argv) -> int:
         subprocess.run([sys.executable, "-m", "postproc.sweep", "table", str(definition)], check=True,
                        env=env, capture_output=True)
         runs = {1: [], 2: []}
-        print(f"{n_cases} cases of input/sweep_paper.nml (15 s simulated each), {repeats} runs per rank count")
+        print(f"{n_cases} cases of input/sweep_paper.nml (each stops once its milestones are final, at most 15 s simulated), {repeats} runs per rank count")
         print(f"{'ranks':>5} {'cases/s':>9} {'wall [s]':>9} {'busy':>6} {'CPU s/case':>11} {'load before':>12}")
         for _ in range(repeats):
             for ranks in (1, 2):
