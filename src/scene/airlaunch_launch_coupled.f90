@@ -22,7 +22,8 @@
 submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   use airlaunch_multibody, only: separation_system, separation_nroots
   use airlaunch_rigidized_coupling, only: rigidized_settings, rigidized_coupling, rigidized_loads, &
-    rigidized_nroots, virtual_line, virtual_line_body, continue_phase_machine
+    rigidized_nroots, rigidized_pitch_root, rigidized_clearance_root, virtual_line, virtual_line_body, &
+    continue_phase_machine
   use airlaunch_coupling_choice, only: auto_switch, line_indicator, line_indicator_of, coupling_name
   implicit none
 
@@ -216,6 +217,7 @@ contains
     call r%dsys%prepare(0.0_dp, y0, status)
     call r%cpl%init(r%chain, 2, 3, r%dsys%line, r%dsys%chute, r%dsys%x, r%dsys%v, r%dsys%v_ref, r%dsys%h_ref, &
       0.0_dp, phase_preparation, r%ropt, error)
+    r%cpl%chain%clr = r%dsys%clr
     if (allocated(error)) error%message = phase_name(phase_preparation) // ", t = 0 s: " // error%message
   end subroutine start_engine
 
@@ -324,6 +326,7 @@ contains
     type(error_type), allocatable, intent(inout) :: err
     logical :: event, changed
     integer :: which(launch_nroots), guard, status
+    real(dp) :: c_before
     real(dp), allocatable :: y(:)
     do guard = 1, 100
       call r%dsolver%advance(t_target, err, event, which)
@@ -342,9 +345,12 @@ contains
         cycle
       end if
       call r%dsys%prepare(r%dsolver%t, r%dsolver%y, status)
-      call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), which(1:launch_nroots-1), &
-        which(launch_nroots), r%dsys%find_pitch_max, changed, err)
+      c_before = res%min_clearance
+      call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), &
+        which(1:separation_nroots), which(launch_pitch_root), r%dsys%find_pitch_max, which(launch_clearance_root), &
+        r%dsys%clr, changed, err)
       if (allocated(err)) return
+      if (res%min_clearance < c_before) r%last_record_of_extremum = r%dsolver%t
       if (changed) then
         if (leaves_at_phase(r, coupling_direct, r%dsys%sep%phase)) then
           switch = .true.
@@ -500,12 +506,15 @@ contains
     logical, intent(out) :: leave
     type(error_type), allocatable, intent(inout) :: err
     logical :: changed
+    real(dp) :: c_before
     leave = .false.
     associate(c => r%cpl%chain)
       call c%prepare(r%cpl%t, r%cpl%chain_solver%y)
+      c_before = res%min_clearance
       call handle_launch_event(res, r%cpl%t, c%sep, c%yabs, which(1:separation_nroots), &
-        which(rigidized_nroots), c%find_pitch_max, changed, err)
+        which(rigidized_pitch_root), c%find_pitch_max, which(rigidized_clearance_root), c%clr, changed, err)
       if (allocated(err)) return
+      if (res%min_clearance < c_before) r%last_record_of_extremum = r%cpl%t
     end associate
     leave = changed .and. leaves_at_phase(r, coupling_rigidized, r%cpl%chain%sep%phase)
     ! every event restarts the chain at its time (the outer step ended there)
@@ -545,6 +554,7 @@ contains
         machine=s%sep)
       if (allocated(err)) return
       r%cpl%chain%find_pitch_max = s%find_pitch_max
+      r%cpl%chain%clr = s%clr
     end associate
   end subroutine rigidized_resume
 

@@ -13,11 +13,12 @@ module airlaunch_launch_history
   use airlaunch_cut_joint, only: phase_free, phase_name
   use airlaunch_strings, only: str
   use airlaunch_launch_loads, only: launch_loads
+  use airlaunch_clearance, only: clearance_geometry, clearance, segment_distance
   implicit none
   private
   public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones
   public :: handle_launch_event, rocket_pitch_rate
-  public :: write_milestones, event_or_minus, segment_distance
+  public :: write_milestones, event_or_minus, clearance_geometry_of
 
   !> Milestones of one run (also the summary row of a sweep case).
   type :: launch_result
@@ -96,7 +97,7 @@ contains
     type(separation_system), intent(in) :: sep
     integer, intent(in) :: iloads
     type(launch_sample) :: s
-    real(dp) :: nose(3), aft(3), edge(3), tail(3)
+    real(dp) :: nose(3), aft(3), edge(3)
     associate(b0 => sep%bodies(0), b1 => sep%bodies(1))
       s%aircraft_euler = dcm_to_euler(b0%c)
       s%rocket_euler = dcm_to_euler(b1%c)
@@ -108,8 +109,7 @@ contains
       nose = b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp])
       aft = b1%point_position([cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp])
       edge = b0%r + matmul(b0%c, [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp])
-      tail = b0%r + matmul(b0%c, [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp])
-      s%clearance = segment_distance(tail, nose, aft) - cfg%rocket%aero%diameter/2
+      s%clearance = clearance(clearance_geometry_of(cfg), b0, b1)
       s%edge_clearance = segment_distance(edge, nose, aft) - cfg%rocket%aero%diameter/2
       if (sep%phase /= phase_free) s%edge_clearance = 0.0_dp
     end associate
@@ -119,6 +119,17 @@ contains
       s%elevator = src%aircraft_out%delta_e
     end select
   end function sample_launch
+
+  !> The empennage point (aircraft axes) and the rocket's axis (rocket axes) of
+  !> the clearance milestone.
+  pure function clearance_geometry_of(cfg) result(geom)
+    type(scenario_config), intent(in) :: cfg
+    type(clearance_geometry) :: geom
+    geom%point = [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp]
+    geom%nose = [cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp]
+    geom%aft = [cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp]
+    geom%radius = cfg%rocket%aero%diameter/2
+  end function clearance_geometry_of
 
   !> Euler pitch rate of the rocket (body 1 of `sep`) [rad/s], free of the
   !> singularity: theta' = sin(gamma) w_y + cos(gamma) w_z (Eqs. (49)-(50)).
@@ -132,16 +143,22 @@ contains
   !> An event at time t (state y of the separation system, bodies loaded):
   !> the first pitch maximum (root `pitch_root` < 0 in Case 3, while
   !> `find_pitch_max`), the phase change of the separation scene (`which_sep`),
-  !> and the rocket's attitude at separation.  `changed`: the phase changed.
-  subroutine handle_launch_event(res, t, sep, y, which_sep, pitch_root, find_pitch_max, changed, error)
+  !> and the rocket's attitude at separation; a local minimum of the clearance
+  !> in Case 3 (`clearance_root` rising, geometry `geom`) and the clearance at the
+  !> separation update its milestone.  `changed`: the phase changed.
+  subroutine handle_launch_event(res, t, sep, y, which_sep, pitch_root, find_pitch_max, clearance_root, geom, &
+      changed, error)
     type(launch_result), intent(inout) :: res
     real(dp), intent(in) :: t, y(:)
     type(separation_system), intent(inout) :: sep
-    integer, intent(in) :: which_sep(:), pitch_root
+    integer, intent(in) :: which_sep(:), pitch_root, clearance_root
     logical, intent(inout) :: find_pitch_max
+    type(clearance_geometry), intent(in) :: geom
     logical, intent(out) :: changed
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: e(3)
+    if (clearance_root > 0 .and. sep%phase == phase_free) &
+      res%min_clearance = min(res%min_clearance, clearance(geom, sep%bodies(0), sep%bodies(1)))
     if (pitch_root < 0 .and. sep%phase == phase_free .and. find_pitch_max) then
       e = dcm_to_euler(sep%bodies(1)%c)
       res%pitch_max_time = t
@@ -159,6 +176,7 @@ contains
       res%pitch_at_separation_deg = e(2)*rad2deg
       res%pitch_rate_at_separation_deg_s = rocket_pitch_rate(sep)*rad2deg
       res%separation_time = t
+      res%min_clearance = min(res%min_clearance, clearance(geom, sep%bodies(0), sep%bodies(1)))
     end if
   end subroutine handle_launch_event
 
@@ -348,12 +366,4 @@ contains
     if (t < -1.0e300_dp) r = -1.0_dp
   end function event_or_minus
 
-  !> Distance from point p to the segment [a, b].
-  pure real(dp) function segment_distance(p, a, b) result(d)
-    real(dp), intent(in) :: p(3), a(3), b(3)
-    real(dp) :: ab(3), s
-    ab = b - a
-    s = max(0.0_dp, min(1.0_dp, dot_product(p - a, ab)/dot_product(ab, ab)))
-    d = norm2(p - (a + s*ab))
-  end function segment_distance
 end module airlaunch_launch_history

@@ -20,9 +20,9 @@ module airlaunch_launch_scene
     phase_preparation
   use airlaunch_line_model, only: line_params
   use airlaunch_launch_loads, only: launch_loads
-  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size
+  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root
   use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
-    record_milestones, write_milestones, event_or_minus, segment_distance, handle_launch_event
+    record_milestones, write_milestones, event_or_minus, handle_launch_event, clearance_geometry_of
   use airlaunch_coupling_choice, only: coupling_plan, auto_settings, coupling_direct, coupling_rigidized, &
     coupling_index
   implicit none
@@ -168,6 +168,7 @@ contains
         rocket_length=cfg%rocket%aero%length, rocket_radius=radius)
       jopt = cut_joint_options(mu_rail=cfg%bay%friction, mu_edge=cfg%bay%friction)
       sys%tie_down = [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
+      sys%clr = clearance_geometry_of(cfg)
       call sys%sep%init(b0, b1, sys%tie_down, 1, geo, jopt, cfg%bay%release_time, error, &
         aircraft_prescribed=cfg%aircraft%dynamics == "prescribed")
       if (allocated(error)) return

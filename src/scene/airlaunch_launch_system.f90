@@ -35,12 +35,16 @@ module airlaunch_launch_system
   use airlaunch_rigid_body, only: body_state_name
   use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_launch_loads, only: launch_loads
+  use airlaunch_clearance, only: clearance_geometry, clearance_rate
   implicit none
   private
-  public :: launch_system, launch_nroots, rigid_size
+  public :: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root
 
   !> Events: the separation scene's and the pitch maximum.
-  integer, parameter :: launch_nroots = separation_nroots + 1
+  !> event functions: the separation scene's, then the rocket's Euler pitch
+  !> rate (its first maximum) and the clearance's rate (its minima), in Case 3
+  integer, parameter :: launch_pitch_root = separation_nroots + 1, launch_clearance_root = separation_nroots + 2
+  integer, parameter :: launch_nroots = separation_nroots + 2
   !> Rigid part of the state (aircraft + rocket).
   integer, parameter :: rigid_size = 26
   !> Largest distance in the state vector between a state and one its rate
@@ -62,6 +66,7 @@ module airlaunch_launch_system
     real(dp) :: h_ref = 0.0_dp              !< h0 of the reference frame [m]
     real(dp) :: tie_down(3) = 0.0_dp        !< rocket axes [m]
     logical :: find_pitch_max = .true.      !< event 5 active in Case 3
+    type(clearance_geometry) :: clr         !< the clearance milestone's points (event 6)
     logical :: has_line = .true.            !< false: no line, no parachute (state = rigid part)
     ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
     real(dp), allocatable :: yabs(:), ydabs(:)
@@ -225,7 +230,9 @@ contains
       if (allocated(self%sep%failure)) self%failure = self%sep%failure
       return
     end if
-    if (self%find_pitch_max .and. self%sep%phase == phase_free) g(launch_nroots) = self%euler_pitch_rate()
+    if (self%sep%phase /= phase_free) return
+    if (self%find_pitch_max) g(launch_pitch_root) = self%euler_pitch_rate()
+    g(launch_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine launch_roots
 
   !> The positions with x' = v: both bodies' (relative) positions and every

@@ -69,15 +69,20 @@ module airlaunch_rigidized_coupling
     parachute_added_mass_rate, &
     canopy_node_jacobian, parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
+  use airlaunch_clearance, only: clearance_geometry, clearance_rate
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
   private
   public :: rigidized_settings, virtual_line, virtual_line_body, rigidized_loads, rigidized_chain, &
-    rigidized_line, rigidized_coupling, rigidized_nroots, chain_atol, line_body_attitude, chain_size, &
+    rigidized_line, rigidized_coupling, rigidized_nroots, rigidized_pitch_root, rigidized_clearance_root, &
+    chain_atol, line_body_attitude, chain_size, &
     continue_phase_machine
 
   !> Events: the separation scene's and the rocket's Euler-pitch maximum.
-  integer, parameter :: rigidized_nroots = separation_nroots + 1
+  !> the chain's event functions: the separation scene's, the pitch rate's and
+  !> the clearance rate's (as the direct system's)
+  integer, parameter :: rigidized_pitch_root = separation_nroots + 1, rigidized_clearance_root = separation_nroots + 2
+  integer, parameter :: rigidized_nroots = separation_nroots + 2
   !> State size of the chain: aircraft (13) + rocket-line-parachute chain (6 + 7*3).
   integer, parameter :: chain_size = 13 + 6 + 7*3
 
@@ -155,6 +160,7 @@ module airlaunch_rigidized_coupling
     real(dp) :: v_ref = 0.0_dp              !< V0 of the reference frame [m/s]
     real(dp) :: h_ref = 0.0_dp              !< h0 of the reference frame [m]
     logical :: find_pitch_max = .true.      !< event 5 active in Case 3
+    type(clearance_geometry) :: clr         !< the clearance milestone's points (event 6)
     real(dp) :: yabs(chain_size) = 0.0_dp   !< absolute state of the last evaluation
   contains
     procedure :: rhs => chain_rhs
@@ -461,7 +467,9 @@ contains
       if (allocated(self%sep%failure)) self%failure = self%sep%failure
       return
     end if
-    if (self%find_pitch_max .and. self%sep%phase == phase_free) g(rigidized_nroots) = self%euler_pitch_rate()
+    if (self%sep%phase /= phase_free) return
+    if (self%find_pitch_max) g(rigidized_pitch_root) = self%euler_pitch_rate()
+    g(rigidized_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine chain_roots
 
   !> Euler pitch rate of the rocket [rad/s] (Eqs. (49)-(50), no singularity).

@@ -236,13 +236,38 @@ def test_output_cadence_changes_no_step(airlaunch_exe, tmp_path, paper_run):
     with xr.open_dataset(out) as ds:
         assert ds.sizes["time"] == 151 and paper.sizes["time"] == 751
         for key in ("release_time_s", "edge_time_s", "edge_pull_time_s", "separation_time_s",
-                    "pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", "pitch_max_time_s"):
+                    "pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", "pitch_max_time_s",
+                    "min_clearance_m"):
             assert ds.attrs[key] == paper.attrs[key], key
         # and the same states at the common output times (every 0.1 s; k*0.1 and 5k*0.02
         # differ in the last bit, so the interpolant is read 1 ulp apart: 1e-13)
         np.testing.assert_allclose(ds["time"].values, paper["time"].values[::5], rtol=1e-15)
         np.testing.assert_allclose(ds["rocket_position"].values, paper["rocket_position"].values[::5],
                                    rtol=1e-13, atol=1e-12)
+
+
+def test_minimum_clearance_is_exact(airlaunch_exe, tmp_path):
+    """min_clearance_m is the clearance at the separation or at a local minimum
+    located as an event (the rising zero of its rate), not the smallest record:
+    the same at output_dt 0.1 s and 0.5 ms (the records alone gave 8.874 and
+    8.799 m), below every record of Case 3, and within (largest clearance rate)
+    x (record spacing) of the smallest record at 0.5 ms."""
+    values, fine = {}, None
+    for dt in ("0.1", "0.0005"):
+        out = tmp_path / f"c{dt}.nc"
+        nml = nml_variant(tmp_path, f"c{dt}", edits=[(r"^  output_dt = \S+", f"  output_dt = {dt}"),
+                                                      (r"^  t_end = \S+", "  t_end = 5.0")])
+        res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+        assert res.returncode == 0, res.stderr
+        with xr.open_dataset(out) as ds:
+            values[dt] = float(ds.attrs["min_clearance_m"])
+            if dt == "0.0005":
+                free = ds["phase"].values == 3
+                fine = (ds["clearance_m"].values[free], ds["time"].values[free])
+    assert values["0.1"] == pytest.approx(values["0.0005"], rel=1e-12)
+    c, t = fine
+    rate = np.max(np.abs(np.diff(c) / np.diff(t)))
+    assert values["0.0005"] <= c.min() <= values["0.0005"] + rate * 0.0005
 
 
 @pytest.mark.parametrize("n_seg", [60, 240])

@@ -18,7 +18,7 @@ program test_rhs_allocations
   use airlaunch_strings, only: str
   use airlaunch_namelist, only: nml_file
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
-  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size
+  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root
   use airlaunch_launch_scene, only: setup_launch
   use airlaunch_launch_history, only: launch_result, handle_launch_event
   use airlaunch_cvode, only: cvode_solver, cvode_options
@@ -121,8 +121,8 @@ contains
       call solver%advance(tout, error, event, which)
       if (allocated(error) .or. .not. event) return
       call sys%prepare(solver%t, solver%y, st)
-      call handle_launch_event(res, solver%t, sys%sep, sys%yabs(1:rigid_size), which(1:launch_nroots-1), &
-        which(launch_nroots), sys%find_pitch_max, changed, error)
+      call handle_launch_event(res, solver%t, sys%sep, sys%yabs(1:rigid_size), which(1:launch_pitch_root-1), &
+        which(launch_pitch_root), sys%find_pitch_max, which(launch_clearance_root), sys%clr, changed, error)
       if (allocated(error)) return
       if (changed) then
         y = solver%y
