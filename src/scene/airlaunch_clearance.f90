@@ -52,9 +52,13 @@ contains
     dist = norm2(p - (a + nearest(p, a, b)*(b - a)))
   end function segment_distance
 
-  !> The parameter s in [0, 1] of the point of [a, b] nearest to p.
+  !> The parameter s in [0, 1] of the point of [a, b] nearest to p (0 if the
+  !> segment is a point, e.g. a geometry left unset).
   pure real(dp) function nearest(p, a, b) result(s)
     real(dp), intent(in) :: p(3), a(3), b(3)
-    s = max(0.0_dp, min(1.0_dp, dot_product(p - a, b - a)/dot_product(b - a, b - a)))
+    real(dp) :: ab2
+    s = 0.0_dp
+    ab2 = dot_product(b - a, b - a)
+    if (ab2 > 0.0_dp) s = max(0.0_dp, min(1.0_dp, dot_product(p - a, b - a)/ab2))
   end function nearest
 end module airlaunch_clearance
