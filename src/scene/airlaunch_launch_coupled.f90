@@ -326,7 +326,7 @@ contains
     type(error_type), allocatable, intent(inout) :: err
     logical :: event, changed
     integer :: which(launch_nroots), guard, status
-    real(dp) :: c_before
+    logical :: lower
     real(dp), allocatable :: y(:)
     do guard = 1, 100
       call r%dsolver%advance(t_target, err, event, which)
@@ -345,12 +345,11 @@ contains
         cycle
       end if
       call r%dsys%prepare(r%dsolver%t, r%dsolver%y, status)
-      c_before = res%min_clearance
       call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), &
         which(1:separation_nroots), which(launch_pitch_root), r%dsys%find_pitch_max, which(launch_clearance_root), &
-        r%dsys%clr, changed, err)
+        r%dsys%clr, changed, lower, err)
       if (allocated(err)) return
-      if (res%min_clearance < c_before) r%last_record_of_extremum = r%dsolver%t
+      if (lower) r%last_record_of_extremum = r%dsolver%t
       if (changed) then
         if (leaves_at_phase(r, coupling_direct, r%dsys%sep%phase)) then
           switch = .true.
@@ -505,16 +504,14 @@ contains
     integer, intent(in) :: which(:)
     logical, intent(out) :: leave
     type(error_type), allocatable, intent(inout) :: err
-    logical :: changed
-    real(dp) :: c_before
+    logical :: changed, lower
     leave = .false.
     associate(c => r%cpl%chain)
       call c%prepare(r%cpl%t, r%cpl%chain_solver%y)
-      c_before = res%min_clearance
       call handle_launch_event(res, r%cpl%t, c%sep, c%yabs, which(1:separation_nroots), &
-        which(rigidized_pitch_root), c%find_pitch_max, which(rigidized_clearance_root), c%clr, changed, err)
+        which(rigidized_pitch_root), c%find_pitch_max, which(rigidized_clearance_root), c%clr, changed, lower, err)
       if (allocated(err)) return
-      if (res%min_clearance < c_before) r%last_record_of_extremum = r%cpl%t
+      if (lower) r%last_record_of_extremum = r%cpl%t
     end associate
     leave = changed .and. leaves_at_phase(r, coupling_rigidized, r%cpl%chain%sep%phase)
     ! every event restarts the chain at its time (the outer step ended there)

@@ -145,20 +145,21 @@ contains
   !> `find_pitch_max`), the phase change of the separation scene (`which_sep`),
   !> and the rocket's attitude at separation; a local minimum of the clearance
   !> in Case 3 (`clearance_root` rising, geometry `geom`) and the clearance at the
-  !> separation update its milestone.  `changed`: the phase changed.
+  !> separation update its milestone.  `changed`: the phase changed; `lower`:
+  !> the minimum clearance fell (for &run stop_when_final).
   subroutine handle_launch_event(res, t, sep, y, which_sep, pitch_root, find_pitch_max, clearance_root, geom, &
-      changed, error)
+      changed, lower, error)
     type(launch_result), intent(inout) :: res
     real(dp), intent(in) :: t, y(:)
     type(separation_system), intent(inout) :: sep
     integer, intent(in) :: which_sep(:), pitch_root, clearance_root
     logical, intent(inout) :: find_pitch_max
     type(clearance_geometry), intent(in) :: geom
-    logical, intent(out) :: changed
+    logical, intent(out) :: changed, lower
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: e(3)
-    if (clearance_root > 0 .and. sep%phase == phase_free) &
-      res%min_clearance = min(res%min_clearance, clearance(geom, sep%bodies(0), sep%bodies(1)))
+    lower = .false.
+    if (clearance_root > 0 .and. sep%phase == phase_free) call take_clearance()
     if (pitch_root < 0 .and. sep%phase == phase_free .and. find_pitch_max) then
       e = dcm_to_euler(sep%bodies(1)%c)
       res%pitch_max_time = t
@@ -176,8 +177,15 @@ contains
       res%pitch_at_separation_deg = e(2)*rad2deg
       res%pitch_rate_at_separation_deg_s = rocket_pitch_rate(sep)*rad2deg
       res%separation_time = t
-      res%min_clearance = min(res%min_clearance, clearance(geom, sep%bodies(0), sep%bodies(1)))
+      call take_clearance()
     end if
+  contains
+    subroutine take_clearance()
+      real(dp) :: c
+      c = clearance(geom, sep%bodies(0), sep%bodies(1))
+      lower = c < res%min_clearance
+      res%min_clearance = min(res%min_clearance, c)
+    end subroutine take_clearance
   end subroutine handle_launch_event
 
   !> Update the running milestones with a sample; true if any extremum moved

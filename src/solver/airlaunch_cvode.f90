@@ -95,10 +95,9 @@ module airlaunch_cvode
     real(dp) :: t = 0.0_dp   !< time of `y`
     !> counters before the last re-initialisation (CVODE restarts its own)
     type(cvode_stats) :: stats_before
-    !> re-initialised and not advanced since: CVODE's linear-solver counters
-    !> still hold the previous segment's (they restart at the next step)
-    logical :: restarted = .false.
-    !> no step taken since the last (re)start: the next one is the first
+    !> no step taken since the last (re)start: the next one is the first (and
+    !> after a re-initialisation CVODE's linear-solver counters still hold the
+    !> previous segment's: they restart at the next step)
     logical :: fresh = .false.
     !> the last CVODE return was an event inside a step: the rest of that step
     !> has not been searched for further events yet
@@ -304,7 +303,6 @@ contains
     self%max_interval = max(0_c_long, int(opts%max_num_steps, c_long))
     self%max_total = int(max(0, opts%max_total_steps), c_long)
     self%stats_before = cvode_stats()
-    self%restarted = .false.
     call forget_steps(self)
     self%stop_time = huge(1.0_dp)
     self%t_final = opts%t_final
@@ -430,7 +428,6 @@ contains
       target = tout
       if (self%fresh .and. self%t_final > tout) target = self%t_final
       ierr = FCVode(self%mem, target, self%nv_y, tret, CV_ONE_STEP)
-      self%restarted = .false.
       self%fresh = .false.
       self%after_root = ierr == CV_ROOT_RETURN
       if (ierr < 0) then
@@ -458,7 +455,7 @@ contains
         ! the rest of a step that ended on the stop time, searched after an event
         ! in it: CVODE has not cleared the stop time (it would return it again,
         ! with no step, at the next call): cleared here, and handled as reached
-        ierr = FCVodeSetStopTime(self%mem, huge(1.0_dp))
+        ierr = clear_stop_time(self)
         ierr = CV_TSTOP_RETURN
       end if
       if (ierr == CV_TSTOP_RETURN) then   ! (CVODE has cleared it)
@@ -525,17 +522,12 @@ contains
     end if
     ! CVODE's counters restart: keep the run's totals
     self%stats_before = so_far
-    self%restarted = .true.
     call forget_steps(self)
     ! a stop time at or behind the restart (an event exactly at it) would be
-    ! refused by CVODE's first step: moved out of the way (SUNDIALS 6.4 cannot clear it)
+    ! refused by CVODE's first step
     if (self%stop_time <= t) then
-      ierr = FCVodeSetStopTime(self%mem, huge(1.0_dp))
-      if (ierr /= 0) then
-        call fatal_error(error, "CVODE: cannot clear the stop time at t = " // str(t) // " s" // cvode_said(self))
-        return
-      end if
-      self%stop_time = huge(1.0_dp)
+      if (clear_stop_time(self) /= 0) call fatal_error(error, "CVODE: cannot clear the stop time at t = " // &
+        str(t) // " s" // cvode_said(self))
     end if
   end subroutine solver_reinit
 
@@ -601,9 +593,9 @@ contains
     integer(c_int) :: ierr
     integer(c_long) :: n(1)
     s = self%stats_before
-    ! just re-initialised: CVODE's counters are zero (its linear-solver ones
+    ! no step since the (re)start: CVODE's counters are zero (after a restart its linear-solver ones
     ! restart at the next step and still hold what stats_before has)
-    if (.not. c_associated(self%mem) .or. self%restarted) return
+    if (.not. c_associated(self%mem) .or. self%fresh) return
     s = cvode_stats()
     ierr = FCVodeGetNumSteps(self%mem, n); s%steps = n(1)
     ierr = FCVodeGetNumRhsEvals(self%mem, n); s%rhs_evals = n(1)
@@ -653,7 +645,6 @@ contains
     end if
     self%t = 0.0_dp
     self%stats_before = cvode_stats()
-    self%restarted = .false.
     call forget_steps(self)
     if (allocated(self%root_y)) deallocate(self%root_y)
     self%t_final = 0.0_dp
@@ -661,6 +652,14 @@ contains
     self%max_total = 0
     self%max_interval = 0
   end subroutine solver_free
+
+  !> Take CVODE's stop time away (SUNDIALS 6.4 has no call to clear it: it is
+  !> moved beyond any time); CVODE's flag.
+  integer(c_int) function clear_stop_time(self) result(ierr)
+    class(cvode_solver), intent(inout) :: self  !< solver
+    ierr = FCVodeSetStopTime(self%mem, huge(1.0_dp))
+    if (ierr == 0) self%stop_time = huge(1.0_dp)
+  end function clear_stop_time
 
   !> A (re)start: no step taken, no event pending.
   subroutine forget_steps(self)

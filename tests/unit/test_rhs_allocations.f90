@@ -115,14 +115,14 @@ contains
   !> direct coupling does).
   subroutine integrate_to(tout)
     real(dp), intent(in) :: tout
-    logical :: event, changed
+    logical :: event, changed, lower
     integer :: which(launch_nroots), guard, st
     do guard = 1, 100
       call solver%advance(tout, error, event, which)
       if (allocated(error) .or. .not. event) return
       call sys%prepare(solver%t, solver%y, st)
       call handle_launch_event(res, solver%t, sys%sep, sys%yabs(1:rigid_size), which(1:launch_pitch_root-1), &
-        which(launch_pitch_root), sys%find_pitch_max, which(launch_clearance_root), sys%clr, changed, error)
+        which(launch_pitch_root), sys%find_pitch_max, which(launch_clearance_root), sys%clr, changed, lower, error)
       if (allocated(error)) return
       if (changed) then
         y = solver%y
