@@ -25,7 +25,38 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     rigidized_nroots, rigidized_pitch_root, rigidized_clearance_root, virtual_line, virtual_line_body, &
     continue_phase_machine
   use airlaunch_coupling_choice, only: auto_switch, line_indicator, line_indicator_of, coupling_name
+  use airlaunch_rigidized_coupling, only: rigidized_chain, rigidized_line
+  use airlaunch_cvode, only: step_observer, step_polynomial
+  use airlaunch_peak_search, only: peak_tracker, peak_bracket, max_search
+  use airlaunch_rotation, only: dcm_to_euler
   implicit none
+
+  !> The safety maxima taken over the integrators' steps (docs/output.md):
+  !> the largest segment tension, |aircraft pitch - trim|, |n - 1|.
+  integer, parameter :: m_tension = 1, m_pitch = 2, m_load = 3
+  !> Which integrator an observer watches: the direct system (all three), the
+  !> rigidized coupling's chain (pitch and load factor) or its line (tension).
+  integer, parameter :: src_direct = 1, src_chain = 2, src_line = 3
+
+  !> Sees every internal step of one integrator and keeps the safety maxima
+  !> of the run's trackers exact between the steps: a discrete local maximum
+  !> of the step-end samples is refined on the steps' interpolants
+  !> (airlaunch_peak_search), each evaluation the same function of the state
+  !> as an output record's.
+  type, extends(step_observer) :: metric_observer
+    integer :: source = 0
+    type(launch_system), pointer :: dsys => null()
+    type(rigidized_chain), pointer :: chain => null()
+    type(rigidized_line), pointer :: line => null()
+    type(peak_tracker), pointer :: trk(:) => null()   !< the run's (m_tension..m_load)
+    real(dp) :: trim_deg = 0.0_dp                     !< the aircraft's trimmed pitch [deg]
+    type(step_polynomial) :: piece(2)                 !< the last two stretches' interpolants
+    integer :: cur = 2                                !< the latest piece
+    real(dp), allocatable :: y(:), dy(:)              !< work: a state and its rate
+    integer :: evaluations = 0                        !< metric evaluations
+  contains
+    procedure :: observe => metrics_observe
+  end type metric_observer
 
   !> One run: the two engines, the choice between them and the records.
   type :: coupled_run
@@ -61,6 +92,9 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     real(dp), allocatable :: active_rec(:), strain_rec(:), change_rec(:), steps_rec(:)
     ! --- work arrays: the line's state of the rigidized engine
     real(dp), allocatable :: xl(:, :), vl(:, :), ten(:)
+    ! --- the safety maxima over every step (on the heap: the observers point to them)
+    type(peak_tracker), pointer :: trk(:) => null()
+    type(metric_observer) :: dobs, cobs, lobs         !< direct, chain, line
   end type coupled_run
 
 contains
@@ -77,6 +111,7 @@ contains
     allocate(r%dsys)
     call setup_launch(cfg, r%dsys, y0, res, error)
     if (.not. allocated(error)) call prepare_run(r, run, cfg, size(y0), error)
+    if (.not. allocated(error)) call init_observers(r, res)
     if (.not. allocated(error)) call start_engine(r, y0, error)
     if (allocated(error)) then
       call release(r)
@@ -98,6 +133,7 @@ contains
       end if
     end do
     call finish_result(r, res)
+    call take_maxima(r, res)
     if (allocated(run_error)) then
       res%status = "failed"
       res%failure = run_error%message
@@ -329,7 +365,7 @@ contains
     logical :: lower
     real(dp), allocatable :: y(:)
     do guard = 1, 100
-      call r%dsolver%advance(t_target, err, event, which)
+      call r%dsolver%advance(t_target, err, event, which, r%dobs)
       if (allocated(err)) then
         err%message = phase_name(r%dsys%sep%phase) // ": " // err%message
         return
@@ -458,13 +494,15 @@ contains
       ! (the steps end on the grid, not on output times a rounding away from it:
       ! an output that close is recorded at the step's end; the steps then do not
       ! depend on the output times)
-      call r%cpl%begin_step(t_target, event, which, err, r%t_out(r%iout:r%nout))
+      r%cobs%chain => r%cpl%chain
+      r%lobs%line => r%cpl%line
+      call r%cpl%begin_step(t_target, event, which, err, r%t_out(r%iout:r%nout), r%cobs)
       do j = 1, r%cpl%n_saved
         if (allocated(err)) exit
-        call r%cpl%line_to(r%cpl%saved_t(j), err)
+        call r%cpl%line_to(r%cpl%saved_t(j), err, r%lobs)
         if (.not. allocated(err)) call rigidized_record(r, run, cfg, res, r%cpl%saved_t(j), r%cpl%saved_y(:, j), err)
       end do
-      if (.not. allocated(err)) call r%cpl%end_step(err)
+      if (.not. allocated(err)) call r%cpl%end_step(err, r%lobs)
       if (allocated(err)) then
         if (index(err%message, "phase ") /= 1) err%message = phase_name(r%cpl%chain%sep%phase) // ": " // err%message
         return
@@ -667,6 +705,7 @@ contains
     real(dp) :: t
     integer :: status, from
     from = r%active
+    call finish_observers(r)   ! the maxima so far, on the outgoing engine's steps
     if (from == coupling_direct) then
       t = r%dsolver%t
       ! the direct solver's counters go into the result once, at the end
@@ -714,7 +753,7 @@ contains
     if (.not. run%stop_when_final) return
     if (phase /= phase_free .or. res%pitch_max_time < 0.0_dp) return
     if (t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
-    stop_now = t >= r%last_record_of_extremum + 1.0_dp
+    stop_now = t >= max(r%last_record_of_extremum, maxval(r%trk%t_best)) + 1.0_dp
   end function stop_now
 
   ! ------------------------------------------------------------ records
@@ -826,6 +865,225 @@ contains
     r%rec_t = r%hist%time(k)
   end subroutine record_extras
 
+  ! ------------------------------------------------------------ the safety maxima
+
+  !> The run's trackers and the observers of its three integrators.
+  subroutine init_observers(r, res)
+    type(coupled_run), intent(inout) :: r
+    type(launch_result), intent(in) :: res
+    allocate(r%trk(3))
+    r%dobs%source = src_direct
+    r%dobs%dsys => r%dsys
+    r%cobs%source = src_chain
+    r%lobs%source = src_line
+    r%dobs%trk => r%trk
+    r%cobs%trk => r%trk
+    r%lobs%trk => r%trk
+    r%dobs%trim_deg = res%trim_alpha_deg
+    r%cobs%trim_deg = res%trim_alpha_deg
+  end subroutine init_observers
+
+  !> Close the open sequences of the active engine's observers (refining a
+  !> maximum at their end): before a switch and at the end of the run.
+  subroutine finish_observers(r)
+    type(coupled_run), intent(inout) :: r
+    if (.not. associated(r%trk)) return
+    if (r%active == coupling_direct) then
+      call observer_finish(r%dobs)
+    else
+      if (associated(r%cpl%chain)) call observer_finish(r%cobs)
+      if (associated(r%cpl%line)) call observer_finish(r%lobs)
+    end if
+  end subroutine finish_observers
+
+  !> The maxima into the milestones: the larger of the trackers' (every step,
+  !> refined between steps) and the records' (the same function of the state:
+  !> they can only tie; a record wins a tie at rounding level).
+  subroutine take_maxima(r, res)
+    type(coupled_run), intent(inout) :: r
+    type(launch_result), intent(inout) :: res
+    if (.not. associated(r%trk)) return
+    call finish_observers(r)
+    if (res%has_line .and. r%trk(m_tension)%best > res%peak_tension) then
+      res%peak_tension = r%trk(m_tension)%best
+      res%peak_tension_time = r%trk(m_tension)%t_best
+    end if
+    res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, r%trk(m_pitch)%best)
+    res%max_load_factor_excursion = max(res%max_load_factor_excursion, r%trk(m_load)%best)
+  end subroutine take_maxima
+
+  !> Whether the observer's integrator carries metric m.
+  logical function watches(self, m)
+    class(metric_observer), intent(in) :: self
+    integer, intent(in) :: m
+    select case (self%source)
+    case (src_direct)
+      watches = m /= m_tension .or. self%dsys%has_line
+    case (src_chain)
+      watches = m /= m_tension
+    case default
+      watches = m == m_tension
+    end select
+  end function watches
+
+  !> A stretch of the solution (airlaunch_cvode's step_observer): its end is
+  !> the next sample of each metric; a bracketed local maximum is refined.
+  subroutine metrics_observe(self, poly, t_start, t_end, restart, last)
+    class(metric_observer), intent(inout) :: self
+    type(step_polynomial), intent(in) :: poly
+    real(dp), intent(in) :: t_start, t_end
+    logical, intent(in) :: restart, last
+    real(dp) :: q(3), t
+    type(peak_bracket) :: br
+    logical :: ok, starts
+    integer :: m, j
+    if (restart) call observer_finish(self)   ! the state may jump at a (re)start
+    self%cur = 3 - self%cur
+    call self%piece(self%cur)%copy(poly)
+    if (.not. allocated(self%y)) allocate(self%y(size(poly%c, 1)), self%dy(size(poly%c, 1)))
+    starts = .false.
+    do m = 1, 3
+      if (watches(self, m) .and. self%trk(m)%n == 0) starts = .true.
+    end do
+    if (starts) then
+      ! a new sequence starts with the stretch's start
+      call metric_values(self, t_start, self%cur, 0, .true., q, ok)
+      if (ok) then
+        do m = 1, 3
+          if (watches(self, m) .and. self%trk(m)%n == 0) ok = self%trk(m)%push(t_start, q(m), self%cur, br, &
+            value=m /= m_load)
+        end do
+      end if
+    end if
+    ! the sample at the stretch's end; in the first and the last stretch of a
+    ! sequence also one at its middle (a sequence may be a single step - the
+    ! rigidized coupling's outer steps -, with its maximum inside)
+    do j = 1, 2
+      t = t_end
+      if (j == 1) t = 0.5_dp*(t_start + t_end)
+      if (j == 1 .and. .not. (t > t_start .and. (starts .or. last))) cycle
+      call metric_values(self, t, self%cur, 0, .true., q, ok)
+      if (.not. ok) cycle
+      do m = 1, 3
+        if (.not. watches(self, m)) cycle
+        if (self%trk(m)%push(t, q(m), self%cur, br, value=m /= m_load)) call refine(self, m, br)
+      end do
+    end do
+    if (last) call observer_finish(self)
+  end subroutine metrics_observe
+
+  !> Close the observer's sequences (the function may jump after their end).
+  subroutine observer_finish(self)
+    class(metric_observer), intent(inout) :: self
+    type(peak_bracket) :: br
+    integer :: m
+    if (.not. associated(self%trk)) return
+    do m = 1, 3
+      if (.not. watches(self, m)) cycle
+      if (self%trk(m)%close(br)) call refine(self, m, br)
+    end do
+  end subroutine observer_finish
+
+  !> The maximum of metric m in the bracket br, on the stretches' interpolants.
+  subroutine refine(self, m, br)
+    class(metric_observer), intent(inout) :: self
+    integer, intent(in) :: m
+    type(peak_bracket), intent(in) :: br
+    type(max_search) :: search
+    real(dp) :: t, q(3)
+    integer :: k
+    logical :: ok
+    call search%start(br, 1.0e-12_dp)
+    do while (search%next(t))
+      k = br%right
+      if (t < br%x .or. k == 0) k = br%left
+      call metric_values(self, t, k, m, .false., q, ok)
+      if (.not. ok) return
+      call search%tell(q(m))
+    end do
+    call self%trk(m)%offer(search%x, search%maximum())
+  end subroutine refine
+
+  !> The metrics at time t on piece k (`only` > 0: that one is enough; the
+  !> others are then -huge): the same functions of the state as the records'.
+  !> `estimate`: the load factor from the interpolant's derivative instead of
+  !> the forces (the aircraft's acceleration: the rate of its velocity states
+  !> 4:6 in both integrators; a sample that only brackets its maxima, at a
+  !> fraction of an evaluation of the forces).
+  subroutine metric_values(self, t, k, only, estimate, q, ok)
+    class(metric_observer), intent(inout) :: self
+    real(dp), intent(in) :: t
+    integer, intent(in) :: k, only
+    logical, intent(in) :: estimate
+    real(dp), intent(out) :: q(3)
+    logical, intent(out) :: ok
+    type(error_type), allocatable :: eval_error
+    integer :: status
+    q = -huge(1.0_dp)
+    ok = .true.
+    call self%piece(k)%eval(t, self%y, self%dy)
+    self%evaluations = self%evaluations + 1
+    select case (self%source)
+    case (src_direct)
+      associate(s => self%dsys)
+        if (only == m_pitch) then
+          call s%load_bodies(t, self%y)
+        else
+          call s%prepare(t, self%y, status)
+          ok = status == 0
+          if (.not. ok) return
+          if (s%has_line) q(m_tension) = maxval(s%tension)
+          if (only == m_tension) return
+          if (.not. estimate) call s%sep%evaluate(t, s%yabs(1:rigid_size), eval_error)
+          ok = .not. allocated(eval_error)
+          if (.not. ok) return
+        end if
+        call aircraft_metrics(s%sep, self%trim_deg, only, q, estimate, self%dy(4:6))
+      end associate
+    case (src_chain)
+      associate(c => self%chain)
+        call c%prepare(t, self%y)
+        if (only /= m_pitch .and. .not. estimate) then
+          call c%sep%evaluate(t, c%yabs, eval_error)
+          ok = .not. allocated(eval_error)
+          if (.not. ok) return
+        end if
+        call aircraft_metrics(c%sep, self%trim_deg, only, q, estimate, self%dy(4:6))
+      end associate
+    case default
+      associate(l => self%line)
+        call l%unpack(t, self%y)
+        call l%model%forces(l%x, l%v, l%f, l%tension, status)
+        ok = status == 0
+        if (ok) q(m_tension) = maxval(l%tension)
+      end associate
+    end select
+  end subroutine metric_values
+
+  !> The aircraft's pitch excursion |theta - theta_trim| [deg] and (unless
+  !> only the pitch is asked for; needs sep%evaluate) its load factor
+  !> excursion |n - 1|, as record_milestones takes them from sample_launch.
+  subroutine aircraft_metrics(sep, trim_deg, only, q, estimate, a0)
+    type(separation_system), intent(in) :: sep
+    real(dp), intent(in) :: trim_deg
+    integer, intent(in) :: only
+    real(dp), intent(inout) :: q(3)
+    logical, intent(in) :: estimate   !< the acceleration a0 instead of sep%a0 (no evaluation)
+    real(dp), intent(in) :: a0(3)
+    real(dp) :: e(3), n
+    associate(b0 => sep%bodies(0))
+      e = dcm_to_euler(b0%c)
+      q(m_pitch) = abs(e(2)*rad2deg - trim_deg)
+      if (only == m_pitch) return
+      if (estimate) then
+        n = dot_product(b0%c(:, 2), a0 + [0.0_dp, g0, 0.0_dp])/g0
+      else
+        n = dot_product(b0%c(:, 2), sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
+      end if
+      q(m_load) = abs(n - 1.0_dp)
+    end associate
+  end subroutine aircraft_metrics
+
   ! ------------------------------------------------------------ end of the run
 
   !> The event times, end time and counters of the engine the run ended in.
@@ -856,6 +1114,8 @@ contains
   !> Free both engines.
   subroutine release(r)
     type(coupled_run), intent(inout) :: r
+    if (associated(r%trk)) deallocate(r%trk)
+    nullify(r%trk, r%dobs%trk, r%cobs%trk, r%lobs%trk, r%dobs%dsys, r%cobs%chain, r%lobs%line)
     call r%dsolver%free()
     call r%cpl%free()
     if (associated(r%dsys)) deallocate(r%dsys)

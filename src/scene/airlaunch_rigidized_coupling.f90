@@ -60,7 +60,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: dcm_to_euler, dcm_to_quat, cross
   use airlaunch_ode, only: ode_system, node_blocks, rhs_ok, rhs_fatal
-  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
+  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats, step_observer
   use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free, &
     body_state_name
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
@@ -931,13 +931,14 @@ contains
   !> `which` holds CVODE's root info and the step ends at the event.  Then
   !> `line_to` each saved time (to record both subsystems there) and
   !> `end_step` (Step 5).
-  subroutine coupling_begin_step(self, t_target, event, which, error, t_out)
+  subroutine coupling_begin_step(self, t_target, event, which, error, t_out, observer)
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     real(dp), intent(in) :: t_target                       !< end of the step [s]
     logical, intent(out) :: event                          !< the chain stopped at an event
     integer, intent(out) :: which(:)                       !< root info (rigidized_nroots)
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     real(dp), intent(in), optional :: t_out(:)             !< output times, ascending
+    class(step_observer), intent(inout), optional :: observer  !< shown the chain's steps
     real(dp) :: eps
     integer :: j, nt
     event = .false.
@@ -961,13 +962,13 @@ contains
     do j = 1, nt
       if (t_out(j) <= self%t + eps) cycle
       if (t_out(j) >= t_target - eps) exit
-      call self%chain_solver%advance(t_out(j), error, event, which)
+      call self%chain_solver%advance(t_out(j), error, event, which, observer)
       if (allocated(error) .or. event) return
       self%n_saved = self%n_saved + 1
       self%saved_t(self%n_saved) = t_out(j)
       self%saved_y(:, self%n_saved) = self%chain_solver%y
     end do
-    call self%chain_solver%advance(t_target, error, event, which)
+    call self%chain_solver%advance(t_target, error, event, which, observer)
     if (allocated(error) .or. event) return
     ! an output time at the step's end, to rounding (the grid's k h and the
     ! outputs' m output_dt): recorded there, under its own time
@@ -984,10 +985,11 @@ contains
   !> Step 5 up to time t inside the current outer step (a saved output time):
   !> the line sub-stepped along the chain's end motions; its state at t is then
   !> in the line solver (`line_state`).
-  subroutine coupling_line_to(self, t, error)
+  subroutine coupling_line_to(self, t, error, observer)
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     real(dp), intent(in) :: t                              !< target time, <= the chain's [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    class(step_observer), intent(inout), optional :: observer  !< shown the line's sub-steps
     real(dp) :: t1
     t1 = self%chain_solver%t
     if (.not. self%motion_set) then
@@ -1004,19 +1006,20 @@ contains
       self%motion_set = .true.
     end if
     if (self%line_solver%t >= t) return
-    call self%line_solver%advance(min(t, t1), error)
+    call self%line_solver%advance(min(t, t1), error, observer=observer)
     if (allocated(error)) error%message = "line sub-steps: " // error%message
   end subroutine coupling_line_to
 
   !> Step 5 to the end of the outer step (the chain's time): both subsystems
   !> are then at self%t.
-  subroutine coupling_end_step(self, error)
+  subroutine coupling_end_step(self, error, observer)
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    class(step_observer), intent(inout), optional :: observer  !< shown the line's sub-steps
     real(dp) :: t1
     t1 = self%chain_solver%t
     if (t1 > self%step_t0) then
-      call self%line_to(t1, error)
+      call self%line_to(t1, error, observer)
       if (allocated(error)) return
     end if
     self%motion_set = .false.

@@ -28,7 +28,7 @@ module airlaunch_cvode
     band_data, use_node_blocks
   implicit none
   private
-  public :: cvode_options, cvode_solver, cvode_stats, add_stats
+  public :: cvode_options, cvode_solver, cvode_stats, add_stats, step_polynomial, step_observer
 
   !> How to integrate.
   type :: cvode_options
@@ -69,6 +69,41 @@ module airlaunch_cvode
     integer(c_long) :: steps = 0, rhs_evals = 0, jac_evals = 0, lin_setups = 0
     integer(c_long) :: err_test_fails = 0, nonlin_iters = 0, nonlin_fails = 0, root_evals = 0
   end type cvode_stats
+
+  !> CVODE's interpolant over one internal step, y(t) = sum_j c(:, j) (t - tn)^j
+  !> (j = 0..order; CVodeGetDky's derivatives at the step's end tn over j!), so
+  !> that it can be evaluated after the solver has moved on.
+  type :: step_polynomial
+    real(dp) :: tn = 0.0_dp                    !< the step's end [s]
+    integer :: order = 0                       !< its degree
+    real(dp), allocatable :: c(:, :)           !< (n, 0:max order) Taylor coefficients at tn
+  contains
+    procedure :: eval => polynomial_eval
+    procedure :: copy => polynomial_copy
+  end type step_polynomial
+
+  !> Sees the solution stretch by stretch: `advance` calls `observe` after
+  !> every internal step CVODE has made final (and the rest of a step an event
+  !> interrupted), in time order, whatever the output times.
+  type, abstract :: step_observer
+  contains
+    procedure(observe_interface), deferred :: observe
+  end type step_observer
+
+  abstract interface
+    !> The solution on [t_start, t_end] is `poly`.  `restart`: the first
+    !> stretch since a (re)start (the state at t_start may differ from the
+    !> end of the stretch before).  `last`: the stretch ends at an event or a
+    !> stop time (the caller may change the state or the system there) or at
+    !> the end of the run (cvode_options%t_final; the stretch is cut there).
+    subroutine observe_interface(self, poly, t_start, t_end, restart, last)
+      import :: step_observer, step_polynomial, dp
+      class(step_observer), intent(inout) :: self
+      type(step_polynomial), intent(in) :: poly
+      real(dp), intent(in) :: t_start, t_end
+      logical, intent(in) :: restart, last
+    end subroutine observe_interface
+  end interface
 
   !> What the C callbacks need; lives on the heap so its address is stable.
   type :: callback_data
@@ -114,6 +149,12 @@ module airlaunch_cvode
     real(dp) :: t_final = 0.0_dp           !< cvode_options%t_final
     integer(c_long) :: max_total = 0       !< cvode_options%max_total_steps
     integer(c_long) :: max_interval = 0    !< cvode_options%max_num_steps
+    ! --- the stretches shown to a step_observer
+    type(step_polynomial) :: poly          !< the interpolant of the last step
+    real(c_double), pointer :: work(:) => null()   !< CVodeGetDky's output (heap, shared with nv_work)
+    type(N_Vector), pointer :: nv_work => null()
+    real(dp) :: t_seen = 0.0_dp            !< end of the last stretch shown (or the (re)start time)
+    logical :: seen_restart = .true.       !< no stretch shown since the last (re)start
   contains
     procedure :: init => solver_init
     procedure :: steps_taken => solver_steps_taken
@@ -176,6 +217,11 @@ contains
       return
     end if
     self%nv_y => FN_VMake_Serial(neq, self%y, self%ctx)
+    allocate(self%work(neq))
+    self%nv_work => FN_VMake_Serial(neq, self%work, self%ctx)
+    ! the interpolant's degree is at most the method's largest order
+    allocate(self%poly%c(neq, 0:merge(12, 5, opts%method == "adams")))
+    self%poly%c = 0.0_dp
     select case (opts%method)
     case ("bdf")
       lmm = CV_BDF
@@ -372,12 +418,15 @@ contains
   !> Integrate towards tout.  On return self%t and self%y hold the reached
   !> state: tout, or the time of an event (then `event` is true and `which`
   !> holds +-1 for the functions that crossed, with the direction).
-  subroutine solver_advance(self, tout, error, event, which)
+  subroutine solver_advance(self, tout, error, event, which, observer)
     class(cvode_solver), intent(inout) :: self            !< solver
     real(dp), intent(in) :: tout                          !< target time [s]
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     logical, intent(out), optional :: event               !< an event stopped the step
     integer, intent(out), optional :: which(:)            !< CVodeGetRootInfo
+    !> shown every stretch of the solution the steps of this call make final
+    class(step_observer), intent(inout), optional :: observer
+    logical :: last
     integer(c_int) :: ierr
     real(c_double) :: tret(1), tn(1), target
     integer(c_long) :: first, limit
@@ -436,6 +485,13 @@ contains
         if (allocated(self%cb%last_message)) deallocate(self%cb%last_message)
         return
       end if
+      if (present(observer)) then
+        ! an event or a stop time ends the stretch: the caller may change the
+        ! state or the system there
+        last = ierr == CV_ROOT_RETURN .or. ierr == CV_TSTOP_RETURN .or. &
+          (ierr == CV_SUCCESS .and. tret(1) == self%stop_time)
+        call show_stretch(self, observer, tret(1), last)
+      end if
       if (ierr == CV_ROOT_RETURN) then
         ierr = FCVodeGetRootInfo(self%mem, self%cb%root_info)
         if (tret(1) <= tout) then
@@ -475,6 +531,78 @@ contains
     end if
     self%t = tout
   end subroutine solver_advance
+
+  !> Show `observer` the solution from the last stretch's end to t_end (cut
+  !> at cvode_options%t_final) with the interpolant of CVODE's last step.
+  subroutine show_stretch(self, observer, t_end, last)
+    class(cvode_solver), intent(inout) :: self     !< solver
+    class(step_observer), intent(inout) :: observer
+    real(dp), intent(in) :: t_end                  !< where CVODE returned [s]
+    logical, intent(in) :: last                    !< an event or a stop time ends the stretch
+    real(c_double) :: tn(1)
+    integer(c_int) :: q(1), ierr
+    real(dp) :: tb, fact
+    logical :: ends
+    integer :: k
+    tb = t_end
+    ends = last
+    if (self%t_final > 0.0_dp .and. tb >= self%t_final) then
+      if (self%t_seen >= self%t_final) return   ! after the run's end
+      tb = self%t_final
+      ends = .true.
+    end if
+    if (tb <= self%t_seen .and. .not. (ends .or. self%seen_restart)) return
+    ierr = FCVodeGetLastOrder(self%mem, q)
+    ierr = FCVodeGetCurrentTime(self%mem, tn)
+    q(1) = min(q(1), ubound(self%poly%c, 2))
+    fact = 1.0_dp
+    self%poly%order = -1
+    do k = 0, q(1)
+      ierr = FCVodeGetDky(self%mem, tn(1), int(k, c_int), self%nv_work)
+      if (ierr /= 0) exit
+      if (k > 0) fact = fact*k
+      self%poly%c(:, k) = self%work/fact
+      self%poly%order = k
+    end do
+    if (self%poly%order < 0) return   ! (no step taken: nothing to show)
+    self%poly%tn = tn(1)
+    call observer%observe(self%poly, self%t_seen, max(tb, self%t_seen), self%seen_restart, ends)
+    self%t_seen = max(tb, self%t_seen)
+    self%seen_restart = .false.
+  end subroutine show_stretch
+
+  !> y = the polynomial at time t, dy its time derivative (no allocation: y
+  !> and dy sized by the caller).
+  pure subroutine polynomial_eval(self, t, y, dy)
+    class(step_polynomial), intent(in) :: self  !< interpolant
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(out) :: y(:)               !< state there
+    real(dp), intent(out), optional :: dy(:)    !< its derivative
+    real(dp) :: s
+    integer :: j
+    s = t - self%tn
+    y = self%c(:, self%order)
+    if (present(dy)) dy = 0.0_dp
+    do j = self%order - 1, 0, -1
+      if (present(dy)) dy = dy*s + (j + 1)*self%c(:, j + 1)
+      y = y*s + self%c(:, j)
+    end do
+  end subroutine polynomial_eval
+
+  !> self = a copy of `from` (storage allocated at the first copy only).
+  subroutine polynomial_copy(self, from)
+    class(step_polynomial), intent(inout) :: self  !< copy
+    type(step_polynomial), intent(in) :: from      !< original
+    if (.not. allocated(self%c)) then
+      allocate(self%c, mold=from%c)
+    else if (any(shape(self%c) /= shape(from%c))) then
+      deallocate(self%c)
+      allocate(self%c, mold=from%c)
+    end if
+    self%tn = from%tn
+    self%order = from%order
+    self%c(:, 0:from%order) = from%c(:, 0:from%order)
+  end subroutine polynomial_copy
 
   !> An event at self%t: `event` and `which` from CVodeGetRootInfo's `info`;
   !> the rest of its step is searched at the next `advance`.
@@ -635,10 +763,13 @@ contains
     if (associated(self%mat)) call FSUNMatDestroy(self%mat)
     if (associated(self%nv_y)) call FN_VDestroy(self%nv_y)
     if (associated(self%nv_atol)) call FN_VDestroy(self%nv_atol)
-    nullify(self%ls, self%nls, self%mat, self%nv_y, self%nv_atol)
+    if (associated(self%nv_work)) call FN_VDestroy(self%nv_work)
+    nullify(self%ls, self%nls, self%mat, self%nv_y, self%nv_atol, self%nv_work)
     if (c_associated(self%ctx)) ierr = FSUNContext_Free(self%ctx)
     self%ctx = c_null_ptr
     if (associated(self%y)) deallocate(self%y)
+    if (associated(self%work)) deallocate(self%work)
+    if (allocated(self%poly%c)) deallocate(self%poly%c)
     if (associated(self%cb)) then
       if (associated(self%cb%blocks)) deallocate(self%cb%blocks)
       deallocate(self%cb)
@@ -667,6 +798,8 @@ contains
     self%fresh = .true.
     self%after_root = .false.
     self%root_pending = .false.
+    self%t_seen = self%t
+    self%seen_restart = .true.
   end subroutine forget_steps
 
   !> One line that says when and why CVODE stopped.
