@@ -39,7 +39,7 @@ MILESTONES = ["edge_time_s", "separation_time_s", "edge_pull_time_s", "pitch_at_
 PAPER_REFERENCE = {"edge_time_s": 2.9951894, "separation_time_s": 3.8745254, "edge_pull_time_s": 3.6422527,
                    "pitch_at_separation_deg": 15.0820179, "pitch_rate_at_separation_deg_s": 19.4215356,
                    "pitch_max_time_s": 10.4655326, "min_clearance_m": 8.7984162, "peak_line_tension_N": 78782.763,
-                   "max_aircraft_pitch_excursion_deg": 1.0250652, "max_load_factor_excursion": 0.26608803}
+                   "max_aircraft_pitch_excursion_deg": 1.0251782, "max_load_factor_excursion": 0.26608856}
 SCENARIOS = {"paper": [], "snatch": [(r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0")]}
 NAMES = {"d": "direct", "r": "rigidized"}
 

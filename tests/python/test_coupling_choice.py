@@ -49,7 +49,7 @@ GRAVITY_DROP = ROOT / "input" / "airlaunch_gravity_drop.nml"
 REFERENCE = {"edge_time_s": 2.9951894, "separation_time_s": 3.8745254, "edge_pull_time_s": 3.6422527,
              "pitch_at_separation_deg": 15.082018, "pitch_rate_at_separation_deg_s": 19.4215356,
              "pitch_max_time_s": 10.4655325, "min_clearance_m": 8.7984162, "peak_line_tension_N": 78782.7635,
-             "max_aircraft_pitch_excursion_deg": 1.0250652, "max_load_factor_excursion": 0.26608803}
+             "max_aircraft_pitch_excursion_deg": 1.0251782, "max_load_factor_excursion": 0.26608856}
 
 CONTRACT_VARS = ["phase", "aircraft_position", "aircraft_euler_deg", "aircraft_alpha_deg", "aircraft_pitch_rate_deg_s",
                  "elevator_deg", "aircraft_load_factor", "rocket_position", "rocket_velocity", "rocket_euler_deg",

@@ -1,0 +1,95 @@
+!> The running maximum between samples (airlaunch_peak_search) against an
+!> analytic function, f(t) = exp(-t) cos(5 (t - 1)): its largest value on
+!> [0, 3] is at t1 = 1 - atan(0.2)/5, f(t1) = exp(-t1) 5/sqrt(26), between the
+!> samples of an uneven grid (as a solver's steps): the largest sample is
+!> 1e-4 below it (what the output records gave), the tracker finds it to
+!> rounding; a sequence that ends rising (the function may jump after it) or
+!> starts falling keeps its end value.
+program test_peak_search
+  use airlaunch_kinds, only: dp
+  use airlaunch_strings, only: str
+  use airlaunch_peak_search
+  use testing
+  implicit none
+  real(dp) :: t1, f1, t, sample_max
+  type(peak_tracker) :: trk
+  type(max_search) :: search
+  type(peak_bracket) :: br
+  integer :: k, refinements
+
+  t1 = 1.0_dp - atan(0.2_dp)/5
+  f1 = exp(-t1)*5/sqrt(26.0_dp)
+
+  call section("the maximum between samples")
+  refinements = 0
+  sample_max = -huge(1.0_dp)
+  t = 0.0_dp
+  k = 0
+  do while (t <= 3.0_dp)
+    sample_max = max(sample_max, f(t))
+    ! the piece numbers stand for the steps' interpolants (here all f itself)
+    if (trk%push(t, f(t), k, br)) call refine(br)
+    k = k + 1
+    t = t + 0.05_dp + 0.08_dp*modulo(0.37_dp*k, 1.0_dp)   ! uneven steps of 0.05-0.13
+  end do
+  if (trk%close(br)) call refine(br)
+  call check(sample_max < f1 - 1.0e-5_dp, "the samples miss the peak by " // str(f1 - sample_max) // &
+    " (the test needs a peak between samples)")
+  call check_close(trk%best, f1, "largest value", rel=1.0e-13_dp)
+  call check_close(trk%t_best, t1, "its time", abs=1.0e-7_dp)
+  call check(trk%best >= sample_max, "not below any sample")
+  call check(refinements >= 1 .and. refinements <= 3, "refinements: " // str(refinements) // &
+    " (the local maxima that could beat the running one)")
+
+  call section("a sequence that ends rising keeps its end")
+  trk = peak_tracker()
+  t = 0.2_dp
+  do while (t <= 0.9_dp + 1.0e-12_dp)
+    if (trk%push(t, f(t), 1, br)) call refine(br)
+    t = t + 0.1_dp
+  end do
+  if (trk%close(br)) call refine(br)
+  call check_close(trk%best, f(0.9_dp), "largest value at the end", rel=1.0e-15_dp)
+
+  call section("a sequence that starts falling keeps its start")
+  trk = peak_tracker()
+  t = 1.0_dp
+  do while (t <= 1.5_dp)
+    if (trk%push(t, f(t), 1, br)) call refine(br)
+    t = t + 0.1_dp
+  end do
+  if (trk%close(br)) call refine(br)
+  call check_close(trk%best, f(1.0_dp), "largest value at the start", rel=1.0e-15_dp)
+
+  call section("a maximum inside a single interval")
+  ! two samples and the middle one (the first and last step of a sequence)
+  trk = peak_tracker()
+  if (trk%push(0.9_dp, f(0.9_dp), 1, br)) call refine(br)
+  if (trk%push(0.99_dp, f(0.99_dp), 1, br)) call refine(br)
+  if (trk%push(1.08_dp, f(1.08_dp), 1, br)) call refine(br)
+  if (trk%close(br)) call refine(br)
+  call check_close(trk%best, f1, "largest value", rel=1.0e-13_dp)
+
+  call finish()
+
+contains
+
+  pure real(dp) function f(t)
+    real(dp), intent(in) :: t
+    f = exp(-t)*cos(5*(t - 1))
+  end function f
+
+  subroutine refine(br)
+    type(peak_bracket), intent(in) :: br
+    real(dp) :: u
+    refinements = refinements + 1
+    call search%start(br, 1.0e-12_dp)
+    do while (search%next(u))
+      call check(u >= br%lo .and. u <= br%hi, "inside the bracket")
+      call search%tell(f(u))
+    end do
+    call check(search%evaluations < 40, "evaluations: " // str(search%evaluations))
+    call trk%offer(search%x, search%maximum())
+  end subroutine refine
+
+end program test_peak_search
