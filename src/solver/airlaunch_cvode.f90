@@ -466,7 +466,9 @@ contains
     limit = huge(limit)
     if (self%max_interval > 0) limit = self%max_interval
     do while (tn(1) < tout .or. self%after_root)
-      if (.not. self%after_root) then
+      ! after an event CVODE first returns the rest of its step (no new step),
+      ! unless the event was at the step's end (tn = the event's time, self%t)
+      if (.not. self%after_root .or. .not. (tn(1) > self%t)) then
         if (self%steps_taken() - first >= limit .or. &
           (self%max_total > 0 .and. self%steps_taken() >= self%max_total)) then
           self%t = tn(1)

@@ -8,11 +8,13 @@ module oscillator_system
   private
   public :: oscillator, jacobian_failing_oscillator
 
-  !> x'' = -w^2 x as [x, v]; event at x = 0; fails after t_fail if set;
+  !> x'' = -w^2 x as [x, v]; event at x = 0 (or, with t_root set, at the
+  !> time t_root: g = t - t_root, exactly 0 there); fails after t_fail if set;
   !> counts its right-hand side calls.
   type, extends(ode_system) :: oscillator
     real(dp) :: omega = 2.0_dp
     real(dp) :: t_fail = huge(1.0_dp)
+    real(dp) :: t_root = -huge(1.0_dp)
     integer :: n_rhs = 0
   contains
     procedure :: rhs
@@ -56,6 +58,7 @@ contains
     real(dp), intent(out) :: g(:)
     integer, intent(out) :: status
     g(1) = y(1)
+    if (self%t_root > -huge(1.0_dp)) g(1) = t - self%t_root
     status = rhs_ok
     if (t < 0 .and. self%omega < 0) status = rhs_ok
   end subroutine roots
@@ -109,6 +112,33 @@ contains
   end subroutine chain_rhs
 end module spring_chain_system
 
+!> A step observer that keeps the end of every stretch it is shown (the
+!> internal steps' ends, for a test that needs an event exactly at one).
+module step_end_recorder
+  use airlaunch_kinds, only: dp
+  use airlaunch_cvode, only: step_observer, step_polynomial
+  implicit none
+  private
+  public :: step_ends
+
+  type, extends(step_observer) :: step_ends
+    integer :: n = 0
+    real(dp) :: t(10000) = 0.0_dp
+  contains
+    procedure :: observe
+  end type step_ends
+contains
+  subroutine observe(self, poly, t_start, t_end, restart, last)
+    class(step_ends), intent(inout) :: self
+    type(step_polynomial), intent(in) :: poly
+    real(dp), intent(in) :: t_start, t_end
+    logical, intent(in) :: restart, last
+    if (self%n >= size(self%t) .or. .not. (t_end > t_start .or. restart .or. last) .or. poly%order < 0) return
+    self%n = self%n + 1
+    self%t(self%n) = t_end
+  end subroutine observe
+end module step_end_recorder
+
 program test_cvode
   use airlaunch_kinds, only: dp, pi
   use airlaunch_error, only: error_type
@@ -116,6 +146,7 @@ program test_cvode
   use airlaunch_cvode
   use oscillator_system
   use spring_chain_system
+  use step_end_recorder
   use, intrinsic :: iso_c_binding
   use fsundials_context_mod
   use fsundials_matrix_mod
@@ -604,6 +635,44 @@ program test_cvode
       call solver%free()
     end do
   end block
+
+  call section("the step budget holds after an event exactly at a step's end")
+  ! An event at the end of a step leaves nothing of that step to search: the
+  ! next call must take a new step, and the budget counts it (the wrapper
+  ! skipped its check after every event, and took one step too many).  The
+  ! event g = t - t_k is placed exactly on the k-th step's end of a first run
+  ! (the root function does not change CVODE's steps before it).
+  block
+    type(step_ends) :: ends
+    integer, parameter :: k = 12
+    integer(c_long) :: taken
+    logical :: ev
+    opts = cvode_options(rtol=1e-10_dp, atol=1e-12_dp)
+    call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    call solver%set_roots(0, error)
+    call solver%advance(1.0_dp, error, observer=ends)   ! (the same tout: it sizes the first step)
+    call check(.not. allocated(error) .and. ends%n > k, "first run: " // str(ends%n) // " steps to t = 1")
+    call solver%free()
+    osc%t_root = ends%t(k)
+    opts%max_total_steps = k
+    call solver%init(osc, 0.0_dp, [1.0_dp, 0.0_dp], opts, error)
+    call solver%advance(1.0_dp, error, ev, which)
+    taken = solver%steps_taken()
+    call check(.not. allocated(error) .and. ev .and. solver%t == ends%t(k) .and. taken == k, &
+      "the event at the 12th step's end t = " // str(ends%t(k)) // " (t = " // str(solver%t) // ", " // &
+      str(int(taken)) // " steps)")
+    call solver%advance(1.0_dp, error, ev, which)
+    taken = solver%steps_taken()
+    call check(allocated(error) .and. taken == k, "then the budget of " // str(k) // &
+      " steps is spent with no step more (" // str(int(taken)) // " steps)")
+    if (allocated(error)) then
+      call check(index(error%message, "budget is spent") > 0, "message: " // error%message)
+      deallocate(error)
+    end if
+    call solver%free()
+    osc%t_root = -huge(1.0_dp)
+  end block
+  opts = saved_opts
 
   call section("a stop time behind the solver is an error; no stale CVODE text later")
   ! CVODE rejects (CV_ILL_INPUT) a stop time it has passed; the wrapper must say
