@@ -39,6 +39,12 @@ module airlaunch_peak_search
     real(dp) :: u = 0.0_dp                  !< the point asked for
     real(dp) :: tol = 0.0_dp                !< absolute tolerance on x
     integer :: evaluations = 0              !< f evaluations asked for
+    !> the sample x at an end of the bracket (+1: at b, -1: at a, 0: inside):
+    !> f is first probed just inside it, and if it is not larger there the
+    !> end is the maximum (a function still rising into the end of a
+    !> sequence of steps; golden sections towards an end take ~30 evaluations)
+    integer :: edge = 0
+    logical :: done = .false.               !< the edge probe settled it
   contains
     procedure :: start => search_start
     procedure :: next => search_next
@@ -96,6 +102,12 @@ contains
     self%d = 0.0_dp
     self%e = br%hi - br%lo   ! a parabolic step is allowed at once
     self%evaluations = 0
+    self%done = .false.
+    self%edge = 0
+    if (br%hi > br%lo) then
+      if (br%x >= br%hi) self%edge = 1
+      if (br%x <= br%lo) self%edge = -1
+    end if
   end subroutine search_start
 
   !> The next point t to evaluate; false when the maximum is located
@@ -107,7 +119,17 @@ contains
     logical :: golden
     t = self%x
     more = .false.
-    if (self%evaluations >= max_evaluations .or. .not. (self%b > self%a)) return
+    if (self%done .or. self%evaluations >= max_evaluations .or. .not. (self%b > self%a)) return
+    if (self%edge /= 0 .and. self%evaluations == 0) then
+      ! the probe just inside the end (a thousandth of the bracket, at least
+      ! twice the resolution of x)
+      self%u = self%x - self%edge*max(1.0e-3_dp*(self%b - self%a), 2*(xrel*abs(self%x) + self%tol/3))
+      self%u = min(max(self%u, self%a), self%b)
+      t = self%u
+      self%evaluations = 1
+      more = .true.
+      return
+    end if
     xm = 0.5_dp*(self%a + self%b)
     tol1 = xrel*abs(self%x) + self%tol/3
     tol2 = 2*tol1
@@ -154,6 +176,10 @@ contains
     real(dp), intent(in) :: f
     real(dp) :: fu
     fu = -f
+    if (self%edge /= 0 .and. self%evaluations == 1 .and. fu >= self%fx) then
+      self%done = .true.   ! not larger inside: the end is the maximum
+      return
+    end if
     if (fu <= self%fx) then
       if (self%u >= self%x) then
         self%a = self%x

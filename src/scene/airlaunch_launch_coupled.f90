@@ -990,10 +990,21 @@ contains
     integer, intent(in) :: m
     type(peak_bracket), intent(in) :: br
     type(max_search) :: search
+    type(peak_bracket) :: b
     real(dp) :: t, q(3)
     integer :: k
     logical :: ok
-    call search%start(br, 1.0e-12_dp)
+    b = br
+    if (m == m_load) then
+      ! the load factor's samples only estimate it (the interpolant's
+      ! derivative): its value at the bracket's best sample from the forces
+      k = br%right
+      if (k == 0) k = br%left
+      call metric_values(self, br%x, k, m, .false., q, ok)
+      if (.not. ok) return
+      b%fx = q(m)
+    end if
+    call search%start(b, 1.0e-12_dp)
     do while (search%next(t))
       k = br%right
       if (t < br%x .or. k == 0) k = br%left

@@ -50,6 +50,23 @@ program test_peak_search
   end do
   if (trk%close(br)) call refine(br)
   call check_close(trk%best, f(0.9_dp), "largest value at the end", rel=1.0e-15_dp)
+  ! f still rises into the end: one probe just inside settles it (a golden-
+  ! section search towards the end took ~30 evaluations, at every end of the
+  ! rigidized coupling's outer steps)
+  call check(search%evaluations == 1, "settled by one probe inside the end (" // &
+    str(search%evaluations) // " evaluations)")
+
+  call section("a peak just inside the end of a sequence is still found")
+  ! samples at 0.9 and at tb, the peak t1 a 0.003 of the interval before tb:
+  ! the probe (a 0.001 inside) sees f rise, and the search goes on to t1
+  trk = peak_tracker()
+  t = (t1 - 0.0027_dp)/0.997_dp
+  call check(f(t) > f(0.9_dp) .and. t > t1, "tb = " // str(t) // " past the peak, its sample the larger")
+  if (trk%push(0.9_dp, f(0.9_dp), 1, br)) call refine(br)
+  if (trk%push(t, f(t), 1, br)) call refine(br)
+  if (trk%close(br)) call refine(br)
+  call check_close(trk%best, f1, "largest value: the peak", rel=1.0e-13_dp)
+  call check(trk%best > f(t), "above the end's sample by " // str(trk%best - f(t)))
 
   call section("a sequence that starts falling keeps its start")
   trk = peak_tracker()
@@ -60,6 +77,8 @@ program test_peak_search
   end do
   if (trk%close(br)) call refine(br)
   call check_close(trk%best, f(1.0_dp), "largest value at the start", rel=1.0e-15_dp)
+  call check(search%evaluations == 1, "settled by one probe inside the start (" // &
+    str(search%evaluations) // " evaluations)")
 
   call section("a maximum inside a single interval")
   ! two samples and the middle one (the first and last step of a sequence)
