@@ -111,6 +111,7 @@ module airlaunch_line_model
   contains
     procedure :: init => model_init
     procedure :: forces => model_forces
+    procedure :: tensions => model_tensions
     procedure :: force_jacobian => model_force_jacobian
     procedure :: energy => model_energy
     procedure :: wave_speed => model_wave_speed
@@ -210,7 +211,7 @@ contains
     integer, intent(out) :: status             !< 0 ok, 1 non-finite tension
     integer :: k, n
     real(dp) :: dx(3), dv(3), t(3), u(3), ut(3), un(3), drag(3)
-    real(dp) :: ell, eps, epsdot, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope
+    real(dp) :: ell, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope
     real(dp) :: qn, qt
 
     n = self%n
@@ -230,20 +231,8 @@ contains
 
     do k = 1, n
       dx = x(:, k) - x(:, k-1)
-      ell = length3(dx)
-      if (ell > tiny_len) then
-        t = dx/ell
-      else
-        t = 0.0_dp
-      end if
-      eps = ell/self%l0 - 1.0_dp
-      tk = 0.0_dp
-      if (eps > 0.0_dp) then
-        ! Eq. (3) with the dashpot; tension only (never compression)
-        dv = v(:, k) - v(:, k-1)
-        epsdot = dot_product(t, dv)/self%l0
-        tk = max(0.0_dp, ea*eps + cd*epsdot)
-      end if
+      dv = v(:, k) - v(:, k-1)
+      call segment_tension(self%l0, ea, cd, tiny_len, dx, dv, tk, ell, t)
       tension(k) = tk
       f(:, k-1) = f(:, k-1) + tk*t
       f(:, k) = f(:, k) - tk*t
@@ -263,6 +252,44 @@ contains
     status = 0
     if (.not. (abs(sum(tension(1:n))) <= huge(1.0_dp))) status = 1
   end subroutine model_forces
+
+  !> The segment tensions alone (those of model_forces, without its loads).
+  !> status = 0, or 1 if a tension is not finite.
+  subroutine model_tensions(self, x, v, tension, status)
+    class(line_model), intent(in) :: self      !< line
+    real(dp), intent(in) :: x(:, 0:)           !< node positions (3, 0:N) [m]
+    real(dp), intent(in) :: v(:, 0:)           !< node velocities (3, 0:N) [m/s]
+    real(dp), intent(out) :: tension(:)        !< segment tensions T_k, k = 1..N [N]
+    integer, intent(out) :: status             !< 0 ok, 1 non-finite tension
+    integer :: k
+    real(dp) :: ell, t(3), dx(3), dv(3)
+    do k = 1, self%n
+      dx = x(:, k) - x(:, k-1)
+      dv = v(:, k) - v(:, k-1)
+      call segment_tension(self%l0, self%p%ea, self%p%damping, tiny_fraction*self%l0, dx, dv, tension(k), ell, t)
+    end do
+    status = 0
+    if (.not. (abs(sum(tension(1:self%n))) <= huge(1.0_dp))) status = 1
+  end subroutine model_tensions
+
+  !> Tension of one segment from its node differences dx, dv, Eq. (3) with the
+  !> dashpot: EA eps + c_d epsdot while stretched, never compression; also its
+  !> length ell and unit tangent t (0 for a segment shorter than tiny_len).
+  pure subroutine segment_tension(l0, ea, cd, tiny_len, dx, dv, tk, ell, t)
+    real(dp), intent(in) :: l0, ea, cd, tiny_len  !< rest length [m], EA [N], c_d [N s], degenerate length [m]
+    real(dp), intent(in) :: dx(3), dv(3)          !< x_k - x_(k-1) [m], v_k - v_(k-1) [m/s]
+    real(dp), intent(out) :: tk, ell, t(3)        !< tension [N], length [m], tangent
+    real(dp) :: eps
+    ell = length3(dx)
+    if (ell > tiny_len) then
+      t = dx/ell
+    else
+      t = 0.0_dp
+    end if
+    eps = ell/l0 - 1.0_dp
+    tk = 0.0_dp
+    if (eps > 0.0_dp) tk = max(0.0_dp, ea*eps + cd*dot_product(t, dv)/l0)
+  end subroutine segment_tension
 
   !> Derivatives of model_forces' nodal forces with respect to the node
   !> positions and velocities, block tridiagonal: dfdx(:, :, d, j) = df_j/dx_(j+d)

@@ -1064,7 +1064,7 @@ contains
     case default
       associate(l => self%line)
         call l%unpack(t, self%y)
-        call l%model%forces(l%x, l%v, l%f, l%tension, status)
+        call l%model%tensions(l%x, l%v, l%tension, status)
         ok = status == 0
         if (ok) q(m_tension) = maxval(l%tension)
       end associate

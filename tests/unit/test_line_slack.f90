@@ -20,6 +20,10 @@
 !>     in an interior segment reaches twice the reference (measured: 288 N at
 !>     N = 10 and 20) - a real property of an undamped chain, not of a line.
 !>     Both schemes must pass the snatch without failure, tensions >= 0.
+!>  3. The segment tensions alone (line_model%tensions, used where only the
+!>     tension is wanted: the safety maxima) against Eq. (3) evaluated here -
+!>     a stretched segment, one the dashpot clips to zero, a slack one - and
+!>     equal to those of the forces.
 program test_line_slack
   use airlaunch_kinds, only: dp, g0
   use airlaunch_error, only: error_type
@@ -37,9 +41,41 @@ program test_line_slack
   call snatch("cvode", "lumped")
   call snatch("cvode", "mixed")
   call snatch("marching", "lumped")
+  call section("3. the segment tensions alone: Eq. (3)")
+  call tensions_alone()
   call finish()
 
 contains
+
+  subroutine tensions_alone()
+    type(line_model) :: model
+    type(error_type), allocatable :: error
+    real(dp), parameter :: ea = 1.0e5_dp, c_d = 50.0_dp, l0 = 2.0_dp
+    real(dp) :: x(3, 0:3), v(3, 0:3), f(3, 0:3), t_alone(3), t_forces(3), expected(3)
+    integer :: st1, st2
+    call model%init(line_params(length=3*l0, n_seg=3, ea=ea, mass_per_length=0.2_dp, damping=c_d, &
+      gravity=.true., air=.true., wind=[-50.0_dp, 0.0_dp, 0.0_dp], air_density=1.0_dp), error)
+    call check(.not. allocated(error), "line of 3 segments")
+    ! segment 1: 1 % stretched along x, stretching at 0.1 m/s; segment 2: 0.5 %
+    ! stretched along y, shortening at 25 m/s (EA eps + c_d epsdot < 0: clipped to
+    ! 0); segment 3: 10 % short (slack), stretching
+    x(:, 0) = 0.0_dp
+    x(:, 1) = x(:, 0) + [1.01_dp*l0, 0.0_dp, 0.0_dp]
+    x(:, 2) = x(:, 1) + [0.0_dp, 1.005_dp*l0, 0.0_dp]
+    x(:, 3) = x(:, 2) + [0.0_dp, 0.0_dp, 0.9_dp*l0]
+    v(:, 0) = 0.0_dp
+    v(:, 1) = [0.1_dp, 0.3_dp, 0.0_dp]
+    v(:, 2) = v(:, 1) + [0.7_dp, -25.0_dp, 0.0_dp]
+    v(:, 3) = v(:, 2) + [0.0_dp, 0.0_dp, 1.0_dp]
+    expected = [ea*0.01_dp + c_d*0.1_dp/l0, 0.0_dp, 0.0_dp]
+    call model%tensions(x, v, t_alone, st1)
+    call model%forces(x, v, f, t_forces, st2)
+    call check(st1 == 0 .and. st2 == 0, "finite")
+    call check_close(t_alone(1), expected(1), "stretched: EA eps + c_d epsdot", rel=1.0e-14_dp)
+    call check(t_alone(2) == 0.0_dp .and. t_alone(3) == 0.0_dp, "clipped by the dashpot and slack: exactly 0 (" // &
+      str(t_alone(2)) // ", " // str(t_alone(3)) // ")")
+    call check(all(t_alone == t_forces), "the same as the forces' tensions")
+  end subroutine tensions_alone
 
   subroutine approach(scheme_name, mass_matrix)
     character(len=*), intent(in) :: scheme_name, mass_matrix
