@@ -210,7 +210,7 @@ contains
     real(dp), intent(out) :: tension(:)        !< segment tensions T_k, k = 1..N [N]
     integer, intent(out) :: status             !< 0 ok, 1 non-finite tension
     integer :: k, n
-    real(dp) :: dx(3), dv(3), t(3), u(3), ut(3), un(3), drag(3)
+    real(dp) :: dx(3), t(3), u(3), ut(3), un(3), drag(3)
     real(dp) :: ell, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope
     real(dp) :: qn, qt
 
@@ -231,8 +231,13 @@ contains
 
     do k = 1, n
       dx = x(:, k) - x(:, k-1)
-      dv = v(:, k) - v(:, k-1)
-      call segment_tension(self%l0, ea, cd, tiny_len, dx, dv, tk, ell, t)
+      ell = length3(dx)
+      if (ell > tiny_len) then
+        t = dx/ell
+      else
+        t = 0.0_dp
+      end if
+      tk = axial_tension(ea, cd, self%l0, ell, t, v(:, k-1), v(:, k))
       tension(k) = tk
       f(:, k-1) = f(:, k-1) + tk*t
       f(:, k) = f(:, k) - tk*t
@@ -262,34 +267,30 @@ contains
     real(dp), intent(out) :: tension(:)        !< segment tensions T_k, k = 1..N [N]
     integer, intent(out) :: status             !< 0 ok, 1 non-finite tension
     integer :: k
-    real(dp) :: ell, t(3), dx(3), dv(3)
+    real(dp) :: ell, t(3), dx(3)
     do k = 1, self%n
       dx = x(:, k) - x(:, k-1)
-      dv = v(:, k) - v(:, k-1)
-      call segment_tension(self%l0, self%p%ea, self%p%damping, tiny_fraction*self%l0, dx, dv, tension(k), ell, t)
+      ell = length3(dx)
+      t = 0.0_dp
+      if (ell > tiny_fraction*self%l0) t = dx/ell
+      tension(k) = axial_tension(self%p%ea, self%p%damping, self%l0, ell, t, v(:, k-1), v(:, k))
     end do
     status = 0
     if (.not. (abs(sum(tension(1:self%n))) <= huge(1.0_dp))) status = 1
   end subroutine model_tensions
 
-  !> Tension of one segment from its node differences dx, dv, Eq. (3) with the
-  !> dashpot: EA eps + c_d epsdot while stretched, never compression; also its
-  !> length ell and unit tangent t (0 for a segment shorter than tiny_len).
-  pure subroutine segment_tension(l0, ea, cd, tiny_len, dx, dv, tk, ell, t)
-    real(dp), intent(in) :: l0, ea, cd, tiny_len  !< rest length [m], EA [N], c_d [N s], degenerate length [m]
-    real(dp), intent(in) :: dx(3), dv(3)          !< x_k - x_(k-1) [m], v_k - v_(k-1) [m/s]
-    real(dp), intent(out) :: tk, ell, t(3)        !< tension [N], length [m], tangent
+  !> Tension of a segment of length ell and unit tangent t whose end nodes move
+  !> at va and vb, Eq. (3) with the dashpot: EA eps + c_d epsdot while
+  !> stretched, never compression.
+  pure real(dp) function axial_tension(ea, cd, l0, ell, t, va, vb) result(tk)
+    real(dp), intent(in) :: ea, cd, l0      !< EA [N], c_d [N s], rest length [m]
+    real(dp), intent(in) :: ell, t(3)       !< length [m], unit tangent
+    real(dp), intent(in) :: va(3), vb(3)    !< node velocities [m/s]
     real(dp) :: eps
-    ell = length3(dx)
-    if (ell > tiny_len) then
-      t = dx/ell
-    else
-      t = 0.0_dp
-    end if
     eps = ell/l0 - 1.0_dp
     tk = 0.0_dp
-    if (eps > 0.0_dp) tk = max(0.0_dp, ea*eps + cd*dot_product(t, dv)/l0)
-  end subroutine segment_tension
+    if (eps > 0.0_dp) tk = max(0.0_dp, ea*eps + cd*(dot_product(t, vb - va)/l0))
+  end function axial_tension
 
   !> Derivatives of model_forces' nodal forces with respect to the node
   !> positions and velocities, block tridiagonal: dfdx(:, :, d, j) = df_j/dx_(j+d)
