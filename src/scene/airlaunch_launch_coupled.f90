@@ -26,8 +26,8 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     continue_phase_machine
   use airlaunch_coupling_choice, only: auto_switch, line_indicator, line_indicator_of, coupling_name
   use airlaunch_rigidized_coupling, only: rigidized_chain, rigidized_line
-  use airlaunch_cvode, only: step_observer, step_polynomial
-  use airlaunch_peak_search, only: peak_tracker, peak_bracket, max_search
+  use airlaunch_step_maxima, only: maxima_observer
+  use airlaunch_peak_search, only: peak_tracker
   use airlaunch_rotation, only: dcm_to_euler
   implicit none
 
@@ -38,24 +38,20 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   !> rigidized coupling's chain (pitch and load factor) or its line (tension).
   integer, parameter :: src_direct = 1, src_chain = 2, src_line = 3
 
-  !> Sees every internal step of one integrator and keeps the safety maxima
-  !> of the run's trackers exact between the steps: a discrete local maximum
-  !> of the step-end samples is refined on the steps' interpolants
-  !> (airlaunch_peak_search), each evaluation the same function of the state
-  !> as an output record's.
-  type, extends(step_observer) :: metric_observer
+  !> The safety maxima over every internal step of one integrator
+  !> (airlaunch_step_maxima), each evaluation the same function of the state
+  !> as an output record's; the load factor's step-end samples are estimates
+  !> (the interpolant's derivative as the aircraft's acceleration).
+  type, extends(maxima_observer) :: metric_observer
     integer :: source = 0
     type(launch_system), pointer :: dsys => null()
     type(rigidized_chain), pointer :: chain => null()
     type(rigidized_line), pointer :: line => null()
-    type(peak_tracker), pointer :: trk(:) => null()   !< the run's (m_tension..m_load)
     real(dp) :: trim_deg = 0.0_dp                     !< the aircraft's trimmed pitch [deg]
-    type(step_polynomial) :: piece(2)                 !< the last two stretches' interpolants
-    integer :: cur = 2                                !< the latest piece
-    real(dp), allocatable :: y(:), dy(:)              !< work: a state and its rate
-    integer :: evaluations = 0                        !< metric evaluations
   contains
-    procedure :: observe => metrics_observe
+    procedure :: watches
+    procedure :: sample_is_value
+    procedure :: values => metric_values
   end type metric_observer
 
   !> One run: the two engines, the choice between them and the records.
@@ -889,10 +885,10 @@ contains
     type(coupled_run), intent(inout) :: r
     if (.not. associated(r%trk)) return
     if (r%active == coupling_direct) then
-      call observer_finish(r%dobs)
+      call r%dobs%finish()
     else
-      if (associated(r%cpl%chain)) call observer_finish(r%cobs)
-      if (associated(r%cpl%line)) call observer_finish(r%lobs)
+      if (associated(r%cpl%chain)) call r%cobs%finish()
+      if (associated(r%cpl%line)) call r%lobs%finish()
     end if
   end subroutine finish_observers
 
@@ -926,114 +922,30 @@ contains
     end select
   end function watches
 
-  !> A stretch of the solution (airlaunch_cvode's step_observer): its end is
-  !> the next sample of each metric; a bracketed local maximum is refined.
-  subroutine metrics_observe(self, poly, t_start, t_end, restart, last)
-    class(metric_observer), intent(inout) :: self
-    type(step_polynomial), intent(in) :: poly
-    real(dp), intent(in) :: t_start, t_end
-    logical, intent(in) :: restart, last
-    real(dp) :: q(3), t
-    type(peak_bracket) :: br
-    logical :: ok, starts
-    integer :: m, j
-    if (restart) call observer_finish(self)   ! the state may jump at a (re)start
-    self%cur = 3 - self%cur
-    call self%piece(self%cur)%copy(poly)
-    if (.not. allocated(self%y)) allocate(self%y(size(poly%c, 1)), self%dy(size(poly%c, 1)))
-    starts = .false.
-    do m = 1, 3
-      if (watches(self, m) .and. self%trk(m)%n == 0) starts = .true.
-    end do
-    if (starts) then
-      ! a new sequence starts with the stretch's start
-      call metric_values(self, t_start, self%cur, 0, .true., q, ok)
-      if (ok) then
-        do m = 1, 3
-          if (watches(self, m) .and. self%trk(m)%n == 0) ok = self%trk(m)%push(t_start, q(m), self%cur, br, &
-            value=m /= m_load)
-        end do
-      end if
-    end if
-    ! the sample at the stretch's end; in the first and the last stretch of a
-    ! sequence also one at its middle (a sequence may be a single step - the
-    ! rigidized coupling's outer steps -, with its maximum inside)
-    do j = 1, 2
-      t = t_end
-      if (j == 1) t = 0.5_dp*(t_start + t_end)
-      if (j == 1 .and. .not. (t > t_start .and. (starts .or. last))) cycle
-      call metric_values(self, t, self%cur, 0, .true., q, ok)
-      if (.not. ok) cycle
-      do m = 1, 3
-        if (.not. watches(self, m)) cycle
-        if (self%trk(m)%push(t, q(m), self%cur, br, value=m /= m_load)) call refine(self, m, br)
-      end do
-    end do
-    if (last) call observer_finish(self)
-  end subroutine metrics_observe
-
-  !> Close the observer's sequences (the function may jump after their end).
-  subroutine observer_finish(self)
-    class(metric_observer), intent(inout) :: self
-    type(peak_bracket) :: br
-    integer :: m
-    if (.not. associated(self%trk)) return
-    do m = 1, 3
-      if (.not. watches(self, m)) cycle
-      if (self%trk(m)%close(br)) call refine(self, m, br)
-    end do
-  end subroutine observer_finish
-
-  !> The maximum of metric m in the bracket br, on the stretches' interpolants.
-  subroutine refine(self, m, br)
-    class(metric_observer), intent(inout) :: self
+  !> Only the load factor's step-end samples are estimates.
+  logical function sample_is_value(self, m)
+    class(metric_observer), intent(in) :: self
     integer, intent(in) :: m
-    type(peak_bracket), intent(in) :: br
-    type(max_search) :: search
-    type(peak_bracket) :: b
-    real(dp) :: t, q(3)
-    integer :: k
-    logical :: ok
-    b = br
-    if (m == m_load) then
-      ! the load factor's samples only estimate it (the interpolant's
-      ! derivative): its value at the bracket's best sample from the forces
-      k = br%right
-      if (k == 0) k = br%left
-      call metric_values(self, br%x, k, m, .false., q, ok)
-      if (.not. ok) return
-      b%fx = q(m)
-    end if
-    call search%start(b, 1.0e-12_dp)
-    do while (search%next(t))
-      k = br%right
-      if (t < br%x .or. k == 0) k = br%left
-      call metric_values(self, t, k, m, .false., q, ok)
-      if (.not. ok) return
-      call search%tell(q(m))
-    end do
-    call self%trk(m)%offer(search%x, search%maximum())
-  end subroutine refine
+    sample_is_value = m /= m_load .and. self%source > 0
+  end function sample_is_value
 
-  !> The metrics at time t on piece k (`only` > 0: that one is enough; the
-  !> others are then -huge): the same functions of the state as the records'.
-  !> `estimate`: the load factor from the interpolant's derivative instead of
-  !> the forces (the aircraft's acceleration: the rate of its velocity states
-  !> 4:6 in both integrators; a sample that only brackets its maxima, at a
-  !> fraction of an evaluation of the forces).
-  subroutine metric_values(self, t, k, only, estimate, q, ok)
+  !> The metrics at time t from the interpolated state self%y (`only` > 0:
+  !> that one is enough; the others are then -huge): the same functions of the
+  !> state as the records'.  `estimate`: the load factor from the
+  !> interpolant's derivative instead of the forces (the aircraft's
+  !> acceleration: the rate of its velocity states 4:6 in both integrators; a
+  !> sample that only brackets its maxima, at a fraction of an evaluation of
+  !> the forces).
+  subroutine metric_values(self, t, only, estimate, q, ok)
     class(metric_observer), intent(inout) :: self
     real(dp), intent(in) :: t
-    integer, intent(in) :: k, only
+    integer, intent(in) :: only
     logical, intent(in) :: estimate
-    real(dp), intent(out) :: q(3)
+    real(dp), intent(out) :: q(:)
     logical, intent(out) :: ok
     type(error_type), allocatable :: eval_error
     integer :: status
-    q = -huge(1.0_dp)
     ok = .true.
-    call self%piece(k)%eval(t, self%y, self%dy)
-    self%evaluations = self%evaluations + 1
     select case (self%source)
     case (src_direct)
       associate(s => self%dsys)

@@ -1,0 +1,177 @@
+!> Maxima of functions of an integrator's state over every internal step, not
+!> only at the output times: a step observer (airlaunch_cvode) that samples
+!> each quantity at the steps' ends, brackets each discrete local maximum that
+!> could beat the running one (airlaunch_peak_search's trackers) and refines it
+!> on the CVODE interpolants of the two steps around it (Brent's search).  A
+!> sequence of steps ends where the quantities may jump (an event, a stop time,
+!> a restart, the end of the run); its first and last step also get a sample
+!> at their middle (a sequence may be a single step with its maximum inside).
+!>
+!> An extension says which quantities its integrator carries (`watches`) and
+!> evaluates them at a time from the interpolated state self%y and its rate
+!> self%dy (`values`); a quantity whose step-end samples are only estimates
+!> that bracket its maxima (`sample_is_value` false: e.g. a load factor from
+!> the interpolant's derivative) enters the maximum through refined values
+!> only.  The trackers (one per quantity) are the owner's: several observers
+!> (integrators) may share them.
+module airlaunch_step_maxima
+  use airlaunch_kinds, only: dp
+  use airlaunch_cvode, only: step_observer, step_polynomial
+  use airlaunch_peak_search, only: peak_tracker, peak_bracket, max_search
+  implicit none
+  private
+  public :: maxima_observer
+
+  type, abstract, extends(step_observer) :: maxima_observer
+    type(peak_tracker), pointer :: trk(:) => null()   !< one per quantity (the owner's)
+    type(step_polynomial) :: piece(2)                 !< the last two stretches' interpolants
+    integer :: cur = 2                                !< the latest piece
+    real(dp), allocatable :: y(:), dy(:)              !< the state at the time asked for, its rate
+    integer :: evaluations = 0                        !< evaluations of the quantities
+  contains
+    procedure :: observe => maxima_observe
+    procedure :: finish => maxima_finish
+    procedure :: watches => maxima_watches
+    procedure :: sample_is_value => maxima_sample_is_value
+    procedure(values_interface), deferred :: values
+  end type maxima_observer
+
+  abstract interface
+    !> The quantities q(m) at time t from the state self%y (rate self%dy) for
+    !> every m the observer watches (`only` > 0: that one is enough, the others
+    !> may be left -huge); `estimate`: a step-end sample, which for a quantity
+    !> that is not `sample_is_value` may be an estimate.  ok = .false. if the
+    !> state cannot be evaluated.
+    subroutine values_interface(self, t, only, estimate, q, ok)
+      import :: maxima_observer, dp
+      class(maxima_observer), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(in) :: only
+      logical, intent(in) :: estimate
+      real(dp), intent(out) :: q(:)
+      logical, intent(out) :: ok
+    end subroutine values_interface
+  end interface
+
+contains
+
+  !> Whether this observer's integrator carries quantity m (default: all).
+  logical function maxima_watches(self, m)
+    class(maxima_observer), intent(in) :: self
+    integer, intent(in) :: m
+    maxima_watches = m >= 1 .and. m <= size(self%trk)
+  end function maxima_watches
+
+  !> Whether the step-end samples of quantity m are its values (default), not
+  !> estimates that only bracket its maxima.
+  logical function maxima_sample_is_value(self, m)
+    class(maxima_observer), intent(in) :: self
+    integer, intent(in) :: m
+    maxima_sample_is_value = m >= 1 .and. m <= size(self%trk)
+  end function maxima_sample_is_value
+
+  !> A stretch of the solution (airlaunch_cvode's step_observer): its end is
+  !> the next sample of each quantity; a bracketed local maximum is refined.
+  subroutine maxima_observe(self, poly, t_start, t_end, restart, last)
+    class(maxima_observer), intent(inout) :: self
+    type(step_polynomial), intent(in) :: poly
+    real(dp), intent(in) :: t_start, t_end
+    logical, intent(in) :: restart, last
+    real(dp) :: q(size(self%trk)), t
+    type(peak_bracket) :: br
+    logical :: ok, starts
+    integer :: m, j
+    if (restart) call self%finish()   ! the state may jump at a (re)start
+    self%cur = 3 - self%cur
+    call self%piece(self%cur)%copy(poly)
+    if (.not. allocated(self%y)) allocate(self%y(size(poly%c, 1)), self%dy(size(poly%c, 1)))
+    starts = .false.
+    do m = 1, size(self%trk)
+      if (self%watches(m) .and. self%trk(m)%n == 0) starts = .true.
+    end do
+    if (starts) then
+      ! a new sequence starts with the stretch's start
+      call evaluate(self, t_start, self%cur, 0, .true., q, ok)
+      if (ok) then
+        do m = 1, size(self%trk)
+          if (self%watches(m) .and. self%trk(m)%n == 0) ok = self%trk(m)%push(t_start, q(m), self%cur, br, &
+            value=self%sample_is_value(m))
+        end do
+      end if
+    end if
+    ! the sample at the stretch's end; in the first and the last stretch of a
+    ! sequence also one at its middle (a sequence may be a single step - the
+    ! rigidized coupling's outer steps -, with its maximum inside)
+    do j = 1, 2
+      t = t_end
+      if (j == 1) t = 0.5_dp*(t_start + t_end)
+      if (j == 1 .and. .not. (t > t_start .and. (starts .or. last))) cycle
+      call evaluate(self, t, self%cur, 0, .true., q, ok)
+      if (.not. ok) cycle
+      do m = 1, size(self%trk)
+        if (.not. self%watches(m)) cycle
+        if (self%trk(m)%push(t, q(m), self%cur, br, value=self%sample_is_value(m))) call refine(self, m, br)
+      end do
+    end do
+    if (last) call self%finish()
+  end subroutine maxima_observe
+
+  !> Close the observer's sequences (the quantities may jump after their end),
+  !> refining a maximum at their end: at a (re)start, an event, a switch of
+  !> integrator, the end of the run.
+  subroutine maxima_finish(self)
+    class(maxima_observer), intent(inout) :: self
+    type(peak_bracket) :: br
+    integer :: m
+    if (.not. associated(self%trk)) return
+    do m = 1, size(self%trk)
+      if (.not. self%watches(m)) cycle
+      if (self%trk(m)%close(br)) call refine(self, m, br)
+    end do
+  end subroutine maxima_finish
+
+  !> The maximum of quantity m in the bracket br, on the stretches' interpolants.
+  subroutine refine(self, m, br)
+    class(maxima_observer), intent(inout) :: self
+    integer, intent(in) :: m
+    type(peak_bracket), intent(in) :: br
+    type(max_search) :: search
+    type(peak_bracket) :: b
+    real(dp) :: t, q(size(self%trk))
+    integer :: k
+    logical :: ok
+    b = br
+    if (.not. self%sample_is_value(m)) then
+      ! the samples only estimate it: its value at the bracket's best sample
+      k = br%right
+      if (k == 0) k = br%left
+      call evaluate(self, br%x, k, m, .false., q, ok)
+      if (.not. ok) return
+      b%fx = q(m)
+    end if
+    call search%start(b, 1.0e-12_dp)
+    do while (search%next(t))
+      k = br%right
+      if (t < br%x .or. k == 0) k = br%left
+      call evaluate(self, t, k, m, .false., q, ok)
+      if (.not. ok) return
+      call search%tell(q(m))
+    end do
+    call self%trk(m)%offer(search%x, search%maximum())
+  end subroutine refine
+
+  !> The quantities at time t on piece k.
+  subroutine evaluate(self, t, k, only, estimate, q, ok)
+    class(maxima_observer), intent(inout) :: self
+    real(dp), intent(in) :: t
+    integer, intent(in) :: k, only
+    logical, intent(in) :: estimate
+    real(dp), intent(out) :: q(:)
+    logical, intent(out) :: ok
+    q = -huge(1.0_dp)
+    call self%piece(k)%eval(t, self%y, self%dy)
+    self%evaluations = self%evaluations + 1
+    call self%values(t, only, estimate, q, ok)
+  end subroutine evaluate
+
+end module airlaunch_step_maxima
