@@ -312,6 +312,7 @@ contains
       if (st /= 0) m = "lumped"
       cfg = scenario(n, merge(m, "lumped  ", opts%scheme == "cvode"))
       cfg%integration = opts
+      cfg%integration%peak_tension = .false.
     end block
     cfg%integration%rtol = x
     cfg%integration%atol = x
@@ -364,6 +365,7 @@ contains
     cfg%t_end = t_end
     cfg%output_interval = t_end/(n_rec - 1)
     cfg%record_nodes = .false.
+    cfg%integration%peak_tension = .false.   ! (an output, like the nodes: both schemes)
   end function scenario
 
   !> Run the scenario; tip position at t_end and the best wall time of `repeat` runs.

@@ -42,10 +42,11 @@ module airlaunch_line_cvode
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_step_maxima, only: maxima_observer
   use airlaunch_line_model, only: line_model, line_energy, node_state_name
   use airlaunch_line_mass, only: line_mass_matrix
   use airlaunch_line_ends, only: line_end, end_point_mass
-  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
+  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, scheme_peak_tension
   implicit none
   private
   public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, line_force_jacobian
@@ -101,12 +102,25 @@ module airlaunch_line_cvode
     procedure, private :: force_blocks => system_force_blocks
   end type line_system
 
+  !> The largest segment tension over every internal CVODE step, refined
+  !> between steps on the interpolants (airlaunch_step_maxima); its own
+  !> tension work array (the system's holds the last right-hand side's, which
+  !> the Jacobian reads).
+  type, extends(maxima_observer) :: tension_observer
+    type(line_system), pointer :: sys => null()
+    real(dp), allocatable :: tension(:)
+  contains
+    procedure :: values => tension_values
+  end type tension_observer
+
   !> The default scheme: CVODE BDF + band solver on a `line_system`.
   type, extends(line_scheme) :: line_cvode
     type(line_system), pointer :: sys => null()   !< on the heap: CVODE keeps its address
     type(cvode_solver) :: solver                  !< the integrator
     type(cvode_options) :: opts                   !< its options
+    type(tension_observer) :: observer            !< the peak tension over the steps
   contains
+    procedure :: peak_tension => cvode_peak_tension
     procedure :: advance => cvode_advance
     procedure :: get_state => cvode_get_state
     procedure :: stats => cvode_scheme_stats
@@ -434,7 +448,10 @@ contains
       max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, &
       analytic_jacobian=opts%analytic_jacobian, t_final=opts%t_final, &
       newton_coefficient=line_newton_coefficient(opts%rtol))
+    if (opts%peak_tension) call scheme%start_peak()
     if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends
+    if (opts%peak_tension) scheme%observer = tension_observer(trk=scheme%peak, sys=scheme%sys, &
+      tension=scheme%sys%tension, needs_rate=.false.)
     allocate(y0(scheme%sys%n_state()))
     call scheme%sys%pack(x0, v0, y0)
     call scheme%solver%init(scheme%sys, t0, y0, scheme%opts, error)
@@ -449,10 +466,40 @@ contains
       self%t = t_out
       return
     end if
-    call self%solver%advance(t_out, error)
+    if (associated(self%peak)) then
+      call self%solver%advance(t_out, error, observer=self%observer)
+    else
+      call self%solver%advance(t_out, error)
+    end if
     self%t = self%solver%t
     if (allocated(error)) error%message = "line (cvode): " // error%message
   end subroutine cvode_advance
+
+  !> The peak tension so far (airlaunch_line_scheme), the open sequence of
+  !> steps closed first (a maximum at its end refined).
+  function cvode_peak_tension(self, t_peak) result(tmax)
+    class(line_cvode), intent(inout) :: self   !< scheme
+    real(dp), intent(out) :: t_peak            !< its time [s]
+    real(dp) :: tmax
+    if (associated(self%observer%trk)) call self%observer%finish()
+    tmax = scheme_peak_tension(self, t_peak)
+  end function cvode_peak_tension
+
+  !> The largest segment tension at time t from the interpolated state.
+  subroutine tension_values(self, t, only, estimate, q, ok)
+    class(tension_observer), intent(inout) :: self
+    real(dp), intent(in) :: t
+    integer, intent(in) :: only
+    logical, intent(in) :: estimate
+    real(dp), intent(out) :: q(:)
+    logical, intent(out) :: ok
+    integer :: st
+    ! (one quantity, and every sample is its value: `only` and `estimate` change nothing)
+    call self%sys%unpack(t, self%y)
+    call self%sys%model%tensions(self%sys%x, self%sys%v, self%tension, st)
+    ok = st == 0 .and. (only >= 0 .or. estimate)
+    if (ok) q(1) = maxval(self%tension)
+  end subroutine tension_values
 
   !> Node state at the current time.
   subroutine cvode_get_state(self, x, v)
@@ -510,5 +557,7 @@ contains
     call self%solver%free()
     if (associated(self%sys)) deallocate(self%sys)
     nullify(self%sys)
+    self%observer = tension_observer()
+    call self%release_peak()
   end subroutine cvode_free
 end module airlaunch_line_cvode

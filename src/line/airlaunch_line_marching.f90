@@ -149,6 +149,7 @@ contains
         1.0_dp/(model%node_mass(scheme%near) + e%mass)
     end associate
     scheme%far_force = 0.0_dp
+    if (opts%peak_tension) call scheme%start_peak()
   end subroutine new_line_marching
 
   !> Index (1 or 2) of the end at the near node.
@@ -201,6 +202,8 @@ contains
         " s: the state diverged")
       return
     end if
+    ! the peak tension over the steps (the scheme's resolution: no interpolant)
+    if (associated(self%peak)) call self%peak(1)%offer(self%t, maxval(self%tension))
     if (self%ends(ne)%kind == end_point_mass) self%f(:, self%near) = self%f(:, self%near) + &
       point_load(self, ne, self%x(:, self%near), self%v(:, self%near))
 
@@ -399,5 +402,6 @@ contains
     class(line_marching), intent(inout) :: self   !< scheme
     if (allocated(self%x)) deallocate(self%x, self%v, self%xn, self%vn, self%f, self%tension, self%inv_mass)
     self%n_steps = 0; self%n_iter = 0; self%n_forces = 0
+    call self%release_peak()
   end subroutine marching_free
 end module airlaunch_line_marching

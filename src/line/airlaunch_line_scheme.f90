@@ -7,9 +7,10 @@ module airlaunch_line_scheme
   use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
+  use airlaunch_peak_search, only: peak_tracker
   implicit none
   private
-  public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
+  public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options, scheme_peak_tension
 
   !> How to integrate a line (namelist group `&line_scene`, scheme part).
   type :: line_scheme_options
@@ -36,6 +37,10 @@ module airlaunch_line_scheme
     real(dp) :: dt = 1.0e-4_dp              !< marching: fixed time step [s]
     real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]
     integer :: max_iterations = 20          !< marching: far-end iterations per step
+    !> take the largest segment tension over every step (line_scheme%peak):
+    !> cvode refines it between steps (its cost: +6 % instructions at N = 8,
+    !> +12 % at N = 60); the benchmarks turn it off for both schemes
+    logical :: peak_tension = .true.
   end type line_scheme_options
 
   !> Work counters of an integration.
@@ -50,7 +55,13 @@ module airlaunch_line_scheme
   !> A line time integrator.
   type, abstract :: line_scheme
     real(dp) :: t = 0.0_dp   !< time of the current state [s]
+    !> (1): the largest segment tension over every step of the scheme (on the
+    !> heap: an observer of the integrator points to it)
+    type(peak_tracker), pointer :: peak(:) => null()
   contains
+    procedure :: peak_tension => scheme_peak_tension
+    procedure :: start_peak => scheme_start_peak
+    procedure :: release_peak => scheme_release_peak
     procedure(advance_interface), deferred :: advance
     procedure(state_interface), deferred :: get_state
     procedure(stats_interface), deferred :: stats
@@ -96,6 +107,34 @@ module airlaunch_line_scheme
   end interface
 
 contains
+
+  !> The largest segment tension of the computed solution so far [N] and its
+  !> time t_peak [s] (0 and -1 before any step).
+  function scheme_peak_tension(self, t_peak) result(tmax)
+    class(line_scheme), intent(inout) :: self   !< scheme
+    real(dp), intent(out) :: t_peak             !< its time [s]
+    real(dp) :: tmax
+    tmax = 0.0_dp
+    t_peak = -1.0_dp
+    if (.not. associated(self%peak)) return
+    if (self%peak(1)%t_best < 0.0_dp) return
+    tmax = self%peak(1)%best
+    t_peak = self%peak(1)%t_best
+  end function scheme_peak_tension
+
+  !> A fresh tracker of the peak tension.
+  subroutine scheme_start_peak(self)
+    class(line_scheme), intent(inout) :: self   !< scheme
+    call self%release_peak()
+    allocate(self%peak(1))
+  end subroutine scheme_start_peak
+
+  !> Free the tracker.
+  subroutine scheme_release_peak(self)
+    class(line_scheme), intent(inout) :: self   !< scheme
+    if (associated(self%peak)) deallocate(self%peak)
+    nullify(self%peak)
+  end subroutine scheme_release_peak
 
   !> Validate the scheme options (one line naming the variable, its value and
   !> what is allowed).

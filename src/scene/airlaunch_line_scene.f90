@@ -63,6 +63,8 @@ module airlaunch_line_scene
     type(line_scheme_stats) :: stats                 !< integrator work
     logical :: completed = .false.                   !< reached t_end
     real(dp) :: t_reached = 0.0_dp                   !< time the integration reached (a failure's time) [s]
+    real(dp) :: peak_tension = 0.0_dp                !< largest segment tension over every step [N]
+    real(dp) :: peak_tension_time = -1.0_dp          !< its time [s]
     logical :: ready = .false.                       !< init succeeded
     !> largest segment strain of the initial shape (negative: all slack)
     real(dp) :: initial_strain = 0.0_dp
@@ -199,6 +201,7 @@ contains
     end do
     self%completed = .not. allocated(error)
     self%t_reached = self%scheme%t
+    self%peak_tension = self%scheme%peak_tension(self%peak_tension_time)
     self%stats = self%scheme%stats()
     call system_clock(c1)
     self%wall_time = real(c1 - c0, dp)/real(rate, dp)
@@ -224,6 +227,8 @@ contains
       end if
     end do
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
+    ! the peak tension is never below a record (the schemes take it over their steps)
+    if (associated(self%scheme%peak)) call self%scheme%peak(1)%offer(t, maxval(self%tension))
     m = self%n_out + 1
     self%time(m) = t
     self%tip(:, m) = self%x(:, n)
@@ -292,18 +297,19 @@ contains
     real(dp) :: a_drag_area, b_position(3), b_velocity(3), b_amplitude(3), b_frequency, b_phase_deg
     real(dp) :: b_t_start, b_mass, b_drag_area, initial_sag, dt, force_tol
     integer :: max_iterations
-    logical :: record_tensions
+    logical :: record_tensions, peak_tension
     namelist /line/ length, n_seg, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, &
       cd_tangential, gravity, air, wind, air_density, mass
     namelist /line_scene/ a_kind, a_position, a_velocity, a_amplitude, a_frequency, a_phase_deg, a_t_start, &
       a_mass, a_drag_area, b_kind, b_position, b_velocity, b_amplitude, b_frequency, b_phase_deg, b_t_start, &
-      b_mass, b_drag_area, initial_shape, initial_sag, scheme, dt, force_tol, max_iterations, record_tensions
+      b_mass, b_drag_area, initial_shape, initial_sag, scheme, dt, force_tol, max_iterations, record_tensions, &
+      peak_tension
     type(nml_var), parameter :: line_vars(14) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
       nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
       nml_var("settling_damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
       nml_var("cd_tangential", "real"), nml_var("gravity", "logical"), nml_var("air", "logical"), &
       nml_var("wind", "real3"), nml_var("air_density", "real"), nml_var("mass", "string", length=8)]
-    type(nml_var), parameter :: scene_vars(25) = [nml_var("a_kind", "string", 16), &
+    type(nml_var), parameter :: scene_vars(26) = [nml_var("a_kind", "string", 16), &
       nml_var("a_position", "real3"), nml_var("a_velocity", "real3"), &
       nml_var("a_amplitude", "real3"), nml_var("a_frequency", "real"), nml_var("a_phase_deg", "real"), &
       nml_var("a_t_start", "real"), nml_var("a_mass", "real"), nml_var("a_drag_area", "real"), &
@@ -312,7 +318,7 @@ contains
       nml_var("b_t_start", "real"), nml_var("b_mass", "real"), nml_var("b_drag_area", "real"), &
       nml_var("initial_shape", "string", 16), nml_var("initial_sag", "real"), nml_var("scheme", "string", 16), &
       nml_var("dt", "real"), nml_var("force_tol", "real"), nml_var("max_iterations", "integer"), &
-      nml_var("record_tensions", "logical")]
+      nml_var("record_tensions", "logical"), nml_var("peak_tension", "logical")]
     character(len=16), parameter :: kinds(4) = [character(len=16) :: "fixed", "prescribed", "free", &
       "point_mass"]
     type(line_scene_config) :: d
@@ -333,6 +339,7 @@ contains
     initial_shape = d%initial_shape; initial_sag = d%initial_sag; scheme = d%integration%scheme
     dt = d%integration%dt; force_tol = d%integration%force_tol; max_iterations = d%integration%max_iterations
     record_tensions = .true.
+    peak_tension = d%integration%peak_tension
 
     call f%check_group("line", line_vars, error)
     if (allocated(error)) return
@@ -406,6 +413,7 @@ contains
     cfg%integration%dt = dt
     cfg%integration%force_tol = force_tol
     cfg%integration%max_iterations = max_iterations
+    cfg%integration%peak_tension = peak_tension
     if (f%is_set("run", "rtol")) cfg%integration%rtol = run%rtol
     if (f%is_set("run", "atol")) cfg%integration%atol = run%atol
     if (f%is_set("run", "max_order")) cfg%integration%max_order = run%max_order
@@ -478,7 +486,9 @@ contains
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
       str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
-      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s" // nl // &
+      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records); " // &
+      "peak segment tension " // str(scene%peak_tension) // " N at t = " // str(scene%peak_tension_time) // &
+      " s (over every step)" // nl // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg, theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
@@ -594,6 +604,10 @@ contains
     call w%add_real_att("/", "initial_strain", scene%initial_strain, error)
     call w%add_real_att("/", "wall_time_s", scene%wall_time, error)
     call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
+    if (scene%peak_tension_time >= 0.0_dp) then
+      call w%add_real_att("/", "peak_tension_N", scene%peak_tension, error)
+      call w%add_real_att("/", "peak_tension_time_s", scene%peak_tension_time, error)
+    end if
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)

@@ -560,6 +560,12 @@ contains
     fact = 1.0_dp
     self%poly%order = -1
     do k = 0, q(1)
+      if (k == 0 .and. t_end == tn(1)) then
+        ! CVODE returned the step's end: y is its state (zn[0], as CVodeGetDky gives)
+        self%poly%c(:, 0) = self%y
+        self%poly%order = 0
+        cycle
+      end if
       ierr = FCVodeGetDky(self%mem, tn(1), int(k, c_int), self%nv_work)
       if (ierr /= 0) exit
       if (k > 0) fact = fact*k
@@ -582,6 +588,16 @@ contains
     real(dp), intent(out), optional :: dy(:)    !< its derivative
     real(dp) :: s
     integer :: j
+    if (t == self%tn) then
+      ! at the step's end (where most samples are): the coefficients themselves
+      ! (what the Horner scheme below gives there, without its passes)
+      y = self%c(:, 0)
+      if (present(dy)) then
+        dy = 0.0_dp
+        if (self%order >= 1) dy = self%c(:, 1)
+      end if
+      return
+    end if
     s = t - self%tn
     y = self%c(:, self%order)
     if (present(dy)) dy = 0.0_dp

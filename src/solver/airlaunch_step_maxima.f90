@@ -20,7 +20,11 @@ module airlaunch_step_maxima
   use airlaunch_peak_search, only: peak_tracker, peak_bracket, max_search
   implicit none
   private
-  public :: maxima_observer
+  public :: maxima_observer, max_quantities
+
+  !> At most this many quantities per observer (work arrays of fixed size: an
+  !> automatic array of unknown size would be a heap allocation every step)
+  integer, parameter :: max_quantities = 8
 
   type, abstract, extends(step_observer) :: maxima_observer
     type(peak_tracker), pointer :: trk(:) => null()   !< one per quantity (the owner's)
@@ -28,6 +32,7 @@ module airlaunch_step_maxima
     integer :: cur = 2                                !< the latest piece
     real(dp), allocatable :: y(:), dy(:)              !< the state at the time asked for, its rate
     integer :: evaluations = 0                        !< evaluations of the quantities
+    logical :: needs_rate = .true.                    !< `values` reads self%dy
   contains
     procedure :: observe => maxima_observe
     procedure :: finish => maxima_finish
@@ -77,23 +82,24 @@ contains
     type(step_polynomial), intent(in) :: poly
     real(dp), intent(in) :: t_start, t_end
     logical, intent(in) :: restart, last
-    real(dp) :: q(size(self%trk)), t
+    real(dp) :: q(max_quantities), t
     type(peak_bracket) :: br
     logical :: ok, starts
-    integer :: m, j
+    integer :: m, j, nq
+    nq = min(size(self%trk), max_quantities)
     if (restart) call self%finish()   ! the state may jump at a (re)start
     self%cur = 3 - self%cur
     call self%piece(self%cur)%copy(poly)
     if (.not. allocated(self%y)) allocate(self%y(size(poly%c, 1)), self%dy(size(poly%c, 1)))
     starts = .false.
-    do m = 1, size(self%trk)
+    do m = 1, nq
       if (self%watches(m) .and. self%trk(m)%n == 0) starts = .true.
     end do
     if (starts) then
       ! a new sequence starts with the stretch's start
-      call evaluate(self, t_start, self%cur, 0, .true., q, ok)
+      call evaluate(self, t_start, self%cur, 0, .true., q(1:nq), ok)
       if (ok) then
-        do m = 1, size(self%trk)
+        do m = 1, nq
           if (self%watches(m) .and. self%trk(m)%n == 0) ok = self%trk(m)%push(t_start, q(m), self%cur, br, &
             value=self%sample_is_value(m))
         end do
@@ -106,9 +112,9 @@ contains
       t = t_end
       if (j == 1) t = 0.5_dp*(t_start + t_end)
       if (j == 1 .and. .not. (t > t_start .and. (starts .or. last))) cycle
-      call evaluate(self, t, self%cur, 0, .true., q, ok)
+      call evaluate(self, t, self%cur, 0, .true., q(1:nq), ok)
       if (.not. ok) cycle
-      do m = 1, size(self%trk)
+      do m = 1, nq
         if (.not. self%watches(m)) cycle
         if (self%trk(m)%push(t, q(m), self%cur, br, value=self%sample_is_value(m))) call refine(self, m, br)
       end do
@@ -124,7 +130,7 @@ contains
     type(peak_bracket) :: br
     integer :: m
     if (.not. associated(self%trk)) return
-    do m = 1, size(self%trk)
+    do m = 1, min(size(self%trk), max_quantities)
       if (.not. self%watches(m)) cycle
       if (self%trk(m)%close(br)) call refine(self, m, br)
     end do
@@ -137,15 +143,16 @@ contains
     type(peak_bracket), intent(in) :: br
     type(max_search) :: search
     type(peak_bracket) :: b
-    real(dp) :: t, q(size(self%trk))
-    integer :: k
+    real(dp) :: t, q(max_quantities)
+    integer :: k, nq
     logical :: ok
+    nq = min(size(self%trk), max_quantities)
     b = br
     if (.not. self%sample_is_value(m)) then
       ! the samples only estimate it: its value at the bracket's best sample
       k = br%right
       if (k == 0) k = br%left
-      call evaluate(self, br%x, k, m, .false., q, ok)
+      call evaluate(self, br%x, k, m, .false., q(1:nq), ok)
       if (.not. ok) return
       b%fx = q(m)
     end if
@@ -153,7 +160,7 @@ contains
     do while (search%next(t))
       k = br%right
       if (t < br%x .or. k == 0) k = br%left
-      call evaluate(self, t, k, m, .false., q, ok)
+      call evaluate(self, t, k, m, .false., q(1:nq), ok)
       if (.not. ok) return
       call search%tell(q(m))
     end do
@@ -169,7 +176,11 @@ contains
     real(dp), intent(out) :: q(:)
     logical, intent(out) :: ok
     q = -huge(1.0_dp)
-    call self%piece(k)%eval(t, self%y, self%dy)
+    if (self%needs_rate) then
+      call self%piece(k)%eval(t, self%y, self%dy)
+    else
+      call self%piece(k)%eval(t, self%y)
+    end if
     self%evaluations = self%evaluations + 1
     call self%values(t, only, estimate, q, ok)
   end subroutine evaluate
