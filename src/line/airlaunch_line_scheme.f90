@@ -38,8 +38,9 @@ module airlaunch_line_scheme
     real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]
     integer :: max_iterations = 20          !< marching: far-end iterations per step
     !> take the largest segment tension over every step (line_scheme%peak):
-    !> cvode refines it between steps (its cost: +6 % instructions at N = 8,
-    !> +12 % at N = 60); the benchmarks turn it off for both schemes
+    !> cvode refines it between steps (its cost on input/line_parachute.nml
+    !> with the lumped mass, whole process: +13 % instructions at N = 8, +16 %
+    !> at N = 60); the benchmarks turn it off for both schemes
     logical :: peak_tension = .true.
   end type line_scheme_options
 
