@@ -231,3 +231,32 @@ def test_sagged_start_is_held_to_the_strain_limit_and_reported(airlaunch_exe, tm
     res = run_airlaunch(airlaunch_exe, nml)
     assert res.returncode == 0, res.stderr
     assert re.search(r"largest segment strain -[0-9.]+ % \(slack\)", res.stdout), res.stdout
+
+
+def test_peak_tension_is_taken_over_every_step(airlaunch_exe, tmp_path):
+    """The towed parachute line (input/line_parachute.nml, 1 s): peak_tension_N is the
+    largest segment tension over every CVODE step, refined between steps on the
+    interpolants - the same at output_dt 0.01 and 0.05 s (CVODE's steps do not depend on
+    the output times) and not below any recorded segment tension; with
+    `peak_tension = .false.` the attributes are left out."""
+    base = (ROOT / "input" / "line_parachute.nml").read_text().replace("t_end = 5.0", "t_end = 1.0")
+    peaks = {}
+    for dt, flag in (("0.01", ".true."), ("0.05", ".true."), ("0.01", ".false.")):
+        tag = f"dt{dt}_{flag.strip('.')}"
+        out = tmp_path / f"{tag}.nc"
+        text = re.sub(r"output_dt = \S+", f"output_dt = {dt}", base)
+        text = text.replace("  scheme = 'cvode'", f"  scheme = 'cvode'\n  peak_tension = {flag}")
+        nml = tmp_path / f"{tag}.nml"
+        nml.write_text(text)
+        res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+        assert res.returncode == 0, res.stderr
+        with xr.open_dataset(out) as ds:
+            if flag == ".false.":
+                assert "peak_tension_N" not in ds.attrs and "peak_tension_time_s" not in ds.attrs
+                continue
+            peak, t_peak = ds.attrs["peak_tension_N"], ds.attrs["peak_tension_time_s"]
+            assert peak >= float(ds["line_tension"].max())
+            assert 0.0 <= t_peak <= 1.0
+            peaks[dt] = (peak, t_peak)
+    assert peaks["0.01"][0] == pytest.approx(peaks["0.05"][0], rel=1e-12)
+    assert peaks["0.01"][1] == pytest.approx(peaks["0.05"][1], abs=1e-9)
