@@ -127,7 +127,7 @@ def airlaunch_run(n, rtol, cd, tmp, reps=3, timeout=RUN_TIMEOUT, t_end=T_END, ta
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0,
   b_kind = 'point_mass', b_mass = {M}, b_position = {L}, 0.0, 0.0,
   initial_shape = '{"sag" if SAG > 0 else "straight"}', initial_sag = {SAG},
-  record_tensions = .false. /
+  record_tensions = .false., peak_tension = .false. /
 """)
     best = inner = None
     for i in range(reps):
@@ -158,7 +158,7 @@ def startup_time(tmp):
     nml = tmp / "tiny.nml"
     nml.write_text(f"""&run scene = 'line', t_end = 0.05, output_dt = 0.005, output = '{tmp / "tiny.nc"}' /
 &line length = 1.0, n_seg = 2, ea = 1.0e4, mass_per_length = 0.1 /
-&line_scene b_kind = 'point_mass', b_mass = 1.0, b_position = 1.0, 0.0, 0.0 /
+&line_scene b_kind = 'point_mass', b_mass = 1.0, b_position = 1.0, 0.0, 0.0, peak_tension = .false. /
 """)
     walls = []
     for _ in range(7):

@@ -73,7 +73,7 @@ def namelist(n, cd, scheme, rtol, dt, out, mass="lumped"):
   gravity = .true., air = .false., mass = '{mass}' /
 &line_scene a_kind = 'fixed', a_position = 0.0, 0.0, 0.0,
   b_kind = 'point_mass', b_mass = {M}, b_position = {L}, 0.0, 0.0,
-  scheme = '{scheme}', dt = {dt:.6e} /
+  scheme = '{scheme}', dt = {dt:.6e}, peak_tension = .false. /
 """
 
 
