@@ -486,18 +486,15 @@ contains
   end function cvode_peak_tension
 
   !> The largest segment tension at time t from the interpolated state.
-  subroutine tension_values(self, t, only, estimate, q, ok)
+  subroutine tension_values(self, t, q, ok)
     class(tension_observer), intent(inout) :: self
     real(dp), intent(in) :: t
-    integer, intent(in) :: only
-    logical, intent(in) :: estimate
     real(dp), intent(out) :: q(:)
     logical, intent(out) :: ok
     integer :: st
-    ! (one quantity, and every sample is its value: `only` and `estimate` change nothing)
     call self%sys%unpack(t, self%y)
     call self%sys%model%tensions(self%sys%x, self%sys%v, self%tension, st)
-    ok = st == 0 .and. (only >= 0 .or. estimate)
+    ok = st == 0
     if (ok) q(1) = maxval(self%tension)
   end subroutine tension_values
 

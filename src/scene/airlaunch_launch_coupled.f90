@@ -50,7 +50,6 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     real(dp) :: trim_deg = 0.0_dp                     !< the aircraft's trimmed pitch [deg]
   contains
     procedure :: watches
-    procedure :: sample_is_value
     procedure :: values => metric_values
   end type metric_observer
 
@@ -877,6 +876,8 @@ contains
     r%lobs%trk => r%trk
     r%dobs%trim_deg = res%trim_alpha_deg
     r%cobs%trim_deg = res%trim_alpha_deg
+    r%dobs%estimated(m_load) = .true.
+    r%cobs%estimated(m_load) = .true.
   end subroutine init_observers
 
   !> Close the open sequences of the active engine's observers (refining a
@@ -922,29 +923,23 @@ contains
     end select
   end function watches
 
-  !> Only the load factor's step-end samples are estimates.
-  logical function sample_is_value(self, m)
-    class(metric_observer), intent(in) :: self
-    integer, intent(in) :: m
-    sample_is_value = m /= m_load .and. self%source > 0
-  end function sample_is_value
-
-  !> The metrics at time t from the interpolated state self%y (`only` > 0:
+  !> The metrics at time t from the interpolated state self%y (self%only > 0:
   !> that one is enough; the others are then -huge): the same functions of the
-  !> state as the records'.  `estimate`: the load factor from the
-  !> interpolant's derivative instead of the forces (the aircraft's
-  !> acceleration: the rate of its velocity states 4:6 in both integrators; a
-  !> sample that only brackets its maxima, at a fraction of an evaluation of
-  !> the forces).
-  subroutine metric_values(self, t, only, estimate, q, ok)
+  !> state as the records'.  A step-end sample takes the load factor (an
+  !> `estimated` quantity) from the interpolant's derivative instead of the
+  !> forces (the aircraft's acceleration: the rate of its velocity states 4:6
+  !> in both integrators; a sample that only brackets its maxima, at a
+  !> fraction of an evaluation of the forces).
+  subroutine metric_values(self, t, q, ok)
     class(metric_observer), intent(inout) :: self
     real(dp), intent(in) :: t
-    integer, intent(in) :: only
-    logical, intent(in) :: estimate
     real(dp), intent(out) :: q(:)
     logical, intent(out) :: ok
     type(error_type), allocatable :: eval_error
-    integer :: status
+    integer :: status, only
+    logical :: estimate
+    only = self%only
+    estimate = self%step_end_sample
     ok = .true.
     select case (self%source)
     case (src_direct)

@@ -10,9 +10,8 @@
 !> An extension says which quantities its integrator carries (`watches`) and
 !> evaluates them at a time from the interpolated state self%y and its rate
 !> self%dy (`values`); a quantity whose step-end samples are only estimates
-!> that bracket its maxima (`sample_is_value` false: e.g. a load factor from
-!> the interpolant's derivative) enters the maximum through refined values
-!> only.  The trackers (one per quantity) are the owner's: several observers
+!> that bracket its maxima (`estimated`: e.g. a load factor from the
+!> interpolant's derivative) enters the maximum through refined values only.  The trackers (one per quantity) are the owner's: several observers
 !> (integrators) may share them.
 module airlaunch_step_maxima
   use airlaunch_kinds, only: dp
@@ -33,26 +32,28 @@ module airlaunch_step_maxima
     real(dp), allocatable :: y(:), dy(:)              !< the state at the time asked for, its rate
     integer :: evaluations = 0                        !< evaluations of the quantities
     logical :: needs_rate = .true.                    !< `values` reads self%dy
+    !> quantities whose step-end samples are estimates (only bracketing their maxima)
+    logical :: estimated(max_quantities) = .false.
+    !> what the evaluation under way is for: quantity `only` (0: all), and
+    !> whether it is a step-end sample (an `estimated` quantity may be estimated)
+    integer :: only = 0
+    logical :: step_end_sample = .false.
   contains
     procedure :: observe => maxima_observe
     procedure :: finish => maxima_finish
     procedure :: watches => maxima_watches
-    procedure :: sample_is_value => maxima_sample_is_value
     procedure(values_interface), deferred :: values
   end type maxima_observer
 
   abstract interface
     !> The quantities q(m) at time t from the state self%y (rate self%dy) for
-    !> every m the observer watches (`only` > 0: that one is enough, the others
-    !> may be left -huge); `estimate`: a step-end sample, which for a quantity
-    !> that is not `sample_is_value` may be an estimate.  ok = .false. if the
-    !> state cannot be evaluated.
-    subroutine values_interface(self, t, only, estimate, q, ok)
+    !> every m the observer watches (self%only > 0: that one is enough, the
+    !> others may be left -huge; self%step_end_sample: an `estimated` quantity
+    !> may be estimated).  ok = .false. if the state cannot be evaluated.
+    subroutine values_interface(self, t, q, ok)
       import :: maxima_observer, dp
       class(maxima_observer), intent(inout) :: self
       real(dp), intent(in) :: t
-      integer, intent(in) :: only
-      logical, intent(in) :: estimate
       real(dp), intent(out) :: q(:)
       logical, intent(out) :: ok
     end subroutine values_interface
@@ -66,14 +67,6 @@ contains
     integer, intent(in) :: m
     maxima_watches = m >= 1 .and. m <= size(self%trk)
   end function maxima_watches
-
-  !> Whether the step-end samples of quantity m are its values (default), not
-  !> estimates that only bracket its maxima.
-  logical function maxima_sample_is_value(self, m)
-    class(maxima_observer), intent(in) :: self
-    integer, intent(in) :: m
-    maxima_sample_is_value = m >= 1 .and. m <= size(self%trk)
-  end function maxima_sample_is_value
 
   !> A stretch of the solution (airlaunch_cvode's step_observer): its end is
   !> the next sample of each quantity; a bracketed local maximum is refined.
@@ -101,7 +94,7 @@ contains
       if (ok) then
         do m = 1, nq
           if (self%watches(m) .and. self%trk(m)%n == 0) ok = self%trk(m)%push(t_start, q(m), self%cur, br, &
-            value=self%sample_is_value(m))
+            value=.not. self%estimated(m))
         end do
       end if
     end if
@@ -116,7 +109,7 @@ contains
       if (.not. ok) cycle
       do m = 1, nq
         if (.not. self%watches(m)) cycle
-        if (self%trk(m)%push(t, q(m), self%cur, br, value=self%sample_is_value(m))) call refine(self, m, br)
+        if (self%trk(m)%push(t, q(m), self%cur, br, value=.not. self%estimated(m))) call refine(self, m, br)
       end do
     end do
     if (last) call self%finish()
@@ -148,7 +141,7 @@ contains
     logical :: ok
     nq = min(size(self%trk), max_quantities)
     b = br
-    if (.not. self%sample_is_value(m)) then
+    if (self%estimated(m)) then
       ! the samples only estimate it: its value at the bracket's best sample
       k = br%right
       if (k == 0) k = br%left
@@ -182,7 +175,9 @@ contains
       call self%piece(k)%eval(t, self%y)
     end if
     self%evaluations = self%evaluations + 1
-    call self%values(t, only, estimate, q, ok)
+    self%only = only
+    self%step_end_sample = estimate
+    call self%values(t, q, ok)
   end subroutine evaluate
 
 end module airlaunch_step_maxima
