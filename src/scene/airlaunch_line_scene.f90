@@ -486,9 +486,8 @@ contains
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
       str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
-      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records); " // &
-      "peak segment tension " // str(scene%peak_tension) // " N at t = " // str(scene%peak_tension_time) // &
-      " s (over every step)" // nl // &
+      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records)" // &
+      peak_note(scene) // nl // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg, theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
@@ -498,6 +497,16 @@ contains
     end if
     call scene%free()
   end subroutine run_line_scene
+
+  !> The summary's note on the peak tension over every step ('' without it:
+  !> &line_scene peak_tension = .false.).
+  function peak_note(scene) result(text)
+    type(line_scene), intent(in) :: scene  !< scene (after run)
+    character(len=:), allocatable :: text
+    text = ""
+    if (scene%peak_tension_time >= 0.0_dp) text = "; peak segment tension " // str(scene%peak_tension) // &
+      " N at t = " // str(scene%peak_tension_time) // " s (over every step)"
+  end function peak_note
 
   !> The summary's line on the initial shape: its largest segment strain and
   !> tension EA eps (the shape 'sag' has the parabola's length, not L's).
