@@ -450,8 +450,10 @@ contains
       newton_coefficient=line_newton_coefficient(opts%rtol))
     if (opts%peak_tension) call scheme%start_peak()
     if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends
-    if (opts%peak_tension) scheme%observer = tension_observer(trk=scheme%peak, sys=scheme%sys, &
-      tension=scheme%sys%tension, needs_rate=.false.)
+    if (opts%peak_tension) then
+      scheme%observer = tension_observer(trk=scheme%peak, sys=scheme%sys, needs_rate=.false.)
+      allocate(scheme%observer%tension(model%n))
+    end if
     allocate(y0(scheme%sys%n_state()))
     call scheme%sys%pack(x0, v0, y0)
     call scheme%solver%init(scheme%sys, t0, y0, scheme%opts, error)

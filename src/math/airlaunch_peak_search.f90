@@ -60,7 +60,6 @@ module airlaunch_peak_search
     integer :: n = 0                   !< samples of the open sequence (0: none)
     real(dp) :: ts(2) = 0.0_dp, qs(2) = 0.0_dp  !< its last two samples (2: the latest)
     integer :: piece(2) = 0            !< piece of the interval ending at each (0: none)
-    integer :: brackets = 0            !< brackets returned (refinements asked for)
   contains
     procedure :: offer => tracker_offer
     procedure :: push => tracker_push
@@ -282,8 +281,8 @@ contains
   !> largest sample plus twice its rise over the lower neighbour (a parabola
   !> through three samples peaks less than that above its middle one, unless
   !> they are very unevenly spaced).
-  logical function worth(self, br)
-    class(peak_tracker), intent(inout) :: self
+  pure logical function worth(self, br)
+    class(peak_tracker), intent(in) :: self
     type(peak_bracket), intent(in) :: br
     real(dp) :: reach, h1, h2, s1, s2, curv
     reach = br%fx + 2*(br%fx - min(br%flo, br%fhi))
@@ -297,7 +296,6 @@ contains
       if (curv < 0.0_dp) reach = max(reach, br%fx - (s1 + curv*h1)**2/(4*curv))
     end if
     worth = reach >= self%best .and. br%hi > br%lo
-    if (worth) self%brackets = self%brackets + 1
   end function worth
 
 end module airlaunch_peak_search

@@ -19,7 +19,7 @@ module airlaunch_step_maxima
   use airlaunch_peak_search, only: peak_tracker, peak_bracket, max_search
   implicit none
   private
-  public :: maxima_observer, max_quantities
+  public :: maxima_observer
 
   !> At most this many quantities per observer (work arrays of fixed size: an
   !> automatic array of unknown size would be a heap allocation every step)
@@ -30,7 +30,6 @@ module airlaunch_step_maxima
     type(step_polynomial) :: piece(2)                 !< the last two stretches' interpolants
     integer :: cur = 2                                !< the latest piece
     real(dp), allocatable :: y(:), dy(:)              !< the state at the time asked for, its rate
-    integer :: evaluations = 0                        !< evaluations of the quantities
     logical :: needs_rate = .true.                    !< `values` reads self%dy
     !> quantities whose step-end samples are estimates (only bracketing their maxima)
     logical :: estimated(max_quantities) = .false.
@@ -68,6 +67,13 @@ contains
     maxima_watches = m >= 1 .and. m <= size(self%trk)
   end function maxima_watches
 
+  !> The quantities this observer's trackers hold (at most max_quantities:
+  !> the work arrays are of that size).
+  pure integer function n_quantities(self)
+    class(maxima_observer), intent(in) :: self
+    n_quantities = min(size(self%trk), max_quantities)
+  end function n_quantities
+
   !> A stretch of the solution (airlaunch_cvode's step_observer): its end is
   !> the next sample of each quantity; a bracketed local maximum is refined.
   subroutine maxima_observe(self, poly, t_start, t_end, restart, last)
@@ -79,7 +85,7 @@ contains
     type(peak_bracket) :: br
     logical :: ok, starts
     integer :: m, j, nq
-    nq = min(size(self%trk), max_quantities)
+    nq = n_quantities(self)
     if (restart) call self%finish()   ! the state may jump at a (re)start
     self%cur = 3 - self%cur
     call self%piece(self%cur)%copy(poly)
@@ -123,7 +129,7 @@ contains
     type(peak_bracket) :: br
     integer :: m
     if (.not. associated(self%trk)) return
-    do m = 1, min(size(self%trk), max_quantities)
+    do m = 1, n_quantities(self)
       if (.not. self%watches(m)) cycle
       if (self%trk(m)%close(br)) call refine(self, m, br)
     end do
@@ -139,7 +145,7 @@ contains
     real(dp) :: t, q(max_quantities)
     integer :: k, nq
     logical :: ok
-    nq = min(size(self%trk), max_quantities)
+    nq = n_quantities(self)
     b = br
     if (self%estimated(m)) then
       ! the samples only estimate it: its value at the bracket's best sample
@@ -174,7 +180,6 @@ contains
     else
       call self%piece(k)%eval(t, self%y)
     end if
-    self%evaluations = self%evaluations + 1
     self%only = only
     self%step_end_sample = estimate
     call self%values(t, q, ok)
