@@ -80,7 +80,7 @@ module airlaunch_line_model
   use airlaunch_atmosphere, only: isa, air_state
   implicit none
   private
-  public :: line_params, line_model, line_energy, node_state_name
+  public :: line_params, line_model, line_energy, node_state_name, marching_stable_step
 
   !> Physical parameters of one line (all SI; namelist group `&line`).
   type :: line_params
@@ -511,11 +511,18 @@ contains
   !> damping is stable for h w <= 2 (sqrt(1 + zeta^2) - zeta).
   pure real(dp) function model_stable_step(self) result(h)
     class(line_model), intent(in) :: self   !< line
-    real(dp) :: w, zeta
-    w = 2.0_dp*self%wave_speed()/self%l0
-    zeta = w*self%p%damping/(2.0_dp*self%p%ea) + self%p%settling_damping/(2.0_dp*w)
-    h = 2.0_dp/w*(sqrt(1.0_dp + zeta**2) - zeta)
+    h = marching_stable_step(self%p%ea, self%p%mass_per_length, self%l0, self%p%damping, self%p%settling_damping)
   end function model_stable_step
+
+  !> model_stable_step from the parameters alone (an input check needs it
+  !> before the line is built): EA [N], rho [kg/m], l0 [m], c_d [N s], alpha [1/s].
+  pure real(dp) function marching_stable_step(ea, mass_per_length, l0, damping, settling_damping) result(h)
+    real(dp), intent(in) :: ea, mass_per_length, l0, damping, settling_damping
+    real(dp) :: w, zeta
+    w = 2.0_dp*sqrt(ea/mass_per_length)/l0
+    zeta = w*damping/(2.0_dp*ea) + settling_damping/(2.0_dp*w)
+    h = 2.0_dp/w*(sqrt(1.0_dp + zeta**2) - zeta)
+  end function marching_stable_step
 
   !> Total mass of the line rho*L [kg].
   pure real(dp) function model_total_mass(self) result(m)

@@ -187,6 +187,8 @@ contains
     type(rigidized_settings) :: ropt
     ropt%outer_dt = cfg%line%outer_dt
     ropt%far_end = cfg%line%far_end
+    ropt%inner_scheme = cfg%line%inner_scheme
+    ropt%inner_dt = cfg%line%inner_dt
     ropt%chain_rtol = run%rtol
     ropt%chain_atol = run%atol
     ropt%inner_rtol = run%rtol
@@ -647,7 +649,7 @@ contains
     if (r%active == coupling_direct) then
       n = real(r%dsolver%steps_taken(), dp)
     else
-      n = real(r%cpl%line_solver%steps_taken(), dp)
+      n = real(r%cpl%line_steps(), dp)
     end if
   end function line_steps
 
@@ -1118,6 +1120,9 @@ contains
     type(error_type), allocatable, intent(inout) :: werr
     call w%add_text_att("/", "line_coupling", trim(r%plan%mode), werr)
     call w%add_real_att("/", "outer_dt_s", r%ropt%outer_dt, werr)
+    call w%add_text_att("/", "line_inner_scheme", trim(r%ropt%inner_scheme), werr)
+    if (r%ropt%inner_scheme == "marching" .and. associated(r%cpl%line)) &
+      call w%add_real_att("/", "line_inner_dt_s", r%cpl%marcher%dt, werr)
     call w%add_real_att("/", "refreshes", real(r%n_refresh, dp), werr)
     call w%add_real_att("/", "guarded_mass_refreshes", real(r%n_guard_mass, dp), werr)
     call w%add_real_att("/", "guarded_inertia_refreshes", real(r%n_guard_inertia, dp), werr)

@@ -54,13 +54,14 @@
 !> The chain's state is written relative to a frame translating at V0 along x
 !> at altitude h0 (as airlaunch_launch_system), so are the line's nodes.
 module airlaunch_rigidized_coupling
-  use airlaunch_kinds, only: dp, g0, pi
+  use airlaunch_kinds, only: dp, i8, g0, pi
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_rotation, only: dcm_to_euler, dcm_to_quat, cross
   use airlaunch_ode, only: ode_system, node_blocks, rhs_ok, rhs_fatal
-  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats, step_observer
+  use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats, step_observer, step_polynomial
+  use airlaunch_linalg, only: solve_general
   use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free, &
     body_state_name
   use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
@@ -73,7 +74,7 @@ module airlaunch_rigidized_coupling
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
   private
-  public :: rigidized_settings, virtual_line, virtual_line_body, rigidized_loads, rigidized_chain, &
+  public :: rigidized_settings, virtual_line, virtual_line_body, rigidized_loads, rigidized_chain, line_marcher, &
     rigidized_line, rigidized_coupling, rigidized_nroots, rigidized_pitch_root, rigidized_clearance_root, &
     chain_atol, line_body_attitude, chain_size, &
     continue_phase_machine
@@ -95,6 +96,15 @@ module airlaunch_rigidized_coupling
     real(dp) :: inner_rtol = 1.0e-6_dp      !< line sub-steps: CVODE relative tolerance
     real(dp) :: inner_atol = 1.0e-5_dp      !< line sub-steps: absolute tolerance [m, m/s]
     integer :: inner_max_order = 2          !< line BDF order (2: the axial modes, docs/model.md)
+    !> line sub-steps: "cvode" (BDF, band; default) or "marching" (the paper's
+    !> explicit marching with the far-end force iteration, §2.3 Steps 1-5:
+    !> with the rigidization, the paper's method end to end)
+    character(len=16) :: inner_scheme = "cvode"
+    !> marching: largest sub-step [s]; 0 = 0.9 of its stability limit
+    !> (line_model%stable_step: the scheme's cheapest setting)
+    real(dp) :: inner_dt = 0.0_dp
+    real(dp) :: inner_force_tol = 1.0e-6_dp !< marching: e0 of the far-end force iteration [N]
+    integer :: inner_max_iterations = 20    !< marching: far-end iterations per sub-step
     character(len=16) :: far_end = "parachute" !< node N: "parachute" (far-end force) or "chain" (B3's motion)
     !> m_rigid and J_rigid are kept within [1/guard_band, guard_band] times the
     !> line mass and the geometric inertia (see `virtual_line_body`).
@@ -200,13 +210,57 @@ module airlaunch_rigidized_coupling
     procedure :: state_name => line_state_name
   end type rigidized_line
 
+  !> The paper's explicit marching (§2.3, Eqs. (12)-(17), Steps 1-5) as the
+  !> rigidized line's sub-stepper, in place of CVODE (`inner_scheme =
+  !> 'marching'`).  The state is the rigidized_line's (nodes 1..last, relative
+  !> frame).  One sub-step of size h from t to t + h, forces at the old level:
+  !>  Step 2, Eq. (15): v_k += h f_k/m_k for the interior nodes;
+  !>  Step 3, Eq. (12) with Eq. (10): the segment vectors advanced by their
+  !>          nodes' new relative velocity, starting from node 0's displacement
+  !>          on its path; the recursion telescopes to x_k += h v_k (the path's
+  !>          discrete velocity cancels), which is what is done;
+  !>  Steps 4-5, Eq. (16): node N (the parachute, far_end 'parachute') with the
+  !>          far-end force condition F_N = canopy drag + weight - (line share
+  !>          + canopy + apparent mass) a, a = (v_N' - v_N)/h, solved by Newton
+  !>          on v_N' (analytic 3x3 Jacobian, LAPACK) until |e| <= e0; with
+  !>          far_end 'chain' node N is on B3's path.
+  !> As airlaunch_line_marching (the standalone scheme): semi-implicit
+  !> (symplectic) Euler, first order, stable for h <= line_model%stable_step.
+  !> Each outer step is cut into equal sub-steps (set_stop_time); a state
+  !> inside a sub-step (an output time) is the linear interpolant between its
+  !> ends, which is also what a step observer is shown, so the sub-steps do not
+  !> depend on the output times.  No allocation after init.
+  type :: line_marcher
+    real(dp) :: t = 0.0_dp                  !< time of y [s]
+    real(dp), allocatable :: y(:)           !< state at t (interpolated inside a sub-step)
+    real(dp) :: tn = 0.0_dp, tp = 0.0_dp    !< end of the last sub-step and its start [s]
+    real(dp), allocatable :: yn(:), yp(:)   !< the states there
+    real(dp) :: dt = 0.0_dp                 !< largest sub-step [s]
+    real(dp) :: h = 0.0_dp                  !< sub-step of the current outer step [s]
+    real(dp) :: t_stop = 0.0_dp             !< end of the current outer step [s]
+    real(dp) :: force_tol = 0.0_dp          !< e0 [N]
+    integer :: max_iter = 20                !< far-end iterations per sub-step
+    integer :: max_steps = 0                !< sub-steps allowed over the run (0: no limit)
+    integer(i8) :: steps = 0, forces = 0, iterations = 0
+    logical :: restart = .true.             !< the next stretch shown is the first
+    type(step_polynomial) :: poly           !< the last sub-step as a degree-1 interpolant
+  contains
+    procedure :: init => marcher_init
+    procedure :: set_stop_time => marcher_set_stop_time
+    procedure :: advance => marcher_advance
+    procedure :: stats => marcher_stats
+    procedure :: free => marcher_free
+  end type line_marcher
+
   !> Both subsystems, their integrators and the outer loop.
   type :: rigidized_coupling
     type(rigidized_settings) :: opts                !< settings
     type(rigidized_chain), pointer :: chain => null()  !< on the heap: CVODE keeps its address
     type(rigidized_line), pointer :: line => null()    !< on the heap
     type(cvode_solver) :: chain_solver              !< integrates the chain
-    type(cvode_solver) :: line_solver               !< sub-steps the line
+    type(cvode_solver) :: line_solver               !< sub-steps the line (inner_scheme 'cvode')
+    type(line_marcher) :: marcher                   !< sub-steps the line (inner_scheme 'marching')
+    logical :: marching = .false.                   !< the marcher sub-steps the line
     real(dp) :: t = 0.0_dp                          !< time both subsystems have reached [s]
     type(virtual_line) :: vl                        !< the virtual body of the last refresh
     real(dp) :: chute_link_mass = 0.0_dp            !< B3's mass of the last refresh [kg]
@@ -237,6 +291,7 @@ module airlaunch_rigidized_coupling
     procedure :: outer_step => coupling_outer_step
     procedure :: restart_chain => coupling_restart_chain
     procedure :: line_state => coupling_line_state
+    procedure :: line_steps => coupling_line_steps
     procedure :: stats => coupling_stats
     procedure :: free => coupling_free
   end type rigidized_coupling
@@ -811,7 +866,12 @@ contains
       self%tie_x + opts%outer_dt*self%tie_v, self%tie_v)
     call self%line%far%set_body_motion(t0, self%b3_x, self%b3_v, t0 + opts%outer_dt, &
       self%b3_x + opts%outer_dt*self%b3_v, self%b3_v)
-    call self%line_solver%init(self%line, t0, yl, lopt, error)
+    self%marching = opts%inner_scheme == "marching"
+    if (self%marching) then
+      call self%marcher%init(self%line, t0, yl, opts, error)
+    else
+      call self%line_solver%init(self%line, t0, yl, lopt, error)
+    end if
   end subroutine coupling_init
 
   !> Continue the phase machine of `from` in `to` (separation systems of the
@@ -891,7 +951,7 @@ contains
     class(rigidized_coupling), intent(inout) :: self       !< the coupling
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     real(dp) :: p0(3), h0(3), e0
-    call self%line%unpack(self%t, self%line_solver%y)
+    call unpack_line(self)
     self%vl = virtual_line_body(self%line%model, self%line%x, self%line%v, self%opts%guard_band)
     if (self%vl%eq%degenerate) then
       call fatal_error(error, "the line's ends coincide at t = " // str(self%t) // " s (no virtual body axis)")
@@ -998,15 +1058,24 @@ contains
       call self%line%near%set_body_motion(self%step_t0, self%tie0_x, self%tie0_v, t1, self%tie_x, self%tie_v)
       if (self%line%far_kinematic) call self%line%far%set_body_motion(self%step_t0, self%b30_x, self%b30_v, t1, &
         self%b3_x, self%b3_v)
-      call self%line_solver%set_stop_time(t1, error)
+      if (self%marching) then
+        call self%marcher%set_stop_time(t1)
+      else
+        call self%line_solver%set_stop_time(t1, error)
+      end if
       if (allocated(error)) then
         error%message = "line sub-steps: " // error%message
         return
       end if
       self%motion_set = .true.
     end if
-    if (self%line_solver%t >= t) return
-    call self%line_solver%advance(min(t, t1), error, observer=observer)
+    if (self%marching) then
+      if (self%marcher%t >= t) return
+      call self%marcher%advance(self%line, min(t, t1), error, observer)
+    else
+      if (self%line_solver%t >= t) return
+      call self%line_solver%advance(min(t, t1), error, observer=observer)
+    end if
     if (allocated(error)) error%message = "line sub-steps: " // error%message
   end subroutine coupling_line_to
 
@@ -1045,7 +1114,7 @@ contains
     real(dp), intent(out) :: x(:, 0:), v(:, 0:)        !< nodes (3, 0:N) [m, m/s]
     real(dp), intent(out) :: tension(:)                !< (N) [N]
     integer :: st
-    call self%line%unpack(self%line_solver%t, self%line_solver%y)
+    call unpack_line(self)
     call self%line%model%forces(self%line%x, self%line%v, self%line%f, self%line%tension, st)
     x = self%line%x
     v = self%line%v
@@ -1057,17 +1126,242 @@ contains
     class(rigidized_coupling), intent(in) :: self   !< the coupling
     type(cvode_stats) :: s
     s = self%chain_solver%stats()
-    call add_stats(s, self%line_solver%stats())
+    if (self%marching) then
+      call add_stats(s, self%marcher%stats())
+    else
+      call add_stats(s, self%line_solver%stats())
+    end if
   end function coupling_stats
+
+  !> Steps the line's sub-stepper has taken so far.
+  integer(i8) function coupling_line_steps(self) result(n)
+    class(rigidized_coupling), intent(in) :: self   !< the coupling
+    if (self%marching) then
+      n = self%marcher%steps
+    else
+      n = int(self%line_solver%steps_taken(), i8)
+    end if
+  end function coupling_line_steps
+
+  !> The line's nodes (self%line%x, %v) from its sub-stepper's state.
+  subroutine unpack_line(self)
+    type(rigidized_coupling), intent(inout) :: self
+    if (self%marching) then
+      call self%line%unpack(self%marcher%t, self%marcher%y)
+    else
+      call self%line%unpack(self%line_solver%t, self%line_solver%y)
+    end if
+  end subroutine unpack_line
 
   !> Release both integrators and subsystems.
   subroutine coupling_free(self)
     class(rigidized_coupling), intent(inout) :: self   !< the coupling
     call self%chain_solver%free()
     call self%line_solver%free()
+    call self%marcher%free()
+    self%marching = .false.
     if (associated(self%chain)) deallocate(self%chain)
     if (associated(self%line)) deallocate(self%line)
     nullify(self%chain, self%line)
   end subroutine coupling_free
+
+  ! ------------------------------------------------------------------ marching
+
+  !> Start the marcher on `line` at t0 from the state y0.  A sub-step above the
+  !> stability limit is an error naming the limit.
+  subroutine marcher_init(self, line, t0, y0, opts, error)
+    class(line_marcher), intent(inout) :: self             !< the marcher (re-initialised)
+    type(rigidized_line), intent(in) :: line               !< the line subsystem
+    real(dp), intent(in) :: t0                             !< start time [s]
+    real(dp), intent(in) :: y0(:)                          !< its state
+    type(rigidized_settings), intent(in) :: opts           !< inner_dt, inner_force_tol, ...
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad settings
+    real(dp) :: limit
+    call self%free()
+    limit = line%model%stable_step()
+    self%dt = opts%inner_dt
+    if (self%dt == 0.0_dp) self%dt = 0.9_dp*limit
+    if (.not. (self%dt > 0.0_dp .and. self%dt <= limit)) then
+      call fatal_error(error, "rigidized coupling: inner_dt = " // str(opts%inner_dt) // " s is not allowed " // &
+        "for the marching line: above its stability limit " // str(limit) // " s (2/w (sqrt(1+zeta^2) - " // &
+        "zeta), w = 2c/l0, c = " // str(line%model%wave_speed()) // " m/s, l0 = " // str(line%model%l0) // &
+        " m); use inner_dt <= that, or 0 for 0.9 of it")
+      return
+    end if
+    if (line%model%mass_coupling > 0.0_dp) then
+      call fatal_error(error, "rigidized coupling: the marching line needs the lumped (diagonal) mass")
+      return
+    end if
+    self%force_tol = opts%inner_force_tol
+    self%max_iter = opts%inner_max_iterations
+    self%max_steps = opts%max_steps
+    self%t = t0; self%tn = t0; self%tp = t0; self%t_stop = t0; self%h = 0.0_dp
+    allocate(self%y, source=y0)
+    allocate(self%yn, source=y0)
+    allocate(self%yp, source=y0)
+    allocate(self%poly%c(size(y0), 0:1))
+    self%poly%order = 1
+    self%restart = .true.
+  end subroutine marcher_init
+
+  !> The current outer step ends at t1: equal sub-steps no larger than dt
+  !> from the last sub-step's end to t1.
+  subroutine marcher_set_stop_time(self, t1)
+    class(line_marcher), intent(inout) :: self   !< the marcher
+    real(dp), intent(in) :: t1                   !< end of the outer step [s]
+    integer :: n_sub
+    self%t_stop = t1
+    n_sub = max(1, ceiling((t1 - self%tn)/self%dt - 1.0e-9_dp))
+    self%h = (t1 - self%tn)/n_sub
+  end subroutine marcher_set_stop_time
+
+  !> March to t (<= the stop time): sub-steps while their end is before t,
+  !> then y = the state at t (the sub-step's linear interpolant inside it).
+  !> Each sub-step is shown to `observer`.
+  subroutine marcher_advance(self, line, t, error, observer)
+    class(line_marcher), intent(inout) :: self             !< the marcher
+    type(rigidized_line), intent(inout) :: line            !< the line subsystem (work arrays)
+    real(dp), intent(in) :: t                              !< target time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    class(step_observer), intent(inout), optional :: observer  !< shown the sub-steps
+    real(dp) :: eps, s
+    logical :: last
+    eps = 1.0e-12_dp*max(1.0_dp, abs(t))
+    do while (self%tn < t - eps)
+      if (.not. (self%h > 0.0_dp) .or. self%tn >= self%t_stop - eps) then
+        call fatal_error(error, "line (marching): asked for t = " // str(t) // " s beyond the outer step's end " // &
+          str(self%t_stop) // " s")
+        return
+      end if
+      if (self%max_steps > 0 .and. self%steps >= self%max_steps) then
+        call fatal_error(error, "line (marching): the step budget of " // str(self%max_steps) // " sub-steps " // &
+          "(&run max_steps) is used up at t = " // str(self%tn) // " s")
+        return
+      end if
+      call marcher_step(self, line, error)
+      if (allocated(error)) return
+      last = abs(self%tn - self%t_stop) <= eps
+      if (last) self%tn = self%t_stop
+      if (present(observer)) then
+        self%poly%tn = self%tn
+        self%poly%c(:, 0) = self%yn
+        self%poly%c(:, 1) = (self%yn - self%yp)/(self%tn - self%tp)
+        call observer%observe(self%poly, self%tp, self%tn, self%restart, last)
+        self%restart = .false.
+      end if
+    end do
+    if (abs(t - self%tn) <= eps .or. self%tn == self%tp) then
+      self%y = self%yn
+      self%t = self%tn
+    else
+      s = (t - self%tp)/(self%tn - self%tp)
+      self%y = self%yp + s*(self%yn - self%yp)
+      self%t = t
+    end if
+  end subroutine marcher_advance
+
+  !> One sub-step of size self%h (Steps 2-5, see line_marcher).
+  subroutine marcher_step(self, line, error)
+    type(line_marcher), intent(inout) :: self
+    type(rigidized_line), intent(inout) :: line
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: k, i, n, st
+    real(dp) :: h
+    n = line%model%n
+    h = self%h
+    self%yp = self%yn
+    self%tp = self%tn
+    call line%unpack(self%tn, self%yn)
+    call line%model%forces(line%x, line%v, line%f, line%tension, st)
+    self%forces = self%forces + 1
+    if (st /= 0) then
+      call fatal_error(error, "line (marching): a line tension is not finite at t = " // str(self%tn) // &
+        " s: the state diverged")
+      return
+    end if
+    ! Steps 2-3, Eqs. (15), (12): interior velocities, then positions
+    do k = 1, min(line%last, n - 1)
+      i = 6*(k - 1)
+      self%yn(i+4:i+6) = self%yn(i+4:i+6) + h*line%f(:, k)/line%model%node_mass(k)
+      self%yn(i+1:i+3) = self%yn(i+1:i+3) + h*self%yn(i+4:i+6)
+    end do
+    if (.not. line%far_kinematic) call parachute_end_step(self, line, self%tn + h, h, error)
+    if (allocated(error)) return
+    self%tn = self%tn + h
+    self%steps = self%steps + 1
+  end subroutine marcher_step
+
+  !> Steps 4-5, Eq. (16): node N, the parachute, at t1 = t + h from its force
+  !> condition with the line's force of the old level (line%f, line%x, line%v
+  !> at t), Newton on its new velocity until |e| <= max(e0, round-off).
+  subroutine parachute_end_step(self, line, t1, h, error)
+    type(line_marcher), intent(inout) :: self
+    type(rigidized_line), intent(inout) :: line
+    real(dp), intent(in) :: t1, h
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: x0(3), v0(3), x1(3), v1(3), fl(3), acc(3), drag(3), e(3), jac(3, 3), rhs(3, 1)
+    real(dp) :: mass, m_share, floor
+    integer :: n, i, it, j
+    logical :: ok
+    n = line%model%n
+    i = 6*(n - 1)
+    x0 = line%x(:, n)
+    v0 = line%v(:, n)
+    fl = line%f(:, n)
+    m_share = line%model%node_mass(n)
+    v1 = v0
+    it = 0
+    do
+      x1 = x0 + h*v1
+      call canopy_node_acceleration(line%chute, t1, x1, v1, m_share, fl, line%model%p%air, &
+        line%model%p%gravity, acc, drag, ok)
+      if (ok) call canopy_node_jacobian(line%chute, t1, x1, v1, m_share, line%model%p%air, mass, jac, ok)
+      if (.not. ok) then
+        call fatal_error(error, "line (marching): parachute altitude " // str(x1(2)) // " m is outside the " // &
+          "atmosphere model at t = " // str(t1) // " s")
+        return
+      end if
+      e = mass*((v1 - v0)/h - acc)
+      floor = 64*epsilon(1.0_dp)*(mass*(norm2(v1) + norm2(v0))/h + norm2(fl) + norm2(drag))
+      if (norm2(e) <= max(self%force_tol, floor)) exit
+      if (it >= self%max_iter) then
+        call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
+          str(t1) // " s: |e| = " // str(norm2(e)) // " N > e0 = " // str(self%force_tol) // " N after " // &
+          str(it) // " iterations")
+        return
+      end if
+      ! de/dv1 = mass/h I - d drag/d v (the density's change with altitude left out)
+      jac = -jac
+      do j = 1, 3
+        jac(j, j) = jac(j, j) + mass/h
+      end do
+      rhs(:, 1) = -e
+      call solve_general(jac, rhs, error, "line (marching): far-end force Jacobian", estimate_condition=.false.)
+      if (allocated(error)) return
+      v1 = v1 + rhs(:, 1)
+      it = it + 1
+    end do
+    self%iterations = self%iterations + it
+    line%chute_drag = drag
+    self%yn(i+4:i+6) = v1 - [line%v_ref, 0.0_dp, 0.0_dp]
+    self%yn(i+1:i+3) = self%yn(i+1:i+3) + h*self%yn(i+4:i+6)
+  end subroutine parachute_end_step
+
+  !> Counters as CVODE's: sub-steps, force evaluations, far-end iterations.
+  function marcher_stats(self) result(s)
+    class(line_marcher), intent(in) :: self   !< the marcher
+    type(cvode_stats) :: s
+    s%steps = int(self%steps, kind(s%steps))
+    s%rhs_evals = int(self%forces, kind(s%rhs_evals))
+    s%nonlin_iters = int(self%iterations, kind(s%nonlin_iters))
+  end function marcher_stats
+
+  !> Release the arrays and reset the counters.
+  subroutine marcher_free(self)
+    class(line_marcher), intent(inout) :: self   !< the marcher
+    if (allocated(self%y)) deallocate(self%y, self%yn, self%yp)
+    if (allocated(self%poly%c)) deallocate(self%poly%c)
+    self%steps = 0; self%forces = 0; self%iterations = 0
+  end subroutine marcher_free
 
 end module airlaunch_rigidized_coupling

@@ -12,6 +12,7 @@ module airlaunch_scenario_config
   use airlaunch_aircraft_aero, only: aircraft_aero
   use airlaunch_rocket_aero, only: rocket_aero
   use airlaunch_parachute, only: parachute
+  use airlaunch_line, only: marching_stable_step
   use airlaunch_trim, only: trim_alpha_min_deg, trim_alpha_max_deg
   implicit none
   private
@@ -23,13 +24,13 @@ module airlaunch_scenario_config
     "aircraft", "bay", "rocket", "parachute", "line"]
 
   !> Variables of &line (air-launch scene).
-  type(nml_var), parameter :: line_vars(18) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
+  type(nml_var), parameter :: line_vars(20) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
     nml_var("cd_tangential", "real"), nml_var("coupling", "string", 16), nml_var("outer_dt", "real"), &
     nml_var("inner_rtol", "real"), nml_var("far_end", "string", 16), nml_var("coupling_by_phase", "string", 16), &
     nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real"), &
-    nml_var("auto_min_steps", "real")]
+    nml_var("auto_min_steps", "real"), nml_var("inner_scheme", "string", 16), nml_var("inner_dt", "real")]
 
   !> The couplings `&line coupling` may name (DESIGN §4 (a), (b)), and the two
   !> ways of choosing between them during a run.
@@ -108,6 +109,9 @@ module airlaunch_scenario_config
     real(dp) :: auto_max_strain_change = 0.05_dp  !< auto: slow when the stretch changes less per outer step
     real(dp) :: auto_dwell = 0.1_dp               !< auto: wanted this long before a switch [s]
     real(dp) :: auto_min_steps = 8.0_dp           !< auto: busy when the line costs this many steps per outer step
+    !> rigidized: the line's sub-steps by "cvode" (BDF) or "marching" (the paper's, §2.3)
+    character(len=16) :: inner_scheme = "cvode"
+    real(dp) :: inner_dt = 0.0_dp           !< rigidized, marching: sub-step [s] (0: 0.9 of its stability limit)
   end type line_config
 
   !> Everything the air-launch scene reads.
@@ -478,14 +482,15 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
+    real(dp) :: inner_dt
     integer :: n_seg, u, ios
-    character(len=16) :: coupling, far_end, coupling_by_phase(4)
+    character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: present
     character(len=256) :: msg
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
       coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, auto_min_strain, auto_max_strain_change, &
-      auto_dwell, auto_min_steps
+      auto_dwell, auto_min_steps, inner_scheme, inner_dt
     enabled = .true.
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -494,6 +499,7 @@ contains
     coupling_by_phase = c%coupling_by_phase
     auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
     auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
+    inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
     call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -522,6 +528,9 @@ contains
     call require_range(f, "line", "inner_rtol", inner_rtol, 0.0_dp, 1.0e-2_dp, "(0: &run rtol)", error)
     call require_choice(f, "line", "far_end", far_end, [character(len=16) :: "parachute", "chain"], error)
     call check_coupling_choice(f, coupling, coupling_by_phase, error)
+    call check_inner_scheme(f, coupling, inner_scheme, inner_dt, error)
+    if (.not. allocated(error) .and. inner_scheme == "marching") &
+      call check_marching_step(f, inner_dt, ea, mass_per_length, length/n_seg, damping, error)
     call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps, &
       error)
     if (.not. allocated(error) .and. coupling /= "direct" .and. far_end == "chain" .and. n_seg < 2) &
@@ -535,6 +544,8 @@ contains
     c%auto_max_strain_change = auto_max_strain_change
     c%auto_dwell = auto_dwell
     c%auto_min_steps = auto_min_steps
+    c%inner_scheme = inner_scheme
+    c%inner_dt = inner_dt
     call echo_line(c, echo)
   end subroutine read_line
 
@@ -546,11 +557,12 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
+    real(dp) :: inner_dt
     integer :: n_seg, u
-    character(len=16) :: coupling, far_end, coupling_by_phase(4)
+    character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
-      coupling, outer_dt, inner_rtol, far_end
+      coupling, outer_dt, inner_rtol, far_end, inner_scheme, inner_dt
     enabled = c%enabled
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -559,6 +571,7 @@ contains
     coupling_by_phase = c%coupling_by_phase
     auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
     auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
+    inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
     open(newunit=u, status="scratch", action="readwrite")
     select case (coupling)
     case ("per_phase")
@@ -584,6 +597,43 @@ contains
       write(unit, nml=line)
     end subroutine write_auto
   end subroutine echo_line
+
+  !> The paper's marching line (`inner_scheme = 'marching'`) sub-steps the
+  !> rigidized coupling's line: it needs coupling = 'rigidized' (the direct
+  !> coupling integrates the nodes with the bodies; the per-phase and automatic
+  !> choices hand CVODE's line over), and inner_dt belongs to it.
+  subroutine check_inner_scheme(f, coupling, inner_scheme, inner_dt, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: coupling, inner_scheme
+    real(dp), intent(in) :: inner_dt
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call require_choice(f, "line", "inner_scheme", inner_scheme, [character(len=16) :: "cvode", "marching"], error)
+    call require_range(f, "line", "inner_dt", inner_dt, 0.0_dp, 0.1_dp, "s (0: 0.9 of the marching " // &
+      "scheme's stability limit)", error)
+    if (allocated(error)) return
+    if (inner_scheme == "marching" .and. coupling /= "rigidized") then
+      call fatal_error(error, f%path // ": &line: inner_scheme = 'marching' is not allowed with coupling = '" // &
+        trim(coupling) // "' (the paper's marching sub-steps the line of coupling = 'rigidized' only)")
+    else if (inner_scheme /= "marching" .and. inner_dt > 0.0_dp) then
+      call fatal_error(error, f%path // ": &line: inner_dt = " // str(inner_dt) // " s is not allowed with " // &
+        "inner_scheme = '" // trim(inner_scheme) // "' (it is the marching line's sub-step: set inner_scheme " // &
+        "= 'marching' or remove it)")
+    end if
+  end subroutine check_inner_scheme
+
+  !> The marching line's sub-step within its stability limit (the line's
+  !> highest axial mode, line_model%stable_step).
+  subroutine check_marching_step(f, inner_dt, ea, mass_per_length, l0, damping, error)
+    type(nml_file), intent(in) :: f
+    real(dp), intent(in) :: inner_dt, ea, mass_per_length, l0, damping
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: limit
+    limit = marching_stable_step(ea, mass_per_length, l0, damping, 0.0_dp)
+    if (inner_dt > limit) call fatal_error(error, f%path // ": &line: inner_dt = " // str(inner_dt) // " s is " // &
+      "not allowed: above the marching line's stability limit " // str(limit) // " s for these ea, " // &
+      "mass_per_length, damping and length/n_seg (use inner_dt <= that, or 0 for 0.9 of it)")
+  end subroutine check_marching_step
 
   !> `coupling_by_phase` belongs to coupling = 'per_phase' and names a single
   !> coupling for each of the four phases.

@@ -134,6 +134,98 @@ def test_far_end_chain_freezes_the_line(airlaunch_exe, tmp_path, paper_pair):
         assert abs(t_end_chain - t0) < 0.05 * t0
 
 
+@pytest.fixture(scope="module")
+def paper_method(airlaunch_exe, tmp_path_factory):
+    """The paper's method end to end: the rigidization with the line sub-stepped by
+    the paper's explicit marching (`inner_scheme = 'marching'`), at output_dt 0.02 s
+    (the file's) and 0.1 s."""
+    d = tmp_path_factory.mktemp("paper_method")
+    out = {}
+    for dt in ("0.02", "0.1"):
+        nc = d / f"m{dt}.nc"
+        nml = nml_variant(d, f"m{dt}", line=("  coupling = 'rigidized'", "  inner_scheme = 'marching'"),
+                          edits=[(r"^  output_dt = \S+", f"  output_dt = {dt}")])
+        res = run_airlaunch(airlaunch_exe, nml, "--output", nc)
+        assert res.returncode == 0, res.stderr
+        out[dt] = (re.search(r"^integration: .*$", res.stdout, flags=re.M).group(0), xr.open_dataset(nc))
+    yield out
+    for _, ds in out.values():
+        ds.close()
+
+
+def marching_limit(ea=1.0e6, rho=0.4, length=60.0, n=15, c_d=1.0e3):
+    """The marching scheme's stability limit for the paper file's line, by hand:
+    highest axial mode w = 2c/l0, zeta = w c_d/(2 EA), h = 2/w (sqrt(1 + zeta^2) - zeta)."""
+    w = 2.0 * np.sqrt(ea / rho) / (length / n)
+    zeta = w * c_d / (2.0 * ea)
+    return 2.0 / w * (np.sqrt(1.0 + zeta**2) - zeta)
+
+
+def test_paper_method_matches_direct(paper_method, paper_pair):
+    """The paper's method (rigidization + marching line) against the direct coupling,
+    with the tolerances of the rigidized coupling's test above (the marching line's
+    first-order time error at 0.9 of its stability limit, 1.7 ms sub-steps, is small
+    against the rigidization's).  Measured: phase times within 0.05 ms, first pitch
+    maximum 2.3 ms, pitch at separation 0.0015 deg, clearance 0.5 mm, nose elevation
+    0.091 deg (at 15 s, the rocket tumbling; the rigidized coupling with CVODE's line
+    0.059 deg, the marching line at half its sub-step 0.039 deg), rocket CG 5 cm,
+    rocket-end tension 26 N, the two parachutes 6 mm apart."""
+    direct, _ = paper_pair
+    _, ds = paper_method["0.02"]
+    assert ds.attrs["status"] == "completed"
+    assert ds.attrs["line_inner_scheme"] == "marching"
+    assert ds.attrs["line_inner_dt_s"] == pytest.approx(0.9 * marching_limit(), rel=1e-12)
+    a, b = direct.attrs, ds.attrs
+    assert b["edge_time_s"] == pytest.approx(a["edge_time_s"], abs=2e-4)
+    assert b["separation_time_s"] == pytest.approx(a["separation_time_s"], abs=2e-4)
+    assert b["pitch_at_separation_deg"] == pytest.approx(a["pitch_at_separation_deg"], abs=0.01)
+    assert b["pitch_max_time_s"] == pytest.approx(a["pitch_max_time_s"], abs=5e-3)
+    assert b["peak_line_tension_N"] == pytest.approx(a["peak_line_tension_N"], abs=10.0)
+    assert b["min_clearance_m"] == pytest.approx(a["min_clearance_m"], abs=0.01)
+    d_elev = np.abs(ds["rocket_nose_elevation_deg"].values - direct["rocket_nose_elevation_deg"].values)
+    d_pos = np.linalg.norm(ds["rocket_position"].values - direct["rocket_position"].values, axis=1)
+    d_ten = np.abs(ds["line_tension_rocket_end_N"].values - direct["line_tension_rocket_end_N"].values)
+    assert d_elev.max() < 0.1, d_elev.max()
+    assert d_pos.max() < 0.2, d_pos.max()
+    assert d_ten.max() < 50.0, d_ten.max()
+    # the parachute on both sides of the coupling: B3 and the marched node N agree
+    assert ds["line_end_mismatch_m"].values.max() < 0.05
+
+
+def test_paper_method_steps_do_not_depend_on_outputs(paper_method):
+    """The marching sub-steps cut each outer step into equal pieces; an output time
+    inside one reads the sub-step's linear interpolant and changes no sub-step: the
+    same counts, event times and safety maxima (over every sub-step) at output_dt
+    0.1 and 0.02 s.  At least t_end / (0.9 limit) sub-steps were taken."""
+    (steps_a, a), (steps_b, b) = paper_method["0.02"], paper_method["0.1"]
+    assert steps_a == steps_b
+    n = int(re.search(r"(\d+) steps", steps_a).group(1))
+    assert n >= 15.0 / (0.9 * marching_limit())
+    for key in ("edge_time_s", "separation_time_s", "pitch_max_time_s", "peak_line_tension_N",
+                "peak_line_tension_time_s", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion"):
+        assert a.attrs[key] == pytest.approx(b.attrs[key], rel=1e-12, abs=1e-12), key
+    for ds in (a, b):   # a maximum over every step is never below a record
+        assert ds.attrs["peak_line_tension_N"] >= ds["line_tension_rocket_end_N"].values.max()
+
+
+@pytest.mark.parametrize("line,fragment", [
+    (("  inner_scheme = 'marching'",),
+     "&line: inner_scheme = 'marching' is not allowed with coupling = 'direct'"),
+    (("  coupling = 'auto'", "  inner_scheme = 'marching'"),
+     "&line: inner_scheme = 'marching' is not allowed with coupling = 'auto'"),
+    (("  coupling = 'rigidized'", "  inner_scheme = 'euler'"),
+     "&line: inner_scheme = 'euler' is not allowed (one of: cvode, marching)"),
+    (("  coupling = 'rigidized'", "  inner_dt = 0.001"),
+     "&line: inner_dt = 0.001 s is not allowed with inner_scheme = 'cvode'"),
+    (("  coupling = 'rigidized'", "  inner_scheme = 'marching'", "  inner_dt = 0.01"),
+     "&line: inner_dt = 0.01 s is not allowed: above the marching line's stability limit 0.0017202"),
+])
+def test_bad_marching_input_gives_one_clear_line(airlaunch_exe, tmp_path, line, fragment):
+    out = tmp_path / "x.nc"
+    res = run_airlaunch(airlaunch_exe, nml_variant(tmp_path, "bad", line=line), "--output", out)
+    assert_input_error(res, fragment, out)
+
+
 @pytest.mark.parametrize("line,fragment", [
     (("  coupling = 'paper'",), "&line: coupling = 'paper' is not allowed (one of: direct, rigidized, per_phase, auto)"),
     (("  coupling = 'rigidized'", "  outer_dt = 0.0"), "&line: outer_dt = 0.0 is not allowed"),

@@ -42,6 +42,15 @@
 !>     acceleration alone (line force held) and added before comparing.  The
 !>     keep/renew rule: kept at the same state when allowed, renewed when a
 !>     segment goes slack.
+!>  6. The paper's marching as the line's sub-stepper (inner_scheme =
+!>     'marching', §2.3 Steps 1-5): a towed line (node 0 on a curved body path,
+!>     the canopy at node N with drag and apparent mass, weight, axial damping,
+!>     taut throughout) against CVODE at rtol 1e-10 (BDF5) on the same
+!>     subsystem: the tip's error falls at first order with the sub-step
+!>     (semi-implicit Euler: slope 1 +- 0.2 over 0.8, 0.4, 0.2 of the stability
+!>     limit); an output time inside the outer step changes no sub-step (the
+!>     end state bit for bit the same); a sub-step above the stability limit and
+!>     a used-up step budget are errors naming the limit and the time.
 program test_rigidized_coupling
   use airlaunch_kinds, only: dp, g0, pi
   use airlaunch_error, only: error_type
@@ -49,9 +58,10 @@ program test_rigidized_coupling
   use airlaunch_rotation, only: quat_from_euler
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_multibody
-  use airlaunch_line, only: line_model, line_params, line_end
+  use airlaunch_line, only: line_model, line_params, line_end, line_band_upper, line_band_lower
   use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_ode, only: node_blocks
+  use airlaunch_cvode, only: cvode_solver, cvode_options
   use airlaunch_rigidized_coupling
   use testing
   implicit none
@@ -65,6 +75,7 @@ program test_rigidized_coupling
   call test_far_end()
   call test_bad_settings()
   call test_line_node_blocks()
+  call test_marching_line()
   call finish()
 
 contains
@@ -537,4 +548,105 @@ contains
     call line%node_jacobian(t, yp, .true., blk, fresh, st)
     call check(fresh, "a taut segment gone slack: renewed although reuse is allowed")
   end subroutine test_line_node_blocks
+  subroutine test_marching_line()
+    integer, parameter :: m = 8
+    real(dp), parameter :: t_end = 0.2_dp
+    type(rigidized_line), pointer :: line
+    type(line_model) :: model
+    type(parachute) :: chute
+    type(rigidized_settings) :: s
+    type(line_marcher) :: mar, mar2
+    type(cvode_solver) :: ref
+    type(cvode_options) :: opt
+    type(error_type), allocatable :: error
+    real(dp) :: x(3, 0:m), v(3, 0:m), y0(6*m), dir(3), tip_ref(3), errs(3), frac(3), limit, slope
+    integer :: k, j
+    call section("6. the paper's marching as the line's sub-stepper against CVODE")
+    call model%init(line_params(length=2.0_dp*m, n_seg=m, ea=1.0e7_dp, mass_per_length=0.5_dp, damping=200.0_dp, &
+      diameter=0.02_dp, cd_normal=1.2_dp, cd_tangential=0.01_dp, gravity=.true., air=.true.), error)
+    call check(.not. allocated(error), "line model")
+    if (allocated(error)) return
+    chute%mass = 40.0_dp
+    chute%drag_area = 20.0_dp
+    chute%added_mass_factor = 1.0_dp
+    allocate(line)
+    call line%setup(model, chute, .false., boost, h_ref)
+    ! node 0 on a curved path (relative frame), the line straight aft, stretched
+    ! about as the canopy's drag at 200 m/s stretches it, moving with the frame
+    call line%near%set_body_motion(0.0_dp, [0.0_dp, 0.0_dp, 0.0_dp], [1.0_dp, -2.0_dp, 0.5_dp], t_end, &
+      [0.3_dp, -0.2_dp, 0.1_dp], [-2.0_dp, 3.0_dp, -1.0_dp])
+    call line%near%motion(0.0_dp, x(:, 0), v(:, 0))
+    x(:, 0) = x(:, 0) + [0.0_dp, h_ref, 0.0_dp]
+    v(:, 0) = v(:, 0) + [boost, 0.0_dp, 0.0_dp]
+    dir = [-1.0_dp, -0.1_dp, 0.05_dp]
+    dir = dir/norm2(dir)
+    do k = 1, m
+      x(:, k) = x(:, 0) + k*model%l0*1.04_dp*dir
+      v(:, k) = [boost, 0.0_dp, 0.0_dp]
+    end do
+    call line%pack(0.0_dp, x, v, y0)
+    ! the reference: CVODE BDF5 at rtol 1e-10 on the same subsystem
+    opt = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
+      lower_bandwidth=line_band_lower, rtol=1.0e-10_dp, atol=1.0e-10_dp, max_order=5, max_num_steps=1000000)
+    call ref%init(line, 0.0_dp, y0, opt, error)
+    if (.not. allocated(error)) call ref%set_stop_time(t_end, error)
+    if (.not. allocated(error)) call ref%advance(t_end, error)
+    call check(.not. allocated(error), "CVODE reference")
+    if (allocated(error)) return
+    tip_ref = ref%y(6*(m - 1) + 1:6*(m - 1) + 3)
+    call line%rhs(t_end, ref%y, y0, j)   ! (y0 as scratch: the tensions at the end)
+    call check(all(line%tension > 0.0_dp), "the line stays taut (no kink spoils the order)")
+    call line%pack(0.0_dp, x, v, y0)
+    limit = model%stable_step()
+    frac = [0.8_dp, 0.4_dp, 0.2_dp]
+    do j = 1, 3
+      s%inner_dt = frac(j)*limit
+      call mar%init(line, 0.0_dp, y0, s, error)
+      call mar%set_stop_time(t_end)
+      if (.not. allocated(error)) call mar%advance(line, t_end, error)
+      call check(.not. allocated(error), "march at " // fmt(frac(j)) // " of the limit")
+      if (allocated(error)) return
+      errs(j) = norm2(mar%y(6*(m - 1) + 1:6*(m - 1) + 3) - tip_ref)
+      print '(a, f4.2, a, es10.3, a, i6, a, es10.3, a)', "  dt = ", frac(j), " x limit: tip error ", errs(j), &
+        " m, ", mar%steps, " sub-steps, ", real(mar%iterations, dp)/mar%steps, " far-end iterations per sub-step"
+    end do
+    slope = log(errs(1)/errs(3))/log(frac(1)/frac(3))
+    print '(a, f6.3)', "  order (log-log slope of the tip error against the sub-step): ", slope
+    call check(errs(3) > 0.0_dp .and. errs(3) < 1.0e-2_dp*model%p%length, "the march follows the reference")
+    call check_close(slope, 1.0_dp, "first order in the sub-step", abs=0.2_dp)
+    ! an output inside the outer step changes no sub-step
+    s%inner_dt = 0.0_dp
+    call mar%init(line, 0.0_dp, y0, s, error)
+    call mar2%init(line, 0.0_dp, y0, s, error)
+    call mar%set_stop_time(t_end)
+    call mar2%set_stop_time(t_end)
+    call mar%advance(line, t_end, error)
+    call mar2%advance(line, t_end/3.0_dp, error)
+    call check(abs(mar2%t - t_end/3.0_dp) < 1.0e-15_dp, "state at the output time")
+    call mar2%advance(line, t_end, error)
+    call check(.not. allocated(error) .and. all(mar%y == mar2%y) .and. mar%steps == mar2%steps, &
+      "the same sub-steps and end state with an output inside (" // str(int(mar%steps)) // " sub-steps, dt = " // &
+      "0.9 of the limit by default: " // fmt(mar%dt) // " s)")
+    call check_close(mar%dt, 0.9_dp*limit, "default sub-step 0.9 of the limit", rel=1.0e-14_dp)
+    ! bad settings
+    s%inner_dt = 1.01_dp*limit
+    call mar%init(line, 0.0_dp, y0, s, error)
+    call check(allocated(error), "a sub-step above the stability limit refused")
+    if (allocated(error)) then
+      print '(a)', "  " // error%message
+      call check(index(error%message, "stability limit") > 0, "the message names the limit")
+      deallocate(error)
+    end if
+    s%inner_dt = 0.0_dp
+    s%max_steps = 10
+    call mar%init(line, 0.0_dp, y0, s, error)
+    call mar%set_stop_time(t_end)
+    call mar%advance(line, t_end, error)
+    call check(allocated(error) .and. mar%steps == 10, "the step budget stops the march after 10 sub-steps")
+    if (allocated(error)) print '(a)', "  " // error%message
+    call mar%free()
+    call mar2%free()
+    call ref%free()
+    deallocate(line)
+  end subroutine test_marching_line
 end program test_rigidized_coupling
