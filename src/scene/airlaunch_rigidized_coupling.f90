@@ -1209,10 +1209,14 @@ contains
   subroutine marcher_set_stop_time(self, t1)
     class(line_marcher), intent(inout) :: self   !< the marcher
     real(dp), intent(in) :: t1                   !< end of the outer step [s]
-    integer :: n_sub
+    real(dp) :: x, n_sub
     self%t_stop = t1
-    n_sub = max(1, ceiling((t1 - self%tn)/self%dt - 1.0e-9_dp))
-    self%h = (t1 - self%tn)/n_sub
+    ! the count in real arithmetic: a tiny inner_dt must not overflow an integer
+    ! (the step budget then stops the march)
+    x = (t1 - self%tn)/self%dt - 1.0e-9_dp
+    n_sub = aint(x)
+    if (n_sub < x) n_sub = n_sub + 1.0_dp
+    self%h = (t1 - self%tn)/max(1.0_dp, n_sub)
   end subroutine marcher_set_stop_time
 
   !> March to t (<= the stop time): sub-steps while their end is before t,

@@ -226,6 +226,22 @@ def test_bad_marching_input_gives_one_clear_line(airlaunch_exe, tmp_path, line, 
     assert_input_error(res, fragment, out)
 
 
+def test_tiny_marching_step_stops_on_the_step_budget(airlaunch_exe, tmp_path):
+    """inner_dt = 1e-30 s: 2e28 sub-steps per outer step.  The count once
+    overflowed an integer, the march took garbage steps and the run failed 0.16 s
+    later on an ill-conditioned Kane matrix; now the step budget (&run max_steps,
+    500 000) stops it at once with the time, and the record so far is kept."""
+    out = tmp_path / "tiny.nc"
+    nml = nml_variant(tmp_path, "tiny", line=("  coupling = 'rigidized'", "  inner_scheme = 'marching'",
+                                              "  inner_dt = 1e-30"))
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 3, res.stderr
+    first = res.stderr.splitlines()[0]
+    assert first.startswith("airlaunch: error:") and "step budget of 500000 sub-steps" in first and "t = " in first
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "failed"
+
+
 @pytest.mark.parametrize("line,fragment", [
     (("  coupling = 'paper'",), "&line: coupling = 'paper' is not allowed (one of: direct, rigidized, per_phase, auto)"),
     (("  coupling = 'rigidized'", "  outer_dt = 0.0"), "&line: outer_dt = 0.0 is not allowed"),
