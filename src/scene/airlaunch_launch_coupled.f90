@@ -343,11 +343,46 @@ contains
       if (switch) return
       if (r%plan%mode == "auto" .and. r%dsolver%t >= r%next_check) then
         call auto_check(r, r%dsolver%t, switch)
-        if (switch) return
+        if (switch) then
+          call direct_to_seen_end(r, run, cfg, res, err)
+          return
+        end if
       end if
     end do
     r%done = .true.
   end subroutine direct_segment
+
+  !> An automatic switch decided at a check time inside the direct solver's
+  !> last step: the safety maxima have already seen that step to its end
+  !> (dsolver%t_seen), so the run keeps the direct solution that far - its
+  !> records and events on the way, no new step - and hands over there.
+  subroutine direct_to_seen_end(r, run, cfg, res, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp) :: tout
+    logical :: leave
+    do while (r%dsolver%t < r%dsolver%t_seen)
+      tout = r%dsolver%t_seen
+      if (r%iout <= r%nout) tout = min(tout, r%t_out(r%iout))
+      leave = .false.
+      call direct_advance(r, tout, res, leave, err)
+      if (allocated(err)) return
+      if (r%iout <= r%nout) then
+        if (r%dsolver%t >= r%t_out(r%iout)) then
+          call record_now(r, run, cfg, res, err)
+          r%iout = r%iout + 1
+          if (r%t_out(r%iout - 1) >= run%t_end .or. stop_now(r, run, res, r%dsys%sep%phase, r%dsolver%t)) then
+            r%done = .true.
+            return
+          end if
+        end if
+      end if
+    end do
+    call set_next_check(r, r%dsolver%t)
+  end subroutine direct_to_seen_end
 
   !> Integrate the direct system to t_target, handling the events on the way;
   !> stops early (`switch`) at a phase change the plan gives to the other coupling.

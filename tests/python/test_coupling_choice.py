@@ -245,6 +245,33 @@ def test_auto_integrates_the_snatch_with_the_direct_coupling(snatch):
     assert largest_error(auto, direct) <= largest_error(rigid, direct)
 
 
+def test_auto_hands_over_at_the_end_of_the_direct_step(airlaunch_exe, tmp_path):
+    """An automatic switch is decided at a check time inside the direct solver's
+    last step, whose whole stretch the safety maxima have already seen; the run
+    keeps the direct solution to that step's end and hands over there.  Snatch,
+    1.5 s, outputs every 0.1 ms: the records up to the switch time (1.340333 s,
+    after the check at 1.34 s) are the pure direct run's, bit for bit, and the
+    first record after it is the rigidized coupling's.  (Before, the hand-over
+    was at the check time: the records in the last 0.33 ms of that step came
+    from the rigidized coupling while the maxima had seen the direct solution
+    there.)"""
+    edits = SNATCH + [(r"^  t_end = 15.0 .*$", "  t_end = 1.5"), (r"^  output_dt = \S+", "  output_dt = 1.0e-4")]
+    with run(airlaunch_exe, tmp_path, "auto", ("  coupling = 'auto'",), edits) as auto, \
+            run(airlaunch_exe, tmp_path, "direct", edits=edits) as direct:
+        log = auto.attrs["coupling_switch_log"].split("; ")
+        assert log[0].endswith("direct -> rigidized")
+        t_switch = float(log[0].split(" s:")[0])
+        check = auto.attrs["outer_dt_s"] * np.floor(t_switch / auto.attrs["outer_dt_s"] + 1e-9)
+        assert check < t_switch < check + 0.01, (check, t_switch)   # inside a step, after the check
+        t = auto["time"].values
+        kept = t <= t_switch
+        assert np.count_nonzero(kept & (t > check)) >= 2           # records between check and switch
+        np.testing.assert_array_equal(auto["line_coupling_active"].values[kept], 0)
+        assert auto["line_coupling_active"].values[np.count_nonzero(kept)] == 1
+        for name in ("rocket_position", "line_tension_rocket_end_N", "aircraft_euler_deg"):
+            np.testing.assert_array_equal(auto[name].values[kept], direct[name].values[kept], err_msg=name)
+
+
 def test_auto_records_follow_the_indicator_and_hysteresis(snatch):
     """From the records alone (outer step = output interval = 0.02 s, so
     every record is a check): the rigidized coupling only after `dwell` of
