@@ -6,6 +6,7 @@
 !> sequence of steps ends where the quantities may jump (an event, a stop time,
 !> a restart, the end of the run); its first and last step also get a sample
 !> at their middle (a sequence may be a single step with its maximum inside).
+!> A bracket over two steps is searched on each step's interpolant apart.
 !>
 !> An extension says which quantities its integrator carries (`watches`) and
 !> evaluates them at a time from the interpolated state self%y and its rate
@@ -136,13 +137,15 @@ contains
   end subroutine maxima_finish
 
   !> The maximum of quantity m in the bracket br, on the stretches' interpolants.
+  !> A bracket over two steps (its best sample at their junction) is searched
+  !> step by step, each on its own interpolant: a maximum inside each step is
+  !> found, not only the one Brent's parabolas over the whole bracket reach.
   subroutine refine(self, m, br)
     class(maxima_observer), intent(inout) :: self
     integer, intent(in) :: m
     type(peak_bracket), intent(in) :: br
-    type(max_search) :: search
     type(peak_bracket) :: b
-    real(dp) :: t, q(max_quantities)
+    real(dp) :: q(max_quantities)
     integer :: k, nq
     logical :: ok
     nq = n_quantities(self)
@@ -155,16 +158,37 @@ contains
       if (.not. ok) return
       b%fx = q(m)
     end if
+    if (b%left /= b%right .and. b%lo < b%x .and. b%x < b%hi) then
+      call search_piece(self, m, peak_bracket(lo=b%lo, x=b%x, hi=b%x, flo=b%flo, fx=b%fx, fhi=b%fx, &
+        left=b%left, right=b%left))
+      call search_piece(self, m, peak_bracket(lo=b%x, x=b%x, hi=b%hi, flo=b%fx, fx=b%fx, fhi=b%fhi, &
+        left=b%right, right=b%right))
+    else
+      call search_piece(self, m, b)
+    end if
+  end subroutine refine
+
+  !> Brent's search for the maximum of quantity m in the bracket b (piece
+  !> b%left before b%x, b%right after), offered to its tracker.
+  subroutine search_piece(self, m, b)
+    class(maxima_observer), intent(inout) :: self
+    integer, intent(in) :: m
+    type(peak_bracket), intent(in) :: b
+    type(max_search) :: search
+    real(dp) :: t, q(max_quantities)
+    integer :: k, nq
+    logical :: ok
+    nq = n_quantities(self)
     call search%start(b, 1.0e-12_dp)
     do while (search%next(t))
-      k = br%right
-      if (t < br%x .or. k == 0) k = br%left
+      k = b%right
+      if (t < b%x .or. k == 0) k = b%left
       call evaluate(self, t, k, m, .false., q(1:nq), ok)
       if (.not. ok) return
       call search%tell(q(m))
     end do
     call self%trk(m)%offer(search%x, search%maximum())
-  end subroutine refine
+  end subroutine search_piece
 
   !> The quantities at time t on piece k.
   subroutine evaluate(self, t, k, only, estimate, q, ok)

@@ -5,10 +5,45 @@
 !> 1e-4 below it (what the output records gave), the tracker finds it to
 !> rounding; a sequence that ends rising (the function may jump after it) or
 !> starts falling keeps its end value.
+!>
+!> The step observer (airlaunch_step_maxima) on synthetic steps whose
+!> interpolants are given: a bracket over two steps whose junction sample is a
+!> valley between a peak in each step (1.2 at t = 1.5 in the first, 2.0 at
+!> t = 2.4 in the second; samples 0.9, 0.9, -0.475 at t = 1, 2, 3).  Each
+!> step is searched on its own interpolant, so the larger peak is found; one
+!> Brent search over the whole bracket followed the samples' parabola to the
+!> first step and returned 1.2.
+module peak_search_test_observer
+  use airlaunch_kinds, only: dp
+  use airlaunch_step_maxima, only: maxima_observer
+  implicit none
+  private
+  public :: state_observer
+
+  !> The quantity is the (one-component) state itself.
+  type, extends(maxima_observer) :: state_observer
+  contains
+    procedure :: values => state_values
+  end type state_observer
+
+contains
+
+  subroutine state_values(self, t, q, ok)
+    class(state_observer), intent(inout) :: self
+    real(dp), intent(in) :: t
+    real(dp), intent(out) :: q(:)
+    logical, intent(out) :: ok
+    q(1) = self%y(1) + 0.0_dp*t
+    ok = .true.
+  end subroutine state_values
+end module peak_search_test_observer
+
 program test_peak_search
   use airlaunch_kinds, only: dp
   use airlaunch_strings, only: str
   use airlaunch_peak_search
+  use airlaunch_cvode, only: step_polynomial
+  use peak_search_test_observer, only: state_observer
   use testing
   implicit none
   real(dp) :: t1, f1, t, sample_max
@@ -89,9 +124,44 @@ program test_peak_search
   if (trk%close(br)) call refine(br)
   call check_close(trk%best, f1, "largest value", rel=1.0e-13_dp)
 
+  call section("the step observer: a peak in each of a bracket's two steps")
+  call two_peaks()
+
   call finish()
 
 contains
+
+  !> Four steps [0,1], [1,2], [2,3], [3,4]: y = 0.9 t, 1.2 - 1.2 (t - 1.5)^2,
+  !> 2 - 6.875 (t - 2.4)^2, then linear to -1 (each interpolant as CVODE's:
+  !> Taylor coefficients at its step's end).
+  subroutine two_peaks()
+    type(state_observer) :: obs
+    type(step_polynomial) :: p
+    type(peak_tracker), pointer :: trk2(:)
+    allocate(trk2(1))
+    obs%trk => trk2
+    obs%needs_rate = .false.
+    allocate(p%c(1, 0:2))
+    p%order = 2
+    call show(obs, p, 1.0_dp, [0.9_dp, 0.9_dp, 0.0_dp], 0.0_dp, .true., .false.)
+    call show(obs, p, 2.0_dp, [0.9_dp, -1.2_dp, -1.2_dp], 1.0_dp, .false., .false.)
+    call show(obs, p, 3.0_dp, [-0.475_dp, -8.25_dp, -6.875_dp], 2.0_dp, .false., .false.)
+    call show(obs, p, 4.0_dp, [-1.0_dp, -0.525_dp, 0.0_dp], 3.0_dp, .false., .true.)
+    call check_close(trk2(1)%best, 2.0_dp, "the larger peak, in the second step", rel=1.0e-12_dp)
+    call check_close(trk2(1)%t_best, 2.4_dp, "its time", abs=1.0e-6_dp)
+    deallocate(trk2)
+  end subroutine two_peaks
+
+  !> Show the observer the step [t_start, tn] with Taylor coefficients c at tn.
+  subroutine show(obs, p, tn, c, t_start, restart, last)
+    type(state_observer), intent(inout) :: obs
+    type(step_polynomial), intent(inout) :: p
+    real(dp), intent(in) :: tn, c(0:2), t_start
+    logical, intent(in) :: restart, last
+    p%tn = tn
+    p%c(1, :) = c
+    call obs%observe(p, t_start, tn, restart, last)
+  end subroutine show
 
   pure real(dp) function f(t)
     real(dp), intent(in) :: t
