@@ -62,7 +62,7 @@ module airlaunch_line_marching
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_linalg, only: solve_general
-  use airlaunch_line_model, only: line_model
+  use airlaunch_line_model, only: line_model, marching_diverged, far_end_not_converged
   use airlaunch_line_ends, only: line_end, end_point_mass
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
   implicit none
@@ -198,8 +198,7 @@ contains
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
     self%n_forces = self%n_forces + 1
     if (st /= 0) then
-      call fatal_error(error, "line (marching): a line tension is not finite at t = " // str(self%t) // &
-        " s: the state diverged")
+      call marching_diverged(self%t, error)
       return
     end if
     ! the peak tension over the steps (the scheme's resolution: no interpolant)
@@ -249,9 +248,7 @@ contains
       e_floor = residual_floor(self, h, force, d_far, v_far)
       if (norm2(e) <= max(self%force_tol, e_floor)) exit
       if (it >= self%max_iter) then
-        call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
-          str(t1) // " s: |e| = " // str(norm2(e)) // " N > e0 = " // str(self%force_tol) // " N after " // &
-          str(it) // " iterations")
+        call far_end_not_converged(t1, norm2(e), self%force_tol, it, error)
         return
       end if
       rhs(:, 1) = -e

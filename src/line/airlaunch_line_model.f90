@@ -80,7 +80,8 @@ module airlaunch_line_model
   use airlaunch_atmosphere, only: isa, air_state
   implicit none
   private
-  public :: line_params, line_model, line_energy, node_state_name, marching_stable_step
+  public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
+    far_end_not_converged
 
   !> Physical parameters of one line (all SI; namelist group `&line`).
   type :: line_params
@@ -257,6 +258,26 @@ contains
     status = 0
     if (.not. (abs(sum(tension(1:n))) <= huge(1.0_dp))) status = 1
   end subroutine model_forces
+
+  !> The error of an explicit (marching) step whose force evaluation at time t
+  !> found a tension that is not finite (the state diverged).
+  subroutine marching_diverged(t, error)
+    real(dp), intent(in) :: t                              !< time of the state [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set
+    call fatal_error(error, "line (marching): a line tension is not finite at t = " // str(t) // &
+      " s: the state diverged")
+  end subroutine marching_diverged
+
+  !> The error of a marching step whose far-end force iteration (Eq. (16))
+  !> stopped at t with residual |e| above e0 after `iterations`.
+  subroutine far_end_not_converged(t, residual, e0, iterations, error)
+    real(dp), intent(in) :: t, residual, e0                !< time [s], |e| and e0 [N]
+    integer, intent(in) :: iterations                      !< iterations made
+    type(error_type), allocatable, intent(inout) :: error  !< set
+    call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
+      str(t) // " s: |e| = " // str(residual) // " N > e0 = " // str(e0) // " N after " // &
+      str(iterations) // " iterations")
+  end subroutine far_end_not_converged
 
   !> The segment tensions alone (those of model_forces, without its loads).
   !> status = 0, or 1 if a tension is not finite.

@@ -64,7 +64,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_linalg, only: solve_general
   use airlaunch_multibody, only: rigid_body, force_source, separation_system, separation_nroots, phase_free, &
     body_state_name
-  use airlaunch_line, only: line_model, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
+  use airlaunch_line, only: line_model, marching_diverged, far_end_not_converged, line_end, line_band_upper, line_band_lower, rigid_equivalent, rigidize, &
     line_force_jacobian, node_state_name
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, canopy_node_acceleration, &
     parachute_added_mass_rate, &
@@ -1279,8 +1279,7 @@ contains
     call line%model%forces(line%x, line%v, line%f, line%tension, st)
     self%forces = self%forces + 1
     if (st /= 0) then
-      call fatal_error(error, "line (marching): a line tension is not finite at t = " // str(self%tn) // &
-        " s: the state diverged")
+      call marching_diverged(self%tn, error)
       return
     end if
     ! Steps 2-3, Eqs. (15), (12): interior velocities, then positions
@@ -1329,9 +1328,7 @@ contains
       floor = 64*epsilon(1.0_dp)*(mass*(norm2(v1) + norm2(v0))/h + norm2(fl) + norm2(drag))
       if (norm2(e) <= max(self%force_tol, floor)) exit
       if (it >= self%max_iter) then
-        call fatal_error(error, "line (marching): the far-end force iteration did not converge at t = " // &
-          str(t1) // " s: |e| = " // str(norm2(e)) // " N > e0 = " // str(self%force_tol) // " N after " // &
-          str(it) // " iterations")
+        call far_end_not_converged(t1, norm2(e), self%force_tol, it, error)
         return
       end if
       ! de/dv1 = mass/h I - d drag/d v (the density's change with altitude left out)
