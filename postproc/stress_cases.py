@@ -17,6 +17,9 @@ def variant(tmp_path, edits, t_end=6.0):
     return p
 
 
+#: the paper's method end to end: the rigidized coupling with its line marched (§2.3)
+PAPER_METHOD = (r"^(  cd_tangential = 0.01 .*)$", r"\1\n  coupling = 'rigidized'\n  inner_scheme = 'marching'")
+
 CASES = {
     # name: (edits, t_end)
     "EA 1e4 N (soft line)": ([(r"^  ea = 1.0e6 .*$", "  ea = 1.0e4")], 6.0),
@@ -37,6 +40,12 @@ CASES = {
     "early separation (one-sided edge)": ([(r"^  edge_contact = 'bilateral'.*$", "  edge_contact = 'one_sided'")], 6.0),
     "stick-fixed aircraft": ([(r"^  control = 'attitude_hold'.*$", "  control = 'stick_fixed'")], 6.0),
     "slack then snatch (canopy inflates at 1 s)": ([(r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0")], 6.0),
+    # the paper's marching line inside the rigidized coupling, at its stability limit
+    "paper method: EA 1e9 N (stiff line)": ([PAPER_METHOD, (r"^  ea = 1.0e6 .*$", "  ea = 1.0e9")], 6.0),
+    "paper method: light line 1e-3 kg/m": ([PAPER_METHOD, (r"^  mass_per_length = 0.4 .*$",
+                                                             "  mass_per_length = 1.0e-3")], 6.0),
+    "paper method: N = 1 segment": ([PAPER_METHOD, (r"^  n_seg = \d+ .*$", "  n_seg = 1")], 6.0),
+    "paper method: slack then snatch": ([PAPER_METHOD, (r"^  deploy_time = -1.0 .*$", "  deploy_time = 1.0")], 6.0),
 }
 
 
