@@ -601,7 +601,7 @@ contains
     frac = [0.8_dp, 0.4_dp, 0.2_dp]
     do j = 1, 3
       s%inner_dt = frac(j)*limit
-      call mar%init(line, 0.0_dp, y0, s, error)
+      call mar%init(line, 0.0_dp, y0, s%inner_dt, s%inner_force_tol, s%inner_max_iterations, s%max_steps, error)
       call mar%set_stop_time(t_end)
       if (.not. allocated(error)) call mar%advance(line, t_end, error)
       call check(.not. allocated(error), "march at " // fmt(frac(j)) // " of the limit")
@@ -616,8 +616,8 @@ contains
     call check_close(slope, 1.0_dp, "first order in the sub-step", abs=0.2_dp)
     ! an output inside the outer step changes no sub-step
     s%inner_dt = 0.0_dp
-    call mar%init(line, 0.0_dp, y0, s, error)
-    call mar2%init(line, 0.0_dp, y0, s, error)
+    call mar%init(line, 0.0_dp, y0, s%inner_dt, s%inner_force_tol, s%inner_max_iterations, s%max_steps, error)
+    call mar2%init(line, 0.0_dp, y0, s%inner_dt, s%inner_force_tol, s%inner_max_iterations, s%max_steps, error)
     call mar%set_stop_time(t_end)
     call mar2%set_stop_time(t_end)
     call mar%advance(line, t_end, error)
@@ -630,7 +630,7 @@ contains
     call check_close(mar%dt, 0.9_dp*limit, "default sub-step 0.9 of the limit", rel=1.0e-14_dp)
     ! bad settings
     s%inner_dt = 1.01_dp*limit
-    call mar%init(line, 0.0_dp, y0, s, error)
+    call mar%init(line, 0.0_dp, y0, s%inner_dt, s%inner_force_tol, s%inner_max_iterations, s%max_steps, error)
     call check(allocated(error), "a sub-step above the stability limit refused")
     if (allocated(error)) then
       print '(a)', "  " // error%message
@@ -639,7 +639,7 @@ contains
     end if
     s%inner_dt = 0.0_dp
     s%max_steps = 10
-    call mar%init(line, 0.0_dp, y0, s, error)
+    call mar%init(line, 0.0_dp, y0, s%inner_dt, s%inner_force_tol, s%inner_max_iterations, s%max_steps, error)
     call mar%set_stop_time(t_end)
     call mar%advance(line, t_end, error)
     call check(allocated(error) .and. mar%steps == 10, "the step budget stops the march after 10 sub-steps")
