@@ -79,8 +79,10 @@ module airlaunch_line_marching
     integer :: near = 0                       !< node the march starts from
     integer :: far = 0                        !< node of the iterated end force
     integer :: dir = 1                        !< +1 (0 -> N) or -1 (N -> 0)
-    real(dp), allocatable :: x(:, :), v(:, :)        !< state (3, 0:N)
+    real(dp), allocatable :: x(:, :), v(:, :)        !< state at the last step's end tn (3, 0:N)
     real(dp), allocatable :: xn(:, :), vn(:, :)      !< new level (3, 0:N)
+    real(dp), allocatable :: xp(:, :), vp(:, :)      !< state at the last step's start tp (3, 0:N)
+    real(dp) :: tn = 0.0_dp, tp = 0.0_dp      !< end and start of the last step [s]
     real(dp), allocatable :: f(:, :), tension(:)     !< node forces, tensions
     real(dp), allocatable :: inv_mass(:)             !< 1/m (near point mass lumped)
     real(dp) :: far_force(3) = 0.0_dp         !< converged force of the far end on the far node [N]
@@ -138,11 +140,15 @@ contains
       scheme%near = 0; scheme%far = n; scheme%dir = 1
     end if
     allocate(scheme%x(3, 0:n), scheme%v(3, 0:n), scheme%xn(3, 0:n), scheme%vn(3, 0:n), &
-      scheme%f(3, 0:n), scheme%tension(n), scheme%inv_mass(0:n))
+      scheme%xp(3, 0:n), scheme%vp(3, 0:n), scheme%f(3, 0:n), scheme%tension(n), scheme%inv_mass(0:n))
     scheme%x = x0
     scheme%v = v0
     scheme%xn = x0
     scheme%vn = v0
+    scheme%xp = x0
+    scheme%vp = v0
+    scheme%tn = t0
+    scheme%tp = t0
     scheme%inv_mass = 1.0_dp/model%node_mass
     associate (e => scheme%ends(near_end(scheme)))
       if (e%kind == end_point_mass) scheme%inv_mass(scheme%near) = &
@@ -164,19 +170,18 @@ contains
     far_end = merge(2, 1, self%near == 0)
   end function far_end
 
-  !> March to t_out with equal steps no larger than dt.
+  !> March to t_out: steps of dt while they end before it; the state at t_out
+  !> (get_state) is then the last step's linear interpolant, so the steps do
+  !> not depend on the output times.
   subroutine marching_advance(self, t_out, error)
     class(line_marching), intent(inout) :: self            !< scheme
     real(dp), intent(in) :: t_out                          !< output time [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    integer :: i, n_sub
-    real(dp) :: h, t0
+    real(dp) :: eps
     if (t_out <= self%t) return
-    t0 = self%t
-    n_sub = max(1, ceiling((t_out - t0)/self%dt - 1.0e-9_dp))
-    h = (t_out - t0)/n_sub
-    do i = 1, n_sub
-      call self%step(h, error)
+    eps = 1.0e-12_dp*max(1.0_dp, abs(t_out))
+    do while (self%tn < t_out - eps)
+      call self%step(self%dt, error)
       if (allocated(error)) return
     end do
     self%t = t_out
@@ -191,18 +196,18 @@ contains
     real(dp) :: t1, vm_near(3), v_exact(3), force(3), e(3), jac(3, 3), rhs(3, 1), e_floor
     real(dp) :: x_far(3), v_far(3), d_far(3), dummy(3)
 
-    t1 = self%t + h
+    t1 = self%tn + h
     ne = near_end(self)
     fe = far_end(self)
     ! forces at the old level (explicit right-hand side of Eq. (15))
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
     self%n_forces = self%n_forces + 1
     if (st /= 0) then
-      call marching_diverged(self%t, error)
+      call marching_diverged(self%tn, error)
       return
     end if
     ! the peak tension over the steps (the scheme's resolution: no interpolant)
-    if (associated(self%peak)) call self%peak(1)%offer(self%t, maxval(self%tension))
+    if (associated(self%peak)) call self%peak(1)%offer(self%tn, maxval(self%tension))
     if (self%ends(ne)%kind == end_point_mass) self%f(:, self%near) = self%f(:, self%near) + &
       point_load(self, ne, self%x(:, self%near), self%v(:, self%near))
 
@@ -268,11 +273,24 @@ contains
     if (self%ends(fe)%is_kinematic()) then
       call self%ends(fe)%motion(t1, self%xn(:, self%far), self%vn(:, self%far))
     end if
-    self%x = self%xn
-    self%v = self%vn
-    self%t = t1
+    ! the new level becomes the state, the old one the step's start (xp, vp),
+    ! and that storage the next new level: the buffers rotate, nothing is copied
+    call rotate(self%xp, self%x, self%xn)
+    call rotate(self%vp, self%v, self%vn)
+    self%tp = self%tn
+    self%tn = t1
     self%n_steps = self%n_steps + 1
   end subroutine marching_step
+
+  !> previous <- current <- new <- previous (descriptors only: no data is copied).
+  subroutine rotate(previous, current, new)
+    real(dp), allocatable, intent(inout) :: previous(:, :), current(:, :), new(:, :)
+    real(dp), allocatable :: spare(:, :)
+    call move_alloc(previous, spare)
+    call move_alloc(current, previous)
+    call move_alloc(new, current)
+    call move_alloc(spare, new)
+  end subroutine rotate
 
   !> Far node advanced with the trial end force `force`, and the residual
   !> e = F - F(N) of Eq. (16) of its end condition, formed from the far node's
@@ -359,12 +377,25 @@ contains
       self%model%p%wind, self%model%p%air_density)
   end function point_load
 
-  !> Node state at the current time.
+  !> Node state at the current time self%t: the last step's end, or its linear
+  !> interpolant inside it (kinematic ends on their own motion).
   subroutine marching_get_state(self, x, v)
     class(line_marching), intent(inout) :: self   !< scheme
     real(dp), intent(out) :: x(:, 0:), v(:, 0:)
-    x = self%x
-    v = self%v
+    real(dp) :: s
+    integer :: e, k
+    if (self%t == self%tn .or. self%tn == self%tp) then
+      x = self%x
+      v = self%v
+      return
+    end if
+    s = (self%t - self%tp)/(self%tn - self%tp)
+    x = self%xp + s*(self%x - self%xp)
+    v = self%vp + s*(self%v - self%vp)
+    do e = 1, 2
+      k = merge(0, self%model%n, e == 1)
+      if (self%ends(e)%is_kinematic()) call self%ends(e)%motion(self%t, x(:, k), v(:, k))
+    end do
   end subroutine marching_get_state
 
   !> Work counters.
@@ -397,7 +428,8 @@ contains
   !> Release the work arrays.
   subroutine marching_free(self)
     class(line_marching), intent(inout) :: self   !< scheme
-    if (allocated(self%x)) deallocate(self%x, self%v, self%xn, self%vn, self%f, self%tension, self%inv_mass)
+    if (allocated(self%x)) deallocate(self%x, self%v, self%xn, self%vn, self%xp, self%vp, self%f, self%tension, &
+      self%inv_mass)
     self%n_steps = 0; self%n_iter = 0; self%n_forces = 0
     call self%release_peak()
   end subroutine marching_free
