@@ -71,6 +71,7 @@ module airlaunch_rigidized_line
     real(dp), allocatable :: y(:)           !< state at t (interpolated inside a sub-step)
     real(dp) :: tn = 0.0_dp, tp = 0.0_dp    !< end of the last sub-step and its start [s]
     real(dp), allocatable :: yn(:), yp(:)   !< the states there
+    real(dp), allocatable :: yw(:)          !< the new level while a sub-step is made
     real(dp) :: dt = 0.0_dp                 !< largest sub-step [s]
     real(dp) :: h = 0.0_dp                  !< sub-step of the current outer step [s]
     real(dp) :: t_stop = 0.0_dp             !< end of the current outer step [s]
@@ -288,6 +289,7 @@ contains
     allocate(self%y, source=y0)
     allocate(self%yn, source=y0)
     allocate(self%yp, source=y0)
+    allocate(self%yw, source=y0)
     allocate(self%poly%c(size(y0), 0:1))
     self%poly%order = 1
     self%restart = .true.
@@ -360,10 +362,9 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     integer :: k, i, n, st
     real(dp) :: h
+    real(dp), allocatable :: spare(:)
     n = line%model%n
     h = self%h
-    self%yp = self%yn
-    self%tp = self%tn
     call line%unpack(self%tn, self%yn)
     call line%model%forces(line%x, line%v, line%f, line%tension, st)
     self%forces = self%forces + 1
@@ -374,11 +375,18 @@ contains
     ! Steps 2-3, Eqs. (15), (12): interior velocities, then positions
     do k = 1, min(line%last, n - 1)
       i = 6*(k - 1)
-      self%yn(i+4:i+6) = self%yn(i+4:i+6) + h*line%f(:, k)/line%model%node_mass(k)
-      self%yn(i+1:i+3) = self%yn(i+1:i+3) + h*self%yn(i+4:i+6)
+      self%yw(i+4:i+6) = self%yn(i+4:i+6) + h*line%f(:, k)/line%model%node_mass(k)
+      self%yw(i+1:i+3) = self%yn(i+1:i+3) + h*self%yw(i+4:i+6)
     end do
     if (.not. line%far_kinematic) call parachute_end_step(self, line, self%tn + h, h, error)
     if (allocated(error)) return
+    ! the new level becomes the state, the old one the sub-step's start, and
+    ! that storage the next new level (descriptors only: nothing is copied)
+    call move_alloc(self%yp, spare)
+    call move_alloc(self%yn, self%yp)
+    call move_alloc(self%yw, self%yn)
+    call move_alloc(spare, self%yw)
+    self%tp = self%tn
     self%tn = self%tn + h
     self%steps = self%steps + 1
   end subroutine marcher_step
@@ -433,8 +441,8 @@ contains
     end do
     self%iterations = self%iterations + it
     line%chute_drag = drag
-    self%yn(i+4:i+6) = v1 - [line%v_ref, 0.0_dp, 0.0_dp]
-    self%yn(i+1:i+3) = self%yn(i+1:i+3) + h*self%yn(i+4:i+6)
+    self%yw(i+4:i+6) = v1 - [line%v_ref, 0.0_dp, 0.0_dp]
+    self%yw(i+1:i+3) = self%yn(i+1:i+3) + h*self%yw(i+4:i+6)
   end subroutine parachute_end_step
 
   !> Counters as CVODE's: sub-steps, force evaluations, far-end iterations.
@@ -449,7 +457,7 @@ contains
   !> Release the arrays and reset the counters.
   subroutine marcher_free(self)
     class(line_marcher), intent(inout) :: self   !< the marcher
-    if (allocated(self%y)) deallocate(self%y, self%yn, self%yp)
+    if (allocated(self%y)) deallocate(self%y, self%yn, self%yp, self%yw)
     if (allocated(self%poly%c)) deallocate(self%poly%c)
     self%steps = 0; self%forces = 0; self%iterations = 0
   end subroutine marcher_free
