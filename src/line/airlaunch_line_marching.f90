@@ -83,6 +83,9 @@ module airlaunch_line_marching
     real(dp), allocatable :: xn(:, :), vn(:, :)      !< new level (3, 0:N)
     real(dp), allocatable :: xp(:, :), vp(:, :)      !< state at the last step's start tp (3, 0:N)
     real(dp) :: tn = 0.0_dp, tp = 0.0_dp      !< end and start of the last step [s]
+    !> a step ends here (the owner's next sample of a body end, set_body_motion):
+    !> the end's motion is known up to it only; huge = none
+    real(dp) :: t_stop = huge(1.0_dp)
     real(dp), allocatable :: f(:, :), tension(:)     !< node forces, tensions
     real(dp), allocatable :: inv_mass(:)             !< 1/m (near point mass lumped)
     real(dp) :: far_force(3) = 0.0_dp         !< converged force of the far end on the far node [N]
@@ -172,17 +175,21 @@ contains
 
   !> March to t_out: steps of dt while they end before it; the state at t_out
   !> (get_state) is then the last step's linear interpolant, so the steps do
-  !> not depend on the output times.
+  !> not depend on the output times.  A step is cut to end on the owner's
+  !> next body-end sample (t_stop).
   subroutine marching_advance(self, t_out, error)
     class(line_marching), intent(inout) :: self            !< scheme
     real(dp), intent(in) :: t_out                          !< output time [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    real(dp) :: eps
+    real(dp) :: eps, h
     if (t_out <= self%t) return
     eps = 1.0e-12_dp*max(1.0_dp, abs(t_out))
     do while (self%tn < t_out - eps)
-      call self%step(self%dt, error)
+      h = self%dt
+      if (self%t_stop > self%tn + eps) h = min(h, self%t_stop - self%tn)
+      call self%step(h, error)
       if (allocated(error)) return
+      if (abs(self%tn - self%t_stop) <= eps) self%tn = self%t_stop
     end do
     self%t = t_out
   end subroutine marching_advance
@@ -423,6 +430,7 @@ contains
       return
     end if
     call self%ends(which)%set_body_motion(t1, x1, v1, t2, x2, v2)
+    self%t_stop = t2
   end subroutine marching_set_body_motion
 
   !> Release the work arrays.

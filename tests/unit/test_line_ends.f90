@@ -6,9 +6,16 @@
 !> takes from a kinematic end), and outside it the motion continues with the
 !> end velocity.  Tolerance 1e-12 relative to the largest value (a cubic is in
 !> the interpolant's space: only rounding remains).
+!>
+!> The paper's marching scheme with a body end (the paper's way of coupling,
+!> line.md §5): it steps at its dt, but a step ends on the owner's sample t2
+!> of the end's motion (beyond it the motion is not known): with dt = 3 ms and
+!> samples 10 ms apart, 4 steps per outer step (3 ms, 3 ms, 3 ms, 1 ms), and
+!> the end node exactly on the sample at t2.
 program test_line_ends
   use airlaunch_kinds, only: dp
   use airlaunch_strings, only: str
+  use airlaunch_error, only: error_type
   use airlaunch_line
   use testing
   implicit none
@@ -42,9 +49,50 @@ program test_line_ends
   call e%motion(t1 - 0.1_dp, x, v, a)
   call check(maxval(abs(x - (pos(t1) - 0.1_dp*vel(t1)))) <= tol*scale(1) .and. &
     maxval(abs(v - vel(t1))) <= tol*scale(2) .and. all(a == 0.0_dp), "before t1: x1 + v1 (t - t1)")
+  call section("the marching scheme ends a step on the owner's sample of a body end")
+  call marching_stops_on_samples()
+
   call finish()
 
 contains
+
+  subroutine marching_stops_on_samples()
+    integer, parameter :: n = 4
+    type(line_model) :: model
+    type(line_marching) :: m
+    type(line_scheme_options) :: opts
+    type(line_scheme_stats) :: st
+    type(error_type), allocatable :: error
+    real(dp) :: xs(3, 0:n), vs(3, 0:n)
+    integer :: k
+    call model%init(line_params(length=4.0_dp, n_seg=n, ea=1.0e4_dp, mass_per_length=0.5_dp, gravity=.false., &
+      air=.false.), error)
+    do k = 0, n
+      xs(:, k) = [real(k, dp), 0.0_dp, 0.0_dp]
+    end do
+    vs = 0.0_dp
+    opts%scheme = "marching"
+    opts%dt = 3.0e-3_dp
+    call check(opts%dt < model%stable_step(), "dt = 3 ms below the stability limit " // str(model%stable_step()))
+    call new_line_marching(m, model, line_end(kind=end_body, position=xs(:, 0)), line_end(kind=end_free), xs, vs, &
+      0.0_dp, opts, error)
+    call check(.not. allocated(error), "scheme built")
+    if (allocated(error)) return
+    do k = 1, 2
+      call m%set_body_motion(1, 0.01_dp*(k - 1), [0.01_dp*(k - 1), 0.0_dp, 0.0_dp], [1.0_dp, 0.0_dp, 0.0_dp], &
+        0.01_dp*k, [0.01_dp*k, 0.0_dp, 0.0_dp], [1.0_dp, 0.0_dp, 0.0_dp], error)
+      call m%advance(0.01_dp*k, error)
+      call check(.not. allocated(error), "outer step " // str(k))
+      if (allocated(error)) return
+      call m%get_state(xs, vs)
+      st = m%stats()
+      call check(st%steps == 4*k, "outer step " // str(k) // ": " // str(int(st%steps)) // &
+        " steps in all (3, 3, 3, 1 ms per outer step)")
+      call check(m%tn == 0.01_dp*k, "the last step ends on the sample")
+      call check_close(xs(1, 0), 0.01_dp*k, "the body end on its sample", abs=1.0e-15_dp)
+    end do
+    call m%free()
+  end subroutine marching_stops_on_samples
 
   pure function pos(tt) result(r)
     real(dp), intent(in) :: tt
