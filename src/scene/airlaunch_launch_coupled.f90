@@ -332,14 +332,8 @@ contains
       if (r%plan%mode == "auto") t_stop = min(tout, r%next_check)
       call direct_advance(r, t_stop, res, switch, err)
       if (allocated(err)) return
-      if (r%dsolver%t >= tout) then
-        call record_now(r, run, cfg, res, err)
-        r%iout = r%iout + 1
-        if (tout >= run%t_end .or. stop_now(r, run, res, r%dsys%sep%phase, r%dsolver%t)) then
-          r%done = .true.
-          return
-        end if
-      end if
+      call direct_output(r, run, cfg, res, err)
+      if (r%done) return
       if (switch) return
       if (r%plan%mode == "auto" .and. r%dsolver%t >= r%next_check) then
         call auto_check(r, r%dsolver%t, switch)
@@ -370,19 +364,28 @@ contains
       leave = .false.
       call direct_advance(r, tout, res, leave, err)
       if (allocated(err)) return
-      if (r%iout <= r%nout) then
-        if (r%dsolver%t >= r%t_out(r%iout)) then
-          call record_now(r, run, cfg, res, err)
-          r%iout = r%iout + 1
-          if (r%t_out(r%iout - 1) >= run%t_end .or. stop_now(r, run, res, r%dsys%sep%phase, r%dsolver%t)) then
-            r%done = .true.
-            return
-          end if
-        end if
-      end if
+      call direct_output(r, run, cfg, res, err)
+      if (r%done) return
     end do
     call set_next_check(r, r%dsolver%t)
   end subroutine direct_to_seen_end
+
+  !> Record the direct engine if it has reached the next output time; the run
+  !> is done (r%done) after the record at t_end or once its metrics are final.
+  subroutine direct_output(r, run, cfg, res, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp) :: tout
+    if (r%iout > r%nout) return
+    tout = r%t_out(r%iout)
+    if (r%dsolver%t < tout) return
+    call record_now(r, run, cfg, res, err)
+    r%iout = r%iout + 1
+    if (tout >= run%t_end .or. stop_now(r, run, res, r%dsys%sep%phase, r%dsolver%t)) r%done = .true.
+  end subroutine direct_output
 
   !> Integrate the direct system to t_target, handling the events on the way;
   !> stops early (`switch`) at a phase change the plan gives to the other coupling.
