@@ -176,7 +176,7 @@ contains
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s
     if (r%has_line) then
-      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN at " // at(r%peak_tension_time) // new_line("a")
+      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN, first reached at " // at(r%peak_tension_time) // new_line("a")
     else
       s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
     end if

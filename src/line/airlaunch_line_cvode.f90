@@ -448,7 +448,7 @@ contains
       max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, &
       analytic_jacobian=opts%analytic_jacobian, t_final=opts%t_final, &
       newton_coefficient=line_newton_coefficient(opts%rtol))
-    if (opts%peak_tension) call scheme%start_peak()
+    if (opts%peak_tension) call scheme%start_peak(opts%rtol)
     if (scheme%sys%n_state() == 0) return   ! one segment between two kinematic ends
     if (opts%peak_tension) then
       scheme%observer = tension_observer(trk=scheme%peak, sys=scheme%sys, needs_rate=.false.)

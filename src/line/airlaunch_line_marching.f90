@@ -158,7 +158,7 @@ contains
         1.0_dp/(model%node_mass(scheme%near) + e%mass)
     end associate
     scheme%far_force = 0.0_dp
-    if (opts%peak_tension) call scheme%start_peak()
+    if (opts%peak_tension) call scheme%start_peak(opts%rtol)
   end subroutine new_line_marching
 
   !> Index (1 or 2) of the end at the near node.

@@ -37,7 +37,8 @@ module airlaunch_line_scheme
     real(dp) :: dt = 1.0e-4_dp              !< marching: fixed time step [s]
     real(dp) :: force_tol = 1.0e-6_dp       !< marching: e0, far-end force tolerance [N]
     integer :: max_iterations = 20          !< marching: far-end iterations per step
-    !> take the largest segment tension over every step (line_scheme%peak):
+    !> take the largest segment tension over every step (line_scheme%peak; its
+    !> time is the first within rtol of it, for either scheme):
     !> cvode refines it between steps (its cost on input/line_parachute.nml
     !> with the lumped mass, whole process: +13 % instructions at N = 8, +16 %
     !> at N = 60); the benchmarks turn it off for both schemes
@@ -110,7 +111,8 @@ module airlaunch_line_scheme
 contains
 
   !> The largest segment tension of the computed solution so far [N] and its
-  !> time t_peak [s] (0 and -1 before any step).
+  !> time t_peak [s]: the first time the tension came within the tracker's
+  !> band (the scheme's rtol) of it (0 and -1 before any step).
   function scheme_peak_tension(self, t_peak) result(tmax)
     class(line_scheme), intent(inout) :: self   !< scheme
     real(dp), intent(out) :: t_peak             !< its time [s]
@@ -120,14 +122,17 @@ contains
     if (.not. associated(self%peak)) return
     if (self%peak(1)%t_best < 0.0_dp) return
     tmax = self%peak(1)%best
-    t_peak = self%peak(1)%t_best
+    t_peak = self%peak(1)%first_time()
   end function scheme_peak_tension
 
-  !> A fresh tracker of the peak tension.
-  subroutine scheme_start_peak(self)
+  !> A fresh tracker of the peak tension; tensions within `band` (relative)
+  !> of the peak are the same peak, reported at the first of them.
+  subroutine scheme_start_peak(self, band)
     class(line_scheme), intent(inout) :: self   !< scheme
+    real(dp), intent(in) :: band                !< relative band of the peak
     call self%release_peak()
     allocate(self%peak(1))
+    self%peak(1)%band = band
   end subroutine scheme_start_peak
 
   !> Free the tracker.

@@ -14,11 +14,17 @@
 !>       end do
 !>       call tracker%offer(search%x, search%fx)
 !>     end if
+!>
+!> The peak's time is reported as the first time the function came within the
+!> tracker's `band` (relative; the owner's integration tolerance) of its
+!> maximum (`first_time`): where a function holds its maximum over a plateau
+!> (a steady tow tension before release), the place of the largest sample is
+!> decided by round-off and the integrator's noise, the first time is not.
 module airlaunch_peak_search
   use airlaunch_kinds, only: dp
   implicit none
   private
-  public :: peak_bracket, max_search, peak_tracker
+  public :: peak_bracket, max_search, peak_tracker, max_records
 
   !> A local maximum between samples: x (the largest sample) in [lo, hi], the
   !> samples' values, and the pieces (interpolants) left and right of x.
@@ -52,16 +58,28 @@ module airlaunch_peak_search
     procedure :: maximum => search_maximum
   end type max_search
 
+  !> Values within this many records of the peak's band are told apart
+  !> exactly (work arrays of fixed size: no allocation per step).
+  integer, parameter :: max_records = 32
+
   !> Running maximum of samples at the ends of consecutive intervals; a
   !> sequence of intervals ends where the function may jump (`close`).
   type :: peak_tracker
     real(dp) :: best = -huge(1.0_dp)   !< the largest value offered
     real(dp) :: t_best = -1.0_dp       !< its time
+    !> relative band of the peak: values within band*|best| of best are the
+    !> same peak, whose time is the first of them (`first_time`)
+    real(dp) :: band = 0.0_dp
+    !> the values offered that may still be the first within the band: none
+    !> is both later and not larger than another (times and values rise together)
+    integer :: n_rec = 0
+    real(dp) :: rec_t(max_records) = 0.0_dp, rec_q(max_records) = 0.0_dp
     integer :: n = 0                   !< samples of the open sequence (0: none)
     real(dp) :: ts(2) = 0.0_dp, qs(2) = 0.0_dp  !< its last two samples (2: the latest)
     integer :: piece(2) = 0            !< piece of the interval ending at each (0: none)
   contains
     procedure :: offer => tracker_offer
+    procedure :: first_time => tracker_first_time
     procedure :: push => tracker_push
     procedure :: close => tracker_close
   end type peak_tracker
@@ -209,15 +227,98 @@ contains
     f = -self%fx
   end function search_maximum
 
-  !> A value of the function at time t: the running maximum (the first of equal ones).
-  pure subroutine tracker_offer(self, t, f)
+  !> A value of the function at time t: the running maximum (the first of
+  !> equal ones) and, unless `candidate` is false (a value that may only raise
+  !> the maximum, e.g. an output record, whose times vary with the output
+  !> cadence), a candidate for the first time within the band.  Offers may
+  !> come in any time order (a refined maximum lies before the sample that
+  !> bracketed it).
+  pure subroutine tracker_offer(self, t, f, candidate)
     class(peak_tracker), intent(inout) :: self
     real(dp), intent(in) :: t, f
+    logical, intent(in), optional :: candidate
+    logical :: cand
     if (f > self%best) then
       self%best = f
       self%t_best = t
     end if
+    cand = .true.
+    if (present(candidate)) cand = candidate
+    if (cand) call remember(self, t, f)
   end subroutine tracker_offer
+
+  !> The lower edge of the peak's band for the peak value `top`.
+  pure real(dp) function band_floor(self, top) result(floor)
+    class(peak_tracker), intent(in) :: self
+    real(dp), intent(in) :: top
+    floor = top - self%band*abs(top)
+  end function band_floor
+
+  !> Keep (t, f) among the records if it may be the first value within the
+  !> band of the final maximum: records form a staircase, each later and
+  !> larger than the one before; a value below the band of the maximum so far
+  !> never enters it again (the maximum only rises).
+  pure subroutine remember(self, t, f)
+    class(peak_tracker), intent(inout) :: self
+    real(dp), intent(in) :: t, f
+    real(dp) :: floor
+    integer :: i, k, pos
+    floor = band_floor(self, self%best)
+    if (f < floor) return
+    ! an earlier record at least as large makes (t, f) useless
+    do i = 1, self%n_rec
+      if (self%rec_t(i) <= t .and. self%rec_q(i) >= f) return
+    end do
+    ! drop the records below the band and those (t, f) makes useless
+    k = 0
+    pos = 0
+    do i = 1, self%n_rec
+      if (self%rec_q(i) < floor) cycle
+      if (self%rec_t(i) >= t .and. self%rec_q(i) <= f) cycle
+      k = k + 1
+      self%rec_t(k) = self%rec_t(i)
+      self%rec_q(k) = self%rec_q(i)
+      if (self%rec_t(k) < t) pos = k
+    end do
+    self%n_rec = k
+    ! full: merge the two neighbours closest in value (the later one goes; a
+    ! threshold between them then finds the later time)
+    if (self%n_rec == max_records) then
+      k = 2
+      do i = 3, self%n_rec
+        if (self%rec_q(i) - self%rec_q(i - 1) < self%rec_q(k) - self%rec_q(k - 1)) k = i
+      end do
+      self%rec_t(k:self%n_rec - 1) = self%rec_t(k + 1:self%n_rec)
+      self%rec_q(k:self%n_rec - 1) = self%rec_q(k + 1:self%n_rec)
+      self%n_rec = self%n_rec - 1
+      if (pos >= k) pos = pos - 1
+    end if
+    ! insert after the last earlier record
+    self%rec_t(pos + 2:self%n_rec + 1) = self%rec_t(pos + 1:self%n_rec)
+    self%rec_q(pos + 2:self%n_rec + 1) = self%rec_q(pos + 1:self%n_rec)
+    self%rec_t(pos + 1) = t
+    self%rec_q(pos + 1) = f
+    self%n_rec = self%n_rec + 1
+  end subroutine remember
+
+  !> The first time a candidate value came within the band of the peak value
+  !> `top` (default: the running maximum; an owner may hold a larger one, e.g.
+  !> from its records); t_best if no candidate did (-1 before any offer).
+  pure real(dp) function tracker_first_time(self, top) result(t)
+    class(peak_tracker), intent(in) :: self
+    real(dp), intent(in), optional :: top
+    real(dp) :: floor
+    integer :: i
+    floor = band_floor(self, self%best)
+    if (present(top)) floor = band_floor(self, max(top, self%best))
+    t = self%t_best
+    do i = 1, self%n_rec
+      if (self%rec_q(i) >= floor) then
+        t = self%rec_t(i)
+        return
+      end if
+    end do
+  end function tracker_first_time
 
   !> The next sample q at time t, the end of an interval on `piece` (the
   !> first sample of a sequence: its start, piece unused).  True with `br` if

@@ -106,7 +106,7 @@ contains
     allocate(r%dsys)
     call setup_launch(cfg, r%dsys, y0, res, error)
     if (.not. allocated(error)) call prepare_run(r, run, cfg, size(y0), error)
-    if (.not. allocated(error)) call init_observers(r, res)
+    if (.not. allocated(error)) call init_observers(r, res, run%rtol)
     if (.not. allocated(error)) call start_engine(r, y0, error)
     if (allocated(error)) then
       call release(r)
@@ -902,11 +902,15 @@ contains
 
   ! ------------------------------------------------------------ the safety maxima
 
-  !> The run's trackers and the observers of its three integrators.
-  subroutine init_observers(r, res)
+  !> The run's trackers and the observers of its three integrators; values
+  !> within `band` (relative: the run's rtol) of a maximum are the same peak,
+  !> whose time is the first of them.
+  subroutine init_observers(r, res, band)
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(in) :: res
+    real(dp), intent(in) :: band
     allocate(r%trk(3))
+    r%trk%band = band
     r%dobs%source = src_direct
     r%dobs%dsys => r%dsys
     r%cobs%source = src_chain
@@ -935,15 +939,23 @@ contains
 
   !> The maxima into the milestones: the larger of the trackers' (every step,
   !> refined between steps) and the records' (the same function of the state:
-  !> they can only tie; a record wins a tie at rounding level).
+  !> they can only tie; a record wins a tie at rounding level).  The peak
+  !> tension's time is the first time the steps' tension came within the band
+  !> (rtol) of it: on a plateau (the steady tow before release) the place of
+  !> the largest value is round-off and integrator noise; a record's time
+  !> (which moves with the output cadence) only if the steps never came that near.
   subroutine take_maxima(r, res)
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(inout) :: res
+    real(dp) :: top
     if (.not. associated(r%trk)) return
     call finish_observers(r)
-    if (res%has_line .and. r%trk(m_tension)%best > res%peak_tension) then
-      res%peak_tension = r%trk(m_tension)%best
-      res%peak_tension_time = r%trk(m_tension)%t_best
+    if (res%has_line) then
+      associate (trk => r%trk(m_tension))
+        top = max(trk%best, res%peak_tension)
+        if (trk%best >= top - trk%band*abs(top)) res%peak_tension_time = trk%first_time(top)
+        res%peak_tension = top
+      end associate
     end if
     res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, r%trk(m_pitch)%best)
     res%max_load_factor_excursion = max(res%max_load_factor_excursion, r%trk(m_load)%best)

@@ -227,8 +227,10 @@ contains
       end if
     end do
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
-    ! the peak tension is never below a record (the schemes take it over their steps)
-    if (associated(self%scheme%peak)) call self%scheme%peak(1)%offer(t, maxval(self%tension))
+    ! the peak tension is never below a record (the schemes take it over their
+    ! steps); a record's time depends on the output cadence: not a candidate
+    ! for the peak's first time
+    if (associated(self%scheme%peak)) call self%scheme%peak(1)%offer(t, maxval(self%tension), candidate=.false.)
     m = self%n_out + 1
     self%time(m) = t
     self%tip(:, m) = self%x(:, n)
@@ -505,7 +507,7 @@ contains
     character(len=:), allocatable :: text
     text = ""
     if (scene%peak_tension_time >= 0.0_dp) text = "; peak segment tension " // str(scene%peak_tension) // &
-      " N at t = " // str(scene%peak_tension_time) // " s (over every step)"
+      " N, first reached at t = " // str(scene%peak_tension_time) // " s (over every step)"
   end function peak_note
 
   !> The summary's line on the initial shape: its largest segment strain and

@@ -13,6 +13,15 @@
 !> step is searched on its own interpolant, so the larger peak is found; one
 !> Brent search over the whole bracket followed the samples' parabola to the
 !> first step and returned 1.2.
+!>
+!> The peak's first time (`first_time`): a tension held at its maximum over a
+!> plateau (a drift of 1e-10 relative, rising then falling: the largest
+!> sample at t = 0.26 s, the plateau from t = 0) is reported at the plateau's
+!> start, not where round-off put the largest sample; against a brute force
+!> over every value offered (random values and times, offered in random
+!> order, as refined maxima come after the samples that bracket them): the
+!> earliest time of a value within the band of the maximum, exactly while
+!> the records fit (32), never earlier beyond.
 module peak_search_test_observer
   use airlaunch_kinds, only: dp
   use airlaunch_step_maxima, only: maxima_observer
@@ -127,6 +136,12 @@ program test_peak_search
   call section("the step observer: a peak in each of a bracket's two steps")
   call two_peaks()
 
+  call section("the first time within the band: a plateau")
+  call plateau()
+
+  call section("the first time within the band: against a brute force")
+  call first_time_brute_force()
+
   call finish()
 
 contains
@@ -151,6 +166,87 @@ contains
     call check_close(trk2(1)%t_best, 2.4_dp, "its time", abs=1.0e-6_dp)
     deallocate(trk2)
   end subroutine two_peaks
+
+  !> Samples every 20 ms of a plateau at 78 770 N drifting by 1e-10 relative
+  !> (up to t = 0.26 s, then down), then a fall after t = 0.72 s; band 1e-5
+  !> (an integration tolerance).  The largest sample is at 0.26 s; the first
+  !> within the band at 0: reported there.  With band 0 the largest sample's
+  !> time.  A record (not a candidate) cannot move the time.
+  subroutine plateau()
+    type(peak_tracker) :: p
+    real(dp) :: tt, q
+    integer :: i
+    p%band = 1.0e-5_dp
+    do i = 0, 60
+      tt = 0.02_dp*i
+      q = 78770.0_dp*(1 + 1.0e-10_dp*(0.26_dp - abs(tt - 0.26_dp)))
+      if (tt > 0.72_dp) q = 78770.0_dp - 2000*(tt - 0.72_dp)
+      call p%offer(tt, q)
+    end do
+    call p%offer(0.1234_dp, 78770.0_dp, candidate=.false.)   ! an output record
+    call check_close(p%t_best, 0.26_dp, "the largest sample at 0.26 s", abs=1.0e-12_dp)
+    call check(p%first_time() == 0.0_dp, "the plateau's first time: " // str(p%first_time()) // " s")
+    ! the rising samples 0 .. 0.26 s form the staircase; the falling ones are
+    ! later and lower, the record no candidate
+    call check(p%n_rec == 14, "records kept: " // str(p%n_rec) // " (the 14 rising samples)")
+    p%band = 0.0_dp
+    call check_close(p%first_time(), 0.26_dp, "band 0: the largest sample's time", abs=1.0e-12_dp)
+    ! a later peak above the band moves the time to it
+    p%band = 1.0e-5_dp
+    call p%offer(1.5_dp, 78770.0_dp*(1 + 2.0e-5_dp))
+    call check(p%first_time() == 1.5_dp, "a later peak 2e-5 higher: at its time (" // str(p%first_time()) // ")")
+  end subroutine plateau
+
+  !> Random offers (values in [0, 1], or within 1e-3 of 1 to crowd the band;
+  !> times in [0, 1], offered in random order) against the earliest time of a
+  !> value within band 1e-3 of the maximum: equal while at most 32 records were
+  !> needed (with 40 offers), never earlier and never past the maximum's time
+  !> with 400.
+  subroutine first_time_brute_force()
+    integer, parameter :: n_max = 400
+    type(peak_tracker) :: p
+    real(dp) :: ts(n_max), qs(n_max), r(2), exact, floor, got
+    integer :: trial, i, n, bad_small, bad_large, differ
+    call fixed_seed()
+    bad_small = 0
+    bad_large = 0
+    differ = 0
+    do trial = 1, 400
+      n = merge(40, n_max, trial <= 200)
+      p = peak_tracker()
+      p%band = 1.0e-3_dp
+      do i = 1, n
+        call random_number(r)
+        ts(i) = r(1)
+        qs(i) = merge(1 - 1.0e-3_dp*r(2)*2, r(2), mod(i, 2) == 0)
+        call p%offer(ts(i), qs(i))
+      end do
+      floor = maxval(qs(1:n))*(1 - 1.0e-3_dp)
+      exact = minval(ts(1:n), mask=qs(1:n) >= floor)
+      got = p%first_time()
+      if (n <= 40) then
+        if (got /= exact) bad_small = bad_small + 1
+      else
+        if (got < exact .or. got > ts(maxloc(qs(1:n), 1))) bad_large = bad_large + 1
+        if (got /= exact) differ = differ + 1
+      end if
+    end do
+    call check(bad_small == 0, "40 offers: the brute force's first time in every trial (" // str(bad_small) // &
+      " of 200 differ)")
+    call check(bad_large == 0, "400 offers: never before it nor after the maximum (" // str(bad_large) // &
+      " of 200 outside; " // str(differ) // " later than it)")
+    ! a staircase longer than the records: values i at times i (i = 1 .. 100), band
+    ! 0.495 (floor 50.5): the first within is 51; kept records are merged, so a
+    ! later one may answer, never an earlier one
+    p = peak_tracker()
+    p%band = 0.495_dp
+    do i = 1, 100
+      call p%offer(real(i, dp), real(i, dp))
+    end do
+    got = p%first_time()
+    call check(p%n_rec <= max_records .and. got >= 51.0_dp .and. got <= 100.0_dp, &
+      "a staircase of 100 in 32 records: first time " // str(got) // " (exact 51; records " // str(p%n_rec) // ")")
+  end subroutine first_time_brute_force
 
   !> Show the observer the step [t_start, tn] with Taylor coefficients c at tn.
   subroutine show(obs, p, tn, c, t_start, restart, last)
