@@ -58,8 +58,9 @@ module airlaunch_peak_search
     procedure :: maximum => search_maximum
   end type max_search
 
-  !> Values within this many records of the peak's band are told apart
-  !> exactly (work arrays of fixed size: no allocation per step).
+  !> At most this many candidates for a peak's first time are kept (work
+  !> arrays of fixed size: no allocation per step); beyond, the two closest in
+  !> value merge and a later time may answer, never an earlier one.
   integer, parameter :: max_records = 32
 
   !> Running maximum of samples at the ends of consecutive intervals; a
