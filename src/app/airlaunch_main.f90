@@ -1,6 +1,9 @@
 !> airlaunch: run one namelist-driven scenario.
 !>
-!>   airlaunch SCENARIO.nml [--output FILE]
+!>   airlaunch SCENARIO.nml [--output FILE] [--check]
+!>
+!> --check reads and validates the input (and the output's directory) and
+!> prints the resolved input, defaults included, without running.
 !>
 !> Exit status 0 on success, 2 for bad input (one line on stderr naming file,
 !> group, variable, value and what is allowed), 3 for a numerical failure (the
@@ -24,12 +27,13 @@ program airlaunch
   character(len=:), allocatable :: path, echo, summary, output_override
   character(len=1024) :: arg
   integer :: i, nargs, n_run_echo, n_arg
-  logical :: written
+  logical :: written, check_only
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   nargs = command_argument_count()
   path = ""
   output_override = ""
+  check_only = .false.
   i = 1
   do while (i <= nargs)
     call get_command_argument(i, arg)
@@ -41,6 +45,8 @@ program airlaunch
       write(output_unit, '(a)') "airlaunch " // code_version
       write(output_unit, '(a)') "SUNDIALS: " // sundials_build
       stop
+    case ("--check")
+      check_only = .true.
     case ("-o", "--output")
       i = i + 1
       if (i > nargs) call fail_input("--output needs a file name")
@@ -129,12 +135,14 @@ contains
   !> input is read (its own errors first), before the run; an old file of the same
   !> name is removed then: the run replaces it in any case (completed, or
   !> failed with what it computed), and one that fails before its first record
-  !> must not leave an older result that passes for its own.
+  !> must not leave an older result that passes for its own.  With --check: the
+  !> resolved input is printed instead, nothing is removed, and the program ends.
   subroutine prepare_output_file()
     type(error_type), allocatable :: out_error
     integer :: u, ios
     ! the resolved input records the settings the run uses (--output, a scene's defaults)
     echo = run_echo(run) // echo(n_run_echo + 1:)
+    if (.not. run%trajectory .and. check_only) call print_resolved_input()
     if (.not. run%trajectory) return
     if (len(output_override) > 0) then
       call require_output_directory("--output", run%output, out_error)
@@ -142,6 +150,7 @@ contains
       call require_output_directory(path // ": &run: output", run%output, out_error)
     end if
     if (allocated(out_error)) call fail_input(out_error%message)
+    if (check_only) call print_resolved_input()
     open(newunit=u, file=trim(run%output), status="old", action="read", iostat=ios)
     if (ios == 0) close(u, status="delete", iostat=ios)
   end subroutine prepare_output_file
@@ -256,9 +265,19 @@ contains
     if (s(1:2) == "-.") s = "-0" // s(2:)
   end function fx
 
+  !> --check: the input is valid; print it resolved (every group the scene
+  !> reads, defaults included: what the output's `input_namelist` records) and end.
+  subroutine print_resolved_input()
+    write(output_unit, '(a)') "! " // path // ": valid input (airlaunch --check; " // &
+      "resolved, defaults included; the run was not started)"
+    write(output_unit, '(a)') echo
+    stop
+  end subroutine print_resolved_input
+
   subroutine usage()
-    write(output_unit, '(a)') "usage: airlaunch SCENARIO.nml [--output FILE]"
+    write(output_unit, '(a)') "usage: airlaunch SCENARIO.nml [--output FILE] [--check]"
     write(output_unit, '(a)') "  runs the scenario of the namelist file; see docs/input.md"
+    write(output_unit, '(a)') "  --check: validate the input and print it resolved (defaults included), without running"
   end subroutine usage
 
   subroutine fail_input(msg)

@@ -255,6 +255,50 @@ def test_resolved_input_records_the_settings_used(airlaunch_exe, tmp_path):
     assert [l for l in res.stdout.splitlines() if l.startswith("end of run")][0].split(",")[1] == steps
 
 
+@pytest.mark.parametrize("name", ["airlaunch_paper", "line_pendulum", "line_parachute", "drop_demo",
+                                  "airlaunch_gravity_drop"])
+def test_check_prints_the_resolved_input_without_running(airlaunch_exe, tmp_path, name):
+    """`--check` validates the input and prints it resolved (defaults included),
+    exit 0, without running: no output file is written and an old one is left
+    alone.  The printed input is itself a valid scenario, and a fixed point: its
+    own --check prints it again."""
+    out = tmp_path / "x.nc"
+    out.write_text("old")
+    res = run_airlaunch(airlaunch_exe, ROOT / "input" / f"{name}.nml", "--check", "--output", out)
+    assert res.returncode == 0, res.stderr
+    assert res.stderr == ""
+    assert res.stdout.startswith(f"! {ROOT / 'input' / name}.nml: valid input (airlaunch --check")
+    assert f'OUTPUT="{out}"' in res.stdout and "&RUN" in res.stdout
+    assert out.read_text() == "old" and not list(tmp_path.glob("*.part"))
+    again = write(tmp_path / "resolved.nml", res.stdout)
+    res2 = run_airlaunch(airlaunch_exe, again, "--check")
+    assert res2.returncode == 0, res2.stderr
+    assert res2.stdout.splitlines()[1:] == res.stdout.splitlines()[1:]
+
+
+def test_check_reports_bad_input_like_a_run(airlaunch_exe, tmp_path):
+    """Bad input under --check: the same one line and exit 2 as a run."""
+    nml, out = drop_nml(tmp_path, store="mass = -5.0, drag_area = 10.0")
+    res = run_airlaunch(airlaunch_exe, nml, "--check")
+    assert_input_error(res, "&store: mass = -5.0 is not allowed", out)
+    nml, out = drop_nml(tmp_path)
+    res = run_airlaunch(airlaunch_exe, nml, "--check", "--output", tmp_path / "no" / "x.nc")
+    assert_input_error(res, "its directory", out)
+
+
+def test_resolved_paper_input_gives_the_same_run(airlaunch_exe, tmp_path):
+    """The paper file and its --check print, run with trajectory output off, print
+    the same milestones and step counts."""
+    res = run_airlaunch(airlaunch_exe, ROOT / "input" / "airlaunch_paper.nml", "--check")
+    assert res.returncode == 0, res.stderr
+    resolved = write(tmp_path / "resolved.nml", res.stdout.replace("TRAJECTORY=T", "TRAJECTORY=F"))
+    original = nml_variant(tmp_path, "orig", edits=[(r"^(  output_dt = .*)$", r"\1\n  trajectory = .false.")])
+    a = run_airlaunch(airlaunch_exe, original)
+    b = run_airlaunch(airlaunch_exe, resolved)
+    assert a.returncode == 0 and b.returncode == 0, (a.stderr, b.stderr)
+    assert a.stdout == b.stdout
+
+
 def test_file_without_final_newline_reads_like_one_with_it(airlaunch_exe, tmp_path):
     """gfortran's namelist read meets the end of the file at a last group's '/'
     with no newline after it (iostat -1, "End of file") although every value
