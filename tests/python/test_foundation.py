@@ -289,7 +289,8 @@ def test_check_reports_bad_input_like_a_run(airlaunch_exe, tmp_path):
 def test_resolved_paper_input_gives_the_same_run(airlaunch_exe, tmp_path):
     """The paper file and its --check print, run with trajectory output off, print
     the same milestones and step counts."""
-    res = run_airlaunch(airlaunch_exe, ROOT / "input" / "airlaunch_paper.nml", "--check")
+    res = run_airlaunch(airlaunch_exe, ROOT / "input" / "airlaunch_paper.nml", "--check", "--output",
+                        tmp_path / "p.nc")
     assert res.returncode == 0, res.stderr
     resolved = write(tmp_path / "resolved.nml", res.stdout.replace("TRAJECTORY=T", "TRAJECTORY=F"))
     original = nml_variant(tmp_path, "orig", edits=[(r"^(  output_dt = .*)$", r"\1\n  trajectory = .false.")])
