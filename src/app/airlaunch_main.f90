@@ -2,8 +2,9 @@
 !>
 !>   airlaunch SCENARIO.nml [--output FILE] [--check]
 !>
-!> --check reads and validates the input (and the output's directory) and
-!> prints the resolved input, defaults included, without running.
+!> --check reads and validates the input (and the output's directory; for the
+!> air-launch scene also the trim of the initial flight) and prints the
+!> resolved input, defaults included, without running.
 !>
 !> Exit status 0 on success, 2 for bad input (one line on stderr naming file,
 !> group, variable, value and what is allowed), 3 for a numerical failure (the
@@ -16,7 +17,9 @@ program airlaunch
   use airlaunch_run_config, only: run_config, read_run_config, run_echo, require_output_directory
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
-  use airlaunch_launch_scene, only: launch_result, run_launch
+  use airlaunch_launch_scene, only: launch_result, run_launch, setup_launch
+  use airlaunch_launch_system, only: launch_system
+  use airlaunch_kinds, only: dp
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
   use airlaunch_strings, only: str
   use airlaunch_blas_threads, only: use_one_blas_thread
@@ -24,7 +27,7 @@ program airlaunch
   type(nml_file) :: f
   type(run_config) :: run
   type(error_type), allocatable :: error
-  character(len=:), allocatable :: path, echo, summary, output_override
+  character(len=:), allocatable :: path, echo, summary, output_override, check_note
   character(len=1024) :: arg
   integer :: i, nargs, n_run_echo, n_arg
   logical :: written, check_only
@@ -34,6 +37,7 @@ program airlaunch
   path = ""
   output_override = ""
   check_only = .false.
+  check_note = ""
   i = 1
   do while (i <= nargs)
     call get_command_argument(i, arg)
@@ -103,6 +107,7 @@ program airlaunch
       type(launch_result) :: res
       call read_scenario_config(f, cfg, echo, error, run%t_end)
       if (allocated(error)) call fail_input(error%message)
+      if (check_only) call check_trim(cfg)
       call prepare_output_file()
       call run_launch(run, cfg, echo, res, error)
       ! a scenario the aircraft cannot fly (its trim) is bad input: one line, exit 2
@@ -270,9 +275,30 @@ contains
   subroutine print_resolved_input()
     write(output_unit, '(a)') "! " // path // ": valid input (airlaunch --check; " // &
       "resolved, defaults included; the run was not started)"
+    if (len(check_note) > 0) write(output_unit, '(a)') "! " // check_note
     write(output_unit, '(a)') echo
     stop
   end subroutine print_resolved_input
+
+  !> --check of an air-launch scenario: the set-up a run starts with (the trim
+  !> of the Case 0 flight, the settled line), which is where a flight the
+  !> aircraft cannot trim is found; as a run: bad input exit 2, a numerical
+  !> failure exit 3.
+  subroutine check_trim(cfg)
+    type(scenario_config), intent(in) :: cfg
+    type(launch_system) :: sys
+    type(launch_result) :: res
+    real(dp), allocatable :: y0(:)
+    type(error_type), allocatable :: setup_error
+    call setup_launch(cfg, sys, y0, res, setup_error)
+    if (allocated(setup_error)) then
+      if (res%status == "invalid_input") call fail_input(path // ": " // setup_error%message)
+      write(error_unit, '(a)') "airlaunch: error: " // setup_error%message
+      stop 3, quiet=.true.
+    end if
+    check_note = "trim: alpha " // fx(res%trim_alpha_deg, 4) // " deg, elevator " // &
+      fx(res%trim_elevator_deg, 3) // " deg, thrust " // fx(res%trim_thrust_n/1000, 1) // " kN"
+  end subroutine check_trim
 
   subroutine usage()
     write(output_unit, '(a)') "usage: airlaunch SCENARIO.nml [--output FILE] [--check]"

@@ -159,10 +159,14 @@ def test_defaults_within_0p1_percent_of_the_paper_discretization(paper_run, pape
      "deg, beyond the elevator limit (allowed: |elevator| <= 5.0 deg"),
 ])
 def test_impossible_scenarios_give_one_clear_line(airlaunch_exe, tmp_path, edits, fragment):
+    """... and `--check` finds each of them too, the untrimmable flights included
+    (it runs the set-up a run starts with: the Case 0 trim)."""
     nml = nml_variant(tmp_path, edits=edits)
     out = tmp_path / "x.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
-    assert_input_error(res, fragment, out)
+    line = assert_input_error(res, fragment, out)
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out, "--check")
+    assert assert_input_error(res, fragment, out) == line
 
 
 def test_one_sided_edge_separates_early(airlaunch_exe, tmp_path, paper_run):

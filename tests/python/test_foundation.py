@@ -260,7 +260,7 @@ def test_resolved_input_records_the_settings_used(airlaunch_exe, tmp_path):
 def test_check_prints_the_resolved_input_without_running(airlaunch_exe, tmp_path, name):
     """`--check` validates the input and prints it resolved (defaults included),
     exit 0, without running: no output file is written and an old one is left
-    alone.  The printed input is itself a valid scenario, and a fixed point: its
+    alone; for an air-launch scenario with the trim the run starts from.  The printed input is itself a valid scenario, and a fixed point: its
     own --check prints it again."""
     out = tmp_path / "x.nc"
     out.write_text("old")
@@ -268,6 +268,9 @@ def test_check_prints_the_resolved_input_without_running(airlaunch_exe, tmp_path
     assert res.returncode == 0, res.stderr
     assert res.stderr == ""
     assert res.stdout.startswith(f"! {ROOT / 'input' / name}.nml: valid input (airlaunch --check")
+    if name.startswith("airlaunch"):   # the set-up's trim, as the run prints it
+        run = run_airlaunch(airlaunch_exe, ROOT / "input" / f"{name}.nml", "--output", tmp_path / "run.nc")
+        assert res.stdout.splitlines()[1] == "! " + run.stdout.splitlines()[0]
     assert f'OUTPUT="{out}"' in res.stdout and "&RUN" in res.stdout
     assert out.read_text() == "old" and not list(tmp_path.glob("*.part"))
     again = write(tmp_path / "resolved.nml", res.stdout)
