@@ -88,6 +88,16 @@ def test_virtual_body_follows_the_line(paper_pair):
     assert rig.attrs["min_rigid_line_tension_N"] > 4e4        # never pushes (the real line cannot)
 
 
+def assert_peak_tension_first_at_start(*runs):
+    """The paper file's peak tension is the steady pull before the release, flat to
+    1e-7 from t = 0 (the records: within rtol 1e-5 of it at t = 0), so it is first
+    reached at t = 0 (before, the time was where each run's round-off ripple on the
+    plateau peaked)."""
+    for x in runs:
+        assert x["line_tension_rocket_end_N"].values[0] >= x.attrs["peak_line_tension_N"] * (1 - 1e-5)
+        assert x.attrs["peak_line_tension_time_s"] == 0.0
+
+
 def test_milestones_match_direct(paper_pair):
     direct, rig = paper_pair
     a, b = direct.attrs, rig.attrs
@@ -99,13 +109,7 @@ def test_milestones_match_direct(paper_pair):
     assert b["pitch_max_time_s"] == pytest.approx(a["pitch_max_time_s"], abs=5e-3)
     assert b["pitch_max_deg"] == pytest.approx(a["pitch_max_deg"], abs=0.01)
     assert b["peak_line_tension_N"] == pytest.approx(a["peak_line_tension_N"], abs=10.0)
-    # the peak is the steady pull before the release, flat to 1e-7 from t = 0
-    # (the records: within rtol 1e-5 of it at t = 0), so it is first reached at
-    # t = 0 in both (the largest value sat at 0.434 s here and 0.247 s direct,
-    # where each run's round-off ripple on the plateau peaked)
-    for x in (direct, rig):
-        assert x["line_tension_rocket_end_N"].values[0] >= x.attrs["peak_line_tension_N"] * (1 - 1e-5)
-        assert x.attrs["peak_line_tension_time_s"] == 0.0
+    assert_peak_tension_first_at_start(direct, rig)   # the largest value sat at 0.434 s here, 0.247 s direct
     assert b["min_clearance_m"] == pytest.approx(a["min_clearance_m"], abs=0.01)
 
 
@@ -189,13 +193,7 @@ def test_paper_method_matches_direct(paper_method, paper_pair):
     assert b["pitch_at_separation_deg"] == pytest.approx(a["pitch_at_separation_deg"], abs=0.01)
     assert b["pitch_max_time_s"] == pytest.approx(a["pitch_max_time_s"], abs=5e-3)
     assert b["peak_line_tension_N"] == pytest.approx(a["peak_line_tension_N"], abs=10.0)
-    # the peak is the steady pull before the release, flat to 1e-7 from t = 0
-    # (the records: within rtol 1e-5 of it at t = 0), so it is first reached at
-    # t = 0 in both (the largest value sat at 0.431 s here and 0.247 s direct,
-    # where each run's round-off ripple on the plateau peaked)
-    for x in (direct, ds):
-        assert x["line_tension_rocket_end_N"].values[0] >= x.attrs["peak_line_tension_N"] * (1 - 1e-5)
-        assert x.attrs["peak_line_tension_time_s"] == 0.0
+    assert_peak_tension_first_at_start(direct, ds)   # the largest value sat at 0.431 s here, 0.247 s direct
     assert b["min_clearance_m"] == pytest.approx(a["min_clearance_m"], abs=0.01)
     d_elev = np.abs(ds["rocket_nose_elevation_deg"].values - direct["rocket_nose_elevation_deg"].values)
     d_pos = np.linalg.norm(ds["rocket_position"].values - direct["rocket_position"].values, axis=1)
