@@ -21,7 +21,7 @@ def test_bench_help_lists_the_benchmarks():
     assert names and all(f"  {n}" in res.stdout for n in names)
 
 
-@pytest.mark.parametrize("name", ["paper", "line", "sweep", "workprecision", "moordyn", "couplings"])
+@pytest.mark.parametrize("name", ["paper", "line", "sweep", "workprecision", "moordyn", "couplings", "fishhook"])
 def test_a_benchmark_help_is_its_header_without_running(name):
     """--help used to be a traceback (paper, sweep), a Fortran runtime error (line)
     or the whole benchmark (workprecision, moordyn: installing MoorDyn first)."""
