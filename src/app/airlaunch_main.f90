@@ -91,7 +91,7 @@ program airlaunch
   case ("line")
     block
       type(line_scene_config) :: cfg
-      call f%check_groups([character(len=16) :: "run", "line", "line_scene"], error)
+      call f%check_groups([character(len=16) :: "run", "line", "line_scene", "parachute"], error)
       if (.not. allocated(error)) call read_line_scene_config(f, run, cfg, echo, error)
       if (allocated(error)) call fail_input(error%message)
       ! the line scheme's own defaults where &run does not set them (line.md §4)

@@ -199,6 +199,11 @@ contains
       self%x(:, k) = y(j+1:j+3)
       self%v(:, k) = y(j+4:j+6)
     end do
+    ! a canopy end's apparent mass, which grows while it fills
+    if (self%first == 0 .and. self%ends(1)%canopy_end) call self%mass%set_extra(0, &
+      self%ends(1)%apparent_mass(t, self%x(:, 0), self%model%p%air, self%model%p%air_density))
+    if (self%last == n .and. self%ends(2)%canopy_end) call self%mass%set_extra(n, &
+      self%ends(2)%apparent_mass(t, self%x(:, n), self%model%p%air, self%model%p%air_density))
   end subroutine system_unpack
 
   !> y' = f(t, y): node velocities and accelerations (Eq. (8); M a = f with
@@ -220,10 +225,10 @@ contains
       return
     end if
     if (self%first == 0 .and. self%ends(1)%kind == end_point_mass) self%f(:, 0) = self%f(:, 0) + &
-      self%ends(1)%external_load(self%x(:, 0), self%v(:, 0), self%model%p%gravity, self%model%p%air, &
+      self%ends(1)%external_load(t, self%x(:, 0), self%v(:, 0), self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
     if (self%last == n .and. self%ends(2)%kind == end_point_mass) self%f(:, n) = self%f(:, n) + &
-      self%ends(2)%external_load(self%x(:, n), self%v(:, n), self%model%p%gravity, self%model%p%air, &
+      self%ends(2)%external_load(t, self%x(:, n), self%v(:, n), self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
     call self%mass%accelerations(self%f, self%end_acc(:, 1), self%end_acc(:, 2), self%acc)
     do k = self%first, self%last
@@ -287,7 +292,7 @@ contains
       k = merge(0, self%model%n, i == 1)
       if (k < self%first .or. k > self%last .or. self%ends(i)%kind /= end_point_mass) cycle
       self%jac_blocks%dfdv(:, :, 0, k) = self%jac_blocks%dfdv(:, :, 0, k) + self%ends(i)%external_load_dv( &
-        self%x(:, k), self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
+        t, self%x(:, k), self%v(:, k), self%model%p%air, self%model%p%wind, self%model%p%air_density)
     end do
   end subroutine system_force_blocks
 
@@ -387,7 +392,8 @@ contains
   end subroutine force_jacobian_to_node_blocks
 
   !> Mechanical energy of line and point-mass ends at time t, state y [J]:
-  !> kinetic + elastic + gravitational (the work of kinematic ends is not in it).
+  !> kinetic (a canopy end's apparent mass moving with it) + elastic + gravitational
+  !> (the work of kinematic ends is not in it).
   function system_energy(self, t, y) result(e)
     class(line_system), intent(inout) :: self   !< system
     real(dp), intent(in) :: t                   !< time [s]
@@ -399,7 +405,8 @@ contains
     do i = 1, 2
       if (self%ends(i)%kind /= end_point_mass) cycle
       k = merge(0, self%model%n, i == 1)
-      e%kinetic = e%kinetic + 0.5_dp*self%ends(i)%mass*dot_product(self%v(:, k), self%v(:, k))
+      e%kinetic = e%kinetic + 0.5_dp*(self%ends(i)%mass + self%ends(i)%apparent_mass(t, self%x(:, k), &
+        self%model%p%air, self%model%p%air_density))*dot_product(self%v(:, k), self%v(:, k))
       if (self%model%p%gravity) e%potential = e%potential + self%ends(i)%mass*g0*self%x(2, k)
     end do
   end function system_energy

@@ -11,6 +11,11 @@
 !>  - point_mass:  the end node carries an extra `mass` [kg] with its weight
 !>                 (when gravity is on) and a drag `drag_area` = Cd*S [m^2]
 !>                 from the air velocity relative to it (a crude parachute);
+!>                 or, with `canopy_end`, a parachute canopy (`canopy`,
+!>                 airlaunch_parachute: Knacke's inflation law for the drag
+!>                 area, the apparent mass of the enclosed air in its inertia
+!>                 but not in its weight, and the momentum of the air it
+!>                 entrains while it fills); `mass` is then the canopy's;
 !>  - body:        kinematic, moved by an outside owner (a rigid body of the
 !>                 full simulation) through `set_body_motion`: cubic Hermite
 !>                 interpolation between two (t, x, v) samples, linear
@@ -22,6 +27,8 @@ module airlaunch_line_ends
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, &
+    parachute_added_mass_rate, parachute_nominal_diameter
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
   private
@@ -44,7 +51,10 @@ module airlaunch_line_ends
     real(dp) :: phase_deg = 0.0_dp          !< prescribed: sinusoid phase [deg]
     real(dp) :: t_start = 0.0_dp            !< prescribed: time the motion starts [s]
     real(dp) :: mass = 0.0_dp               !< point mass [kg]
-    real(dp) :: drag_area = 0.0_dp          !< point mass drag area Cd*S [m^2]
+    real(dp) :: drag_area = 0.0_dp          !< point mass drag area Cd*S [m^2] (not with canopy_end)
+    logical :: canopy_end = .false.         !< point mass: the canopy below, not drag_area
+    type(parachute) :: canopy               !< canopy_end: its data (mass = `mass`; fill_time set
+                                            !< by set_fill_time when it is 0)
     ! body ends: the owner's two samples
     real(dp) :: body_t(2) = [0.0_dp, 1.0_dp]  !< sample times [s]
     real(dp) :: body_x(3, 2) = 0.0_dp         !< sample positions [m]
@@ -54,6 +64,9 @@ module airlaunch_line_ends
     procedure :: motion => end_motion
     procedure :: external_load => end_external_load
     procedure :: external_load_dv => end_external_load_dv
+    procedure :: apparent_mass => end_apparent_mass
+    procedure :: inflating => end_inflating
+    procedure :: set_fill_time => end_set_fill_time
     procedure :: set_body_motion => end_set_body_motion
     procedure :: check => end_check
   end type line_end
@@ -185,43 +198,51 @@ contains
     self%body_v(:, 1) = v1; self%body_v(:, 2) = v2
   end subroutine end_set_body_motion
 
-  !> External load on a point-mass end at position x, velocity v [N]: its
-  !> weight (if gravity) and its drag 1/2 rho CdS |u| u, u = wind - v (if air).
-  !> Zero for the other kinds.
-  function end_external_load(self, x, v, gravity, air, wind, air_density) result(f)
+  !> External load on a point-mass end at time t, position x, velocity v [N]:
+  !> its weight (if gravity) and its drag 1/2 rho CdS |u| u, u = wind - v (if
+  !> air); a canopy's drag area is its inflation law's at t, and while it fills
+  !> the air it entrains is brought to its velocity: + (dm_a/dt) u
+  !> (airlaunch_parachute, canopy_node_acceleration, with the wind).  Zero for
+  !> the other kinds.
+  function end_external_load(self, t, x, v, gravity, air, wind, air_density) result(f)
     class(line_end), intent(in) :: self    !< end
+    real(dp), intent(in) :: t              !< time [s]
     real(dp), intent(in) :: x(3), v(3)     !< end position [m], velocity [m/s]
     logical, intent(in) :: gravity, air    !< loads switched on
     real(dp), intent(in) :: wind(3)        !< air velocity [m/s]
     real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
-    real(dp) :: f(3), u(3), rho
+    real(dp) :: f(3), u(3), rho, cds
     f = 0.0_dp
     if (self%kind /= end_point_mass) return
     if (gravity) f(2) = -self%mass*g0
-    if (air .and. self%drag_area > 0.0_dp) then
-      rho = air_density
-      if (rho <= 0.0_dp) rho = isa_density(x(2))
-      u = wind - v
-      f = f + 0.5_dp*rho*self%drag_area*norm2(u)*u
-    end if
+    if (.not. air) return
+    cds = end_drag_area(self, t)
+    if (.not. (cds > 0.0_dp)) return
+    rho = density(x, air_density)
+    u = wind - v
+    f = f + 0.5_dp*rho*cds*norm2(u)*u
+    if (self%canopy_end) f = f + parachute_added_mass_rate(self%canopy, rho, t)*u
   end function end_external_load
 
   !> Derivative of end_external_load with respect to the end velocity [N s/m]:
   !> the point mass's drag F = rho CdS |u| u / 2, u = wind - v, gives
-  !> dF/dv = -rho CdS (|u| I + u u^T/|u|)/2 (the ISA density's dependence on
-  !> the altitude is left out).  Zero for other kinds or with the air off.
-  pure function end_external_load_dv(self, x, v, air, wind, air_density) result(d)
+  !> dF/dv = -rho CdS (|u| I + u u^T/|u|)/2, and a filling canopy's entrained
+  !> air - (dm_a/dt) I (the ISA density's dependence on the altitude is left
+  !> out).  Zero for other kinds or with the air off.
+  pure function end_external_load_dv(self, t, x, v, air, wind, air_density) result(d)
     class(line_end), intent(in) :: self    !< end
+    real(dp), intent(in) :: t              !< time [s]
     real(dp), intent(in) :: x(3), v(3)     !< end position [m], velocity [m/s]
     logical, intent(in) :: air             !< drag switched on
     real(dp), intent(in) :: wind(3)        !< air velocity [m/s]
     real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
-    real(dp) :: d(3, 3), u(3), un, rho
+    real(dp) :: d(3, 3), u(3), un, rho, cds, rate
     integer :: i, j
     d = 0.0_dp
-    if (self%kind /= end_point_mass .or. .not. air .or. .not. (self%drag_area > 0.0_dp)) return
-    rho = air_density
-    if (rho <= 0.0_dp) rho = isa_density(x(2))
+    if (self%kind /= end_point_mass .or. .not. air) return
+    cds = end_drag_area(self, t)
+    if (.not. (cds > 0.0_dp)) return
+    rho = density(x, air_density)
     u = wind - v
     un = sqrt(dot_product(u, u))
     do j = 1, 3
@@ -230,8 +251,62 @@ contains
       end do
       d(j, j) = d(j, j) + un
     end do
-    d = -0.5_dp*rho*self%drag_area*d
+    d = -0.5_dp*rho*cds*d
+    if (.not. self%canopy_end) return
+    rate = parachute_added_mass_rate(self%canopy, rho, t)
+    do j = 1, 3
+      d(j, j) = d(j, j) - rate
+    end do
   end function end_external_load_dv
+
+  !> Apparent mass of a canopy end at time t and position x [kg]: in its
+  !> inertia, not in its weight (Knacke ch. 6; airlaunch_parachute).  Zero for
+  !> every other end and with the air off.
+  pure real(dp) function end_apparent_mass(self, t, x, air, air_density) result(ma)
+    class(line_end), intent(in) :: self    !< end
+    real(dp), intent(in) :: t              !< time [s]
+    real(dp), intent(in) :: x(3)           !< end position [m]
+    logical, intent(in) :: air             !< air switched on
+    real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
+    ma = 0.0_dp
+    if (self%kind /= end_point_mass .or. .not. self%canopy_end .or. .not. air) return
+    ma = parachute_added_mass(self%canopy, density(x, air_density), t)
+  end function end_apparent_mass
+
+  !> True for a canopy end whose mass and drag change with time (it deploys).
+  elemental logical function end_inflating(self)
+    class(line_end), intent(in) :: self   !< end
+    end_inflating = self%kind == end_point_mass .and. self%canopy_end .and. self%canopy%deploy_time >= 0.0_dp
+  end function end_inflating
+
+  !> A deploying canopy's filling time t_f = n D0 / V (Knacke, NWC TP 6575,
+  !> ch. 5) from the air speed `speed` it deploys into, unless already set.
+  pure subroutine end_set_fill_time(self, speed)
+    class(line_end), intent(inout) :: self   !< end
+    real(dp), intent(in) :: speed            !< air speed relative to the end at deployment [m/s]
+    if (.not. self%inflating() .or. self%canopy%fill_time > 0.0_dp) return
+    if (speed > 0.0_dp) self%canopy%fill_time = self%canopy%fill_constant*parachute_nominal_diameter(self%canopy)/speed
+  end subroutine end_set_fill_time
+
+  !> Drag area of a point-mass end at time t [m^2]: a canopy's inflation law,
+  !> otherwise the fixed drag_area.
+  pure real(dp) function end_drag_area(self, t) result(cds)
+    type(line_end), intent(in) :: self   !< end
+    real(dp), intent(in) :: t            !< time [s]
+    if (self%canopy_end) then
+      cds = parachute_drag_area(self%canopy, t)
+    else
+      cds = self%drag_area
+    end if
+  end function end_drag_area
+
+  !> The air density at x: the fixed one, or ISA at x(2) when it is 0.
+  pure real(dp) function density(x, air_density) result(rho)
+    real(dp), intent(in) :: x(3)          !< position [m]
+    real(dp), intent(in) :: air_density   !< fixed density [kg/m^3]; 0 = ISA
+    rho = air_density
+    if (rho <= 0.0_dp) rho = isa_density(x(2))
+  end function density
 
   !> ISA density at altitude y [kg/m^3].
   pure real(dp) function isa_density(y) result(rho)
@@ -261,6 +336,36 @@ contains
     else if (.not. (self%frequency >= 0.0_dp .and. ieee_is_finite(self%frequency))) then
       call fatal_error(error, name // ": frequency = " // str(self%frequency) // " Hz is not allowed: " // &
         "must be >= 0 and finite")
+    else if (self%canopy_end) then
+      call check_canopy(self, name, error)
     end if
   end subroutine end_check
+
+  !> Validate a canopy end: a point mass whose mass is the canopy's, drag areas
+  !> 0 <= packed < open, a filling time set when it deploys.
+  subroutine check_canopy(self, name, error)
+    type(line_end), intent(in) :: self                     !< end with canopy_end
+    character(len=*), intent(in) :: name                   !< which end, for the message
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    associate (c => self%canopy)
+      if (self%kind /= end_point_mass) then
+        call fatal_error(error, name // ": a canopy needs a point_mass end, not " // end_kind_name(self%kind))
+      else if (c%mass /= self%mass) then
+        call fatal_error(error, name // ": the canopy's mass " // str(c%mass) // " kg differs from the end's " // &
+          str(self%mass) // " kg")
+      else if (.not. (c%packed_drag_area >= 0.0_dp .and. c%packed_drag_area < c%drag_area .and. &
+          ieee_is_finite(c%drag_area))) then
+        call fatal_error(error, name // ": the canopy's drag areas (packed " // str(c%packed_drag_area) // &
+          ", open " // str(c%drag_area) // " m^2) are not allowed: need 0 <= packed < open, finite")
+      else if (.not. (c%added_mass_factor >= 0.0_dp .and. ieee_is_finite(c%added_mass_factor) .and. &
+          c%cd0 > 0.0_dp .and. c%inflation_exponent >= 1.0_dp)) then
+        call fatal_error(error, name // ": the canopy's added_mass_factor must be >= 0, cd0 > 0 and " // &
+          "inflation_exponent >= 1")
+      else if (self%inflating() .and. .not. (c%fill_time > 0.0_dp .and. ieee_is_finite(c%fill_time))) then
+        call fatal_error(error, name // ": the canopy deploys at " // str(c%deploy_time) // " s but its " // &
+          "filling time " // str(c%fill_time) // " s is not > 0 (t_f = n D0 / V needs an air speed " // &
+          "relative to the end)")
+      end if
+    end associate
+  end subroutine check_canopy
 end module airlaunch_line_ends

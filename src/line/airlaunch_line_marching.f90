@@ -89,6 +89,8 @@ module airlaunch_line_marching
     real(dp), allocatable :: f(:, :), tension(:)     !< node forces, tensions
     real(dp), allocatable :: inv_mass(:)             !< 1/m (near point mass lumped)
     real(dp) :: far_force(3) = 0.0_dp         !< converged force of the far end on the far node [N]
+    real(dp) :: t_new = 0.0_dp                !< the step's end t+h [s]
+    real(dp) :: far_mass = 0.0_dp             !< point-mass far end: its mass at t+h, apparent mass included [kg]
     real(dp) :: v_prev(3) = 0.0_dp            !< march velocity of the node before the far one
     real(dp) :: d_prev(3) = 0.0_dp            !< march displacement x^(n+1) - x^n of that node [m]
     real(dp) :: x_target(3) = 0.0_dp          !< kinematic far end: position at t+h
@@ -206,6 +208,17 @@ contains
     t1 = self%tn + h
     ne = near_end(self)
     fe = far_end(self)
+    self%t_new = t1
+    ! a canopy end's inertia at the step's start (near, explicit) and end (far,
+    ! implicit in Eq. (16)): its mass with the apparent mass of the moment
+    associate (en => self%ends(ne))
+      if (en%canopy_end) self%inv_mass(self%near) = 1.0_dp/(self%model%node_mass(self%near) + en%mass + &
+        en%apparent_mass(self%tn, self%x(:, self%near), self%model%p%air, self%model%p%air_density))
+    end associate
+    associate (en => self%ends(fe))
+      self%far_mass = en%mass + en%apparent_mass(t1, self%x(:, self%far), self%model%p%air, &
+        self%model%p%air_density)
+    end associate
     ! forces at the old level (explicit right-hand side of Eq. (15))
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
     self%n_forces = self%n_forces + 1
@@ -216,7 +229,7 @@ contains
     ! the peak tension over the steps (the scheme's resolution: no interpolant)
     if (associated(self%peak)) call self%peak(1)%offer(self%tn, maxval(self%tension))
     if (self%ends(ne)%kind == end_point_mass) self%f(:, self%near) = self%f(:, self%near) + &
-      point_load(self, ne, self%x(:, self%near), self%v(:, self%near))
+      point_load(self, ne, self%tn, self%x(:, self%near), self%v(:, self%near))
 
     ! Step 2, Eq. (15): explicit velocity update of all nodes but the far one
     do k = 0, self%model%n
@@ -322,7 +335,7 @@ contains
         e = (d_far - self%d_target)/(h*h*self%inv_mass(kf))
       else if (en%kind == end_point_mass) then
         ! Newton's law of the end mass with the backward-difference acceleration
-        e = force - point_load(self, fe, x_far, v_far) + en%mass*(v_far - self%v(:, kf))/h
+        e = force - point_load(self, fe, self%t_new, x_far, v_far) + self%far_mass*(v_far - self%v(:, kf))/h
       else
         e = force   ! free end: no force, de/dF = I
       end if
@@ -344,10 +357,10 @@ contains
     real(dp) :: hm
     fe = far_end(self)
     hm = h*self%inv_mass(self%far)
-    jac = -hm*self%ends(fe)%external_load_dv(x_far, v_far, self%model%p%air, self%model%p%wind, &
+    jac = -hm*self%ends(fe)%external_load_dv(self%t_new, x_far, v_far, self%model%p%air, self%model%p%wind, &
       self%model%p%air_density)
     do i = 1, 3
-      jac(i, i) = jac(i, i) + 1.0_dp + self%ends(fe)%mass*self%inv_mass(self%far)
+      jac(i, i) = jac(i, i) + 1.0_dp + self%far_mass*self%inv_mass(self%far)
     end do
   end function far_jacobian
 
@@ -369,18 +382,19 @@ contains
         m_far*(norm2(self%v(:, self%far)) + norm2(self%v_prev))/h
     else if (self%ends(fe)%kind == end_point_mass) then
       ! M (v_far - v)/h: velocities cancel
-      size = size + (self%ends(fe)%mass + m_far)*norm2(v_far)/h
+      size = size + (self%far_mass + m_far)*norm2(v_far)/h
     end if
     floor = 64*epsilon(1.0_dp)*size
   end function residual_floor
 
-  !> Weight and drag of a point-mass end.
-  function point_load(self, which, x, v) result(f)
+  !> Weight and drag of a point-mass end at time t.
+  function point_load(self, which, t, x, v) result(f)
     type(line_marching), intent(in) :: self   !< scheme
     integer, intent(in) :: which              !< end index
+    real(dp), intent(in) :: t                 !< time [s]
     real(dp), intent(in) :: x(3), v(3)        !< end position, velocity
     real(dp) :: f(3)
-    f = self%ends(which)%external_load(x, v, self%model%p%gravity, self%model%p%air, &
+    f = self%ends(which)%external_load(t, x, v, self%model%p%gravity, self%model%p%air, &
       self%model%p%wind, self%model%p%air_density)
   end function point_load
 

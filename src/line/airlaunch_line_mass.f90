@@ -25,6 +25,7 @@ module airlaunch_line_mass
     integer :: last = -1                     !< last state node
     real(dp) :: coupling = 0.0_dp            !< M(k, k +- 1) = beta rho l0 [kg] (0: lumped)
     real(dp), allocatable :: diagonal(:)     !< M(k, k), k = 0..N [kg] (point-mass ends included)
+    real(dp), allocatable :: built(:)        !< M(k, k) as built, without `set_extra`'s masses [kg]
     real(dp), allocatable :: inv_diagonal(:) !< 1/M(k, k) [1/kg]
     real(dp), allocatable :: d(:), e(:)      !< dpttrf's factors of M over first..last
     real(dp), allocatable :: work(:, :)      !< right-hand sides (nodes, 3)
@@ -33,6 +34,7 @@ module airlaunch_line_mass
     procedure :: is_lumped => mass_is_lumped
     procedure :: accelerations => mass_accelerations
     procedure :: scaled_coupling => mass_scaled_coupling
+    procedure :: set_extra => mass_set_extra
   end type line_mass_matrix
 
   interface
@@ -63,28 +65,54 @@ contains
     real(dp), intent(in) :: beta                           !< coupling fraction (0: lumped)
     integer, intent(in) :: first, last                     !< state nodes
     type(error_type), allocatable, intent(inout) :: error  !< set if M is not positive definite
-    integer :: m, info, k
+    integer :: m, info
     self%first = first
     self%last = last
     self%coupling = beta*segment_mass
-    if (allocated(self%diagonal)) deallocate(self%diagonal, self%inv_diagonal, self%d, self%e, self%work)
+    if (allocated(self%diagonal)) deallocate(self%diagonal, self%built, self%inv_diagonal, self%d, self%e, self%work)
     m = max(0, last - first + 1)
-    allocate(self%diagonal(0:size(node_mass) - 1), self%inv_diagonal(0:size(node_mass) - 1), self%d(m), &
+    allocate(self%diagonal(0:size(node_mass) - 1), self%built(0:size(node_mass) - 1), self%inv_diagonal(0:size(node_mass) - 1), self%d(m), &
       self%e(max(m - 1, 1)), self%work(max(m, 1), 3))
     ! each segment moves beta rho l0 from each end's diagonal to the coupling
     self%diagonal = node_mass - 2.0_dp*self%coupling
     self%diagonal(0) = self%diagonal(0) + self%coupling
     self%diagonal(ubound(node_mass, 1)) = self%diagonal(ubound(node_mass, 1)) + self%coupling
+    self%built = self%diagonal
     self%inv_diagonal = 1.0_dp/self%diagonal
-    if (self%is_lumped() .or. m == 0) return
-    do k = first, last
-      self%d(k - first + 1) = self%diagonal(k)
-    end do
-    self%e = self%coupling
-    call dpttrf(m, self%d, self%e, info)
+    call factor(self, info)
     if (info /= 0) call fatal_error(error, "line: the mixed mass matrix is not positive definite (LAPACK " // &
       "dpttrf info = " // str(info) // ")")
   end subroutine mass_build
+
+  !> Node k's diagonal entry becomes its built one plus `extra` [kg] (a
+  !> canopy's apparent mass, which changes with time), refactored if mixed.
+  !> Adding mass keeps M positive definite.  No allocation.
+  subroutine mass_set_extra(self, k, extra)
+    class(line_mass_matrix), intent(inout) :: self   !< the matrix
+    integer, intent(in) :: k                         !< node
+    real(dp), intent(in) :: extra                    !< added mass, >= 0 [kg]
+    integer :: info
+    if (self%diagonal(k) == self%built(k) + extra) return
+    self%diagonal(k) = self%built(k) + extra
+    self%inv_diagonal(k) = 1.0_dp/self%diagonal(k)
+    if (k >= self%first .and. k <= self%last) call factor(self, info)
+  end subroutine mass_set_extra
+
+  !> L D L^T of M over the state nodes (LAPACK dpttrf); nothing for the lumped
+  !> matrix.  info from dpttrf (0: factored).
+  subroutine factor(self, info)
+    type(line_mass_matrix), intent(inout) :: self   !< the matrix
+    integer, intent(out) :: info                    !< dpttrf's
+    integer :: k, m
+    info = 0
+    m = max(0, self%last - self%first + 1)
+    if (self%is_lumped() .or. m == 0) return
+    do k = self%first, self%last
+      self%d(k - self%first + 1) = self%diagonal(k)
+    end do
+    self%e = self%coupling
+    call dpttrf(m, self%d, self%e, info)
+  end subroutine factor
 
   !> True for the diagonal (lumped) matrix.
   pure logical function mass_is_lumped(self)

@@ -21,6 +21,8 @@ module airlaunch_line_scene
   use airlaunch_run_config, only: run_config, echo_namelist_unit
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
+  use airlaunch_parachute, only: parachute
+  use airlaunch_scenario_config, only: read_parachute
   use airlaunch_line
   implicit none
   private
@@ -90,9 +92,12 @@ contains
     self%cfg = cfg
     call self%model%init(cfg%line, error)
     if (allocated(error)) return
-    call cfg%end_a%check("end_a", error)
+    ! a deploying canopy fills in t_f = n D0 / V, V its initial air speed
+    call self%cfg%end_a%set_fill_time(air_speed(cfg%line, cfg%end_a))
+    call self%cfg%end_b%set_fill_time(air_speed(cfg%line, cfg%end_b))
+    call self%cfg%end_a%check("end_a", error)
     if (allocated(error)) return
-    call cfg%end_b%check("end_b", error)
+    call self%cfg%end_b%check("end_b", error)
     if (allocated(error)) return
     call check_scheme_options(cfg%integration, error)
     if (allocated(error)) return
@@ -163,7 +168,7 @@ contains
     ! not depend on the output times) unless the caller chose otherwise
     opts = cfg%integration
     if (.not. (opts%t_final > 0.0_dp)) opts%t_final = cfg%t_end
-    call new_line_scheme(self%scheme, self%model, cfg%end_a, cfg%end_b, self%x, self%v, 0.0_dp, &
+    call new_line_scheme(self%scheme, self%model, self%cfg%end_a, self%cfg%end_b, self%x, self%v, 0.0_dp, &
       opts, error)
     if (allocated(error)) return
 
@@ -175,6 +180,17 @@ contains
     self%n_out = 0
     self%ready = .true.
   end subroutine scene_init
+
+  !> Speed of the air relative to an end at t = 0 [m/s] (0 with the air off).
+  pure real(dp) function air_speed(line, en) result(speed)
+    type(line_params), intent(in) :: line   !< the line (wind, air)
+    type(line_end), intent(in) :: en        !< the end
+    real(dp) :: x(3), v(3)
+    speed = 0.0_dp
+    if (.not. line%air) return
+    call en%motion(0.0_dp, x, v)
+    speed = norm2(line%wind - v)
+  end function air_speed
 
   !> Integrate to t_end, recording at every output time (t = 0 included).
   subroutine scene_run(self, error)
@@ -244,7 +260,9 @@ contains
       if (i == 1) en = self%cfg%end_a
       if (en%kind /= end_point_mass) cycle
       k = merge(0, n, i == 1)
-      e%kinetic = e%kinetic + 0.5_dp*en%mass*dot_product(self%v(:, k), self%v(:, k))
+      ! a canopy's apparent mass moves with it (its weight is the canopy's only)
+      e%kinetic = e%kinetic + 0.5_dp*(en%mass + en%apparent_mass(t, self%x(:, k), self%cfg%line%air, &
+        self%cfg%line%air_density))*dot_product(self%v(:, k), self%v(:, k))
       if (self%cfg%line%gravity) e%potential = e%potential + en%mass*g0*self%x(2, k)
     end do
     self%energy(:, m) = [e%kinetic, e%elastic, e%potential]
@@ -321,9 +339,11 @@ contains
       nml_var("initial_shape", "string", 16), nml_var("initial_sag", "real"), nml_var("scheme", "string", 16), &
       nml_var("dt", "real"), nml_var("force_tol", "real"), nml_var("max_iterations", "integer"), &
       nml_var("record_tensions", "logical"), nml_var("peak_tension", "logical")]
-    character(len=16), parameter :: kinds(4) = [character(len=16) :: "fixed", "prescribed", "free", &
-      "point_mass"]
+    character(len=16), parameter :: kinds(5) = [character(len=16) :: "fixed", "prescribed", "free", &
+      "point_mass", "canopy"]
     type(line_scene_config) :: d
+    type(parachute) :: chute
+    character(len=:), allocatable :: chute_echo
     integer :: unit, ios, u
     logical :: present
     character(len=256) :: msg
@@ -385,6 +405,8 @@ contains
     call require_nonnegative(f, "line_scene", "b_drag_area", b_drag_area, "m^2", error)
     if (trim(a_kind) == "point_mass") call require_positive(f, "line_scene", "a_mass", a_mass, "kg", error)
     if (trim(b_kind) == "point_mass") call require_positive(f, "line_scene", "b_mass", b_mass, "kg", error)
+    if (.not. allocated(error)) call read_canopy(f, a_kind, b_kind, [a_mass, a_drag_area, b_mass, &
+      b_drag_area], air, run%t_end, chute, chute_echo, error)
     call require_choice(f, "line_scene", "initial_shape", initial_shape, &
       [character(len=16) :: "straight", "sag"], error)
     call require_nonnegative(f, "line_scene", "initial_sag", initial_sag, "m", error)
@@ -409,6 +431,8 @@ contains
     cfg%end_b = line_end(kind=end_kind_code(b_kind), position=b_position, velocity=b_velocity, &
       amplitude=b_amplitude, frequency=b_frequency, phase_deg=b_phase_deg, t_start=b_t_start, mass=b_mass, &
       drag_area=b_drag_area)
+    if (trim(a_kind) == "canopy") cfg%end_a = canopy_end(cfg%end_a, chute)
+    if (trim(b_kind) == "canopy") cfg%end_b = canopy_end(cfg%end_b, chute)
     cfg%initial_shape = initial_shape
     cfg%initial_sag = initial_sag
     cfg%integration%scheme = scheme
@@ -445,7 +469,70 @@ contains
     write(u, nml=line)
     write(u, nml=line_scene)
     call echo_namelist_unit(u, echo)
+    if (allocated(chute_echo)) echo = echo // chute_echo
   end subroutine read_line_scene_config
+
+  !> The canopy of a 'canopy' end: the group &parachute (the air-launch
+  !> scene's, docs/input.md), allowed only with such an end.  Its mass and
+  !> drag areas are the group's: the end's a_/b_mass and a_/b_drag_area must
+  !> stay 0 (the default, which the resolved input echoes).
+  subroutine read_canopy(f, a_kind, b_kind, point_data, air, t_end, chute, echo, error)
+    type(nml_file), intent(in) :: f                        !< scanned input
+    character(len=*), intent(in) :: a_kind, b_kind         !< the ends' kinds
+    real(dp), intent(in) :: point_data(4)                  !< a_mass, a_drag_area, b_mass, b_drag_area
+    logical, intent(in) :: air                             !< &line air
+    real(dp), intent(in) :: t_end                          !< &run t_end [s]
+    type(parachute), intent(out) :: chute                  !< the canopy
+    character(len=:), allocatable, intent(inout) :: echo   !< the resolved &parachute
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    character(len=1) :: e
+    integer :: i, j
+    if (trim(a_kind) /= "canopy" .and. trim(b_kind) /= "canopy") then
+      if (f%has_group("parachute")) call fatal_error(error, f%path // ": &parachute: the group is not " // &
+        "allowed without a canopy end (a_kind or b_kind = 'canopy'; a point_mass end takes a_/b_mass and " // &
+        "a_/b_drag_area)")
+      return
+    end if
+    if (trim(a_kind) == "canopy" .and. trim(b_kind) == "canopy") then
+      call fatal_error(error, f%path // ": &line_scene: a_kind = 'canopy' is not allowed with b_kind = " // &
+        "'canopy': one &parachute group describes one canopy; make one end a point_mass")
+      return
+    end if
+    e = merge("a", "b", trim(a_kind) == "canopy")
+    do i = 1, 2
+      j = i + merge(0, 2, e == "a")
+      if (point_data(j) /= 0.0_dp) then
+        call fatal_error(error, f%path // ": &line_scene: " // e // trim(merge("_mass     ", "_drag_area", &
+          i == 1)) // " = " // str(point_data(j)) // " " // trim(merge("kg ", "m^2", i == 1)) // &
+          " is not allowed with " // e // "_kind = 'canopy' (must be 0, the default): the canopy's mass " // &
+          "and drag areas are &parachute mass, drag_area and packed_drag_area")
+        return
+      end if
+    end do
+    if (.not. air) then
+      call fatal_error(error, f%path // ": &line: air = .false. is not allowed with " // e // "_kind = " // &
+        "'canopy': a canopy's drag, filling and apparent mass come from the air; use a point_mass end")
+      return
+    end if
+    call read_parachute(f, chute, echo, error)
+    if (allocated(error)) return
+    if (chute%deploy_time >= t_end) call fatal_error(error, f%path // ": &parachute: deploy_time = " // &
+      str(chute%deploy_time) // " s is not allowed: must be < &run t_end = " // str(t_end) // &
+      " s (the canopy would never inflate; < 0: open from the start)")
+  end subroutine read_canopy
+
+  !> A point-mass end carrying the canopy `chute` (its mass the canopy's).
+  pure function canopy_end(base, chute) result(en)
+    type(line_end), intent(in) :: base     !< the end as read (kind, position, velocity)
+    type(parachute), intent(in) :: chute   !< the canopy
+    type(line_end) :: en
+    en = base
+    en%kind = end_point_mass
+    en%mass = chute%mass
+    en%drag_area = 0.0_dp
+    en%canopy_end = .true.
+    en%canopy = chute
+  end function canopy_end
 
   !> Build the scene once to check what the single values cannot show (end
   !> geometry, stability of the marching step).  (A separate procedure: the
@@ -483,7 +570,7 @@ contains
     i_max = maxloc(scene%end_tension(:, 1:m))
     summary = "line: " // str(cfg%line%length) // " m, " // str(cfg%line%n_seg) // " segments, scheme " // &
       trim(cfg%integration%scheme) // ", " // trim(cfg%line%mass) // " mass" // nl // &
-      initial_note(scene) // nl // &
+      canopy_note(scene) // initial_note(scene) // nl // &
       end_note(scene) // str(int(scene%stats%steps)) // " steps, " // str(int(scene%stats%rhs_evals)) // &
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
       str(scene%wall_time) // " s" // nl // &
@@ -622,8 +709,25 @@ contains
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)
+    if (scene%cfg%end_a%inflating()) call w%add_real_att("/", "canopy_fill_time_s", &
+      scene%cfg%end_a%canopy%fill_time, error)
+    if (scene%cfg%end_b%inflating()) call w%add_real_att("/", "canopy_fill_time_s", &
+      scene%cfg%end_b%canopy%fill_time, error)
     call w%finish(error)
   end subroutine write_output
+
+  !> The deploying canopy's filling (a line of its own), or nothing.
+  function canopy_note(scene) result(note)
+    type(line_scene), intent(in) :: scene   !< the run
+    character(len=:), allocatable :: note
+    type(line_end) :: en
+    note = ""
+    en = scene%cfg%end_b
+    if (scene%cfg%end_a%canopy_end) en = scene%cfg%end_a
+    if (.not. en%inflating()) return
+    note = "canopy: deploys at t = " // str(en%canopy%deploy_time) // " s, fills in t_f = n D0 / V = " // &
+      str(en%canopy%fill_time) // " s (V = " // str(air_speed(scene%cfg%line, en)) // " m/s)" // new_line("a")
+  end function canopy_note
 
   !> A line that nothing does work on: no end moved on a path (fixed, free and
   !> point-mass ends) and no wind (in still air, drag, the dashpot and the

@@ -17,7 +17,7 @@ module airlaunch_scenario_config
   implicit none
   private
   public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config
-  public :: read_scenario_config, scenario_groups
+  public :: read_scenario_config, scenario_groups, read_parachute
 
   !> Groups of the air-launch scene.
   character(len=16), parameter :: scenario_groups(7) = [character(len=16) :: "run", "flight", &

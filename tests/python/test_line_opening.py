@@ -1,0 +1,112 @@
+"""The paper's parachute-opening run with the canopy inflating (input/line_opening.nml: the
+fishhook release of input/line_fishhook.nml, whose end node is a 'canopy' end deploying at
+0.2 s), and the clear errors of a canopy end's input.
+
+Independent references:
+- Before the deployment the packed canopy (0.1 m^2) is below the fishhook's critical drag
+  area m Cd_n d / rho = 0.18 m^2 (tests/python/test_line_fishhook.py): the hook forms.
+- Once the canopy is full its drag per unit mass, CdS / (m + m_a) = 10 / (1.8 + 5.19)
+  m^2/kg, is 14 times the line's Cd_n d / rho: the end leads, no hook (the same criterion).
+- The settled tow is the towed line of tests/unit/test_line_towed.f90, whose closed form
+  T(u) = (T_end + EA) e^(f u / EA) - EA gives 78 775 N at the support and a stretched length of
+  64.7146 m (without weight: the weight, 176 N of line and 18 N of canopy across an 78.8 kN
+  pull, changes the tension by ~0.2 N)."""
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
+
+OPENING = ROOT / "input" / "line_opening.nml"
+LINE_CD_N, LINE_D, LINE_RHO, EA, LENGTH = 1.2, 0.025, 0.3, 1.0e6, 60.0   # the file's &line values
+RHO_AIR, U_AIR, CD_T = 0.41351, 194.7, 0.01
+CANOPY_MASS, CDS_OPEN, CDS_PACKED, CD0, FILL_CONSTANT, DEPLOY = 1.8, 10.0, 0.1, 0.75, 8.0, 0.2
+
+
+def towed_line():
+    """Support tension and stretched length of the steady towed line (no weight)."""
+    q = 0.5 * RHO_AIR * U_AIR ** 2
+    t_end = q * CDS_OPEN
+    f = q * CD_T * math.pi * LINE_D
+    support = (t_end + EA) * math.exp(f * LENGTH / EA) - EA
+    stretched = (t_end + EA) / f * (math.exp(f * LENGTH / EA) - 1.0)
+    return support, stretched
+
+
+def test_the_canopy_opens_the_hook_and_settles_into_the_tow(airlaunch_exe, tmp_path):
+    out = tmp_path / "opening.nc"
+    res = run_airlaunch(airlaunch_exe, OPENING, "--output", out)
+    assert res.returncode == 0, res.stderr
+    d0 = math.sqrt(4 * CDS_OPEN / (math.pi * CD0))
+    t_fill = FILL_CONSTANT * d0 / U_AIR
+    apparent = RHO_AIR * math.pi / 6 * (0.7 * d0) ** 3
+    # the criteria: packed below the critical drag area, full far above it
+    critical_packed = CANOPY_MASS * LINE_CD_N * LINE_D / LINE_RHO
+    assert CDS_PACKED < critical_packed
+    assert CDS_OPEN / (CANOPY_MASS + apparent) > 10 * LINE_CD_N * LINE_D / LINE_RHO
+    support, stretched = towed_line()
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["canopy_fill_time_s"] == pytest.approx(t_fill, rel=1e-12)
+        t = ds["time"].values
+        x = ds["line_node_position"].values          # (time, node, xyz); the stream runs along -x
+        tension = ds["line_end_tension"].values[:, 0]   # (time, end): the tie's segment
+    depth = x[:, -1, 0] - x[:, :, 0].min(axis=1)
+    before = t <= DEPLOY
+    assert depth[before].max() > 1.0, depth[before].max()      # measured 2.21 m at 0.2 s
+    full = t >= DEPLOY + t_fill
+    assert (depth[full] == 0.0).all(), depth[full].max()         # the end leads once the canopy is full
+    # the tow after 1.6 s: the line's swing into the stream decays through its drag; what is
+    # left of it at t >= 1.6 s moves the tension by +-0.2 % (measured), the weight by ~3e-6
+    late = t >= 1.6
+    assert np.abs(tension[late] / support - 1).max() < 0.01, tension[late]
+    tip = np.linalg.norm(x[-1, -1] - x[-1, 0])
+    assert tip == pytest.approx(stretched, rel=0.005), (tip, stretched)
+
+
+def test_the_paper_marching_scheme_opens_it_alike(airlaunch_exe, tmp_path):
+    """The inflating canopy at the marching scheme's far end (its mass and drag at the step's
+    end, Eq. (16)): the same hook and the same tow as the default scheme, to the first-order
+    time error of the marching scheme (cm on the nodes at N = 60, test_line_fishhook)."""
+    runs = {}
+    for scheme, extra in (("cvode", ""), ("marching", "\n  dt = 1.2e-4")):
+        nml = nml_variant(tmp_path, scheme, base=OPENING, edits=[
+            (r"^  t_end = 2.0 .*$", "  t_end = 0.6"),
+            (r"^  scheme = 'cvode'$", f"  scheme = '{scheme}'{extra}")])
+        out = tmp_path / f"{scheme}.nc"
+        res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+        assert res.returncode == 0, res.stderr
+        with xr.open_dataset(out) as ds:
+            runs[scheme] = ds["line_node_position"].values
+    a, b = runs["cvode"], runs["marching"]
+    depth = {k: (v[:, -1, 0] - v[:, :, 0].min(axis=1)).max() for k, v in runs.items()}
+    assert depth["marching"] == pytest.approx(depth["cvode"], rel=0.05), depth
+    # the canopy's track through the opening: within 0.1 m of each other over 0.6 s
+    assert np.abs(a[:, -1] - b[:, -1]).max() < 0.1, np.abs(a[:, -1] - b[:, -1]).max()
+
+
+@pytest.mark.parametrize("edits, fragment", [
+    ([(r"^  b_kind = 'canopy' .*$", "  b_kind = 'canopy'\n  b_mass = 2.0")],
+     "b_mass = 2.0 kg is not allowed with b_kind = 'canopy'"),
+    ([(r"^  b_kind = 'canopy' .*$", "  b_kind = 'canopy'\n  b_drag_area = 1.0")],
+     "b_drag_area = 1.0 m^2 is not allowed with b_kind = 'canopy'"),
+    ([(r"^  a_kind = 'fixed' .*$", "  a_kind = 'canopy'")],
+     "a_kind = 'canopy' is not allowed with b_kind = 'canopy'"),
+    ([(r"^  b_kind = 'canopy' .*$", "  b_kind = 'point_mass'\n  b_mass = 1.8")],
+     "&parachute: the group is not allowed without a canopy end"),
+    ([(r"^  air = .true.$", "  air = .false.")],
+     "air = .false. is not allowed with b_kind = 'canopy'"),
+    ([(r"^  deploy_time = 0.2 .*$", "  deploy_time = 2.0")],
+     "deploy_time = 2.0 s is not allowed: must be < &run t_end = 2.0 s"),
+    ([(r"^  packed_drag_area = 0.1 .*$", "  packed_drag_area = 20.0")],
+     "packed_drag_area = 20.0 is not allowed (must be < drag_area = 10.0 m^2)"),
+    ([(r"^  wind = .*$", "  wind = 0.0, 0.0, 0.0")],
+     "filling time 0.0 s is not > 0"),
+])
+def test_canopy_input_errors(airlaunch_exe, tmp_path, edits, fragment):
+    nml = nml_variant(tmp_path, "bad", base=OPENING, edits=edits)
+    out = tmp_path / "bad.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    line = assert_input_error(res, fragment, out)
+    assert "line_opening" not in line and "bad.nml" in line
