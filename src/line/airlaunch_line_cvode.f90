@@ -37,7 +37,7 @@
 !> and no segment has switched between slack and taut; a band solver gets them
 !> as a band matrix (`jacobian`).
 module airlaunch_line_cvode
-  use airlaunch_kinds, only: dp, i8, g0
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
@@ -400,14 +400,15 @@ contains
     real(dp), intent(in) :: y(:)                !< state
     type(line_energy) :: e
     integer :: i, k
+    real(dp) :: ek(2)
     call self%unpack(t, y)
     e = self%model%energy(self%x, self%v)
     do i = 1, 2
-      if (self%ends(i)%kind /= end_point_mass) cycle
       k = merge(0, self%model%n, i == 1)
-      e%kinetic = e%kinetic + 0.5_dp*(self%ends(i)%mass + self%ends(i)%apparent_mass(t, self%x(:, k), &
-        self%model%p%air, self%model%p%air_density))*dot_product(self%v(:, k), self%v(:, k))
-      if (self%model%p%gravity) e%potential = e%potential + self%ends(i)%mass*g0*self%x(2, k)
+      ek = self%ends(i)%energy(t, self%x(:, k), self%v(:, k), self%model%p%gravity, self%model%p%air, &
+        self%model%p%air_density)
+      e%kinetic = e%kinetic + ek(1)
+      e%potential = e%potential + ek(2)
     end do
   end function system_energy
 

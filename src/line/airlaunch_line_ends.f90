@@ -53,8 +53,9 @@ module airlaunch_line_ends
     real(dp) :: mass = 0.0_dp               !< point mass [kg]
     real(dp) :: drag_area = 0.0_dp          !< point mass drag area Cd*S [m^2] (not with canopy_end)
     logical :: canopy_end = .false.         !< point mass: the canopy below, not drag_area
-    type(parachute) :: canopy               !< canopy_end: its data (mass = `mass`; fill_time set
-                                            !< by set_fill_time when it is 0)
+    type(parachute) :: canopy               !< canopy_end: its drag areas, inflation and apparent
+                                            !< mass (its own `mass` is not read: the end's is;
+                                            !< fill_time set by set_fill_time when it is 0)
     ! body ends: the owner's two samples
     real(dp) :: body_t(2) = [0.0_dp, 1.0_dp]  !< sample times [s]
     real(dp) :: body_x(3, 2) = 0.0_dp         !< sample positions [m]
@@ -65,6 +66,7 @@ module airlaunch_line_ends
     procedure :: external_load => end_external_load
     procedure :: external_load_dv => end_external_load_dv
     procedure :: apparent_mass => end_apparent_mass
+    procedure :: energy => end_energy
     procedure :: inflating => end_inflating
     procedure :: set_fill_time => end_set_fill_time
     procedure :: set_body_motion => end_set_body_motion
@@ -273,6 +275,22 @@ contains
     ma = parachute_added_mass(self%canopy, density(x, air_density), t)
   end function end_apparent_mass
 
+  !> Kinetic and gravitational energy of a point-mass end at time t [J]: the
+  !> apparent mass of a canopy moves with it, its weight is the canopy's only.
+  !> Zero for the other kinds.
+  pure function end_energy(self, t, x, v, gravity, air, air_density) result(e)
+    class(line_end), intent(in) :: self    !< end
+    real(dp), intent(in) :: t              !< time [s]
+    real(dp), intent(in) :: x(3), v(3)     !< end position [m], velocity [m/s]
+    logical, intent(in) :: gravity, air    !< loads switched on
+    real(dp), intent(in) :: air_density    !< fixed density [kg/m^3]; 0 = ISA at x(2)
+    real(dp) :: e(2)                       !< kinetic, potential
+    e = 0.0_dp
+    if (self%kind /= end_point_mass) return
+    e(1) = 0.5_dp*(self%mass + self%apparent_mass(t, x, air, air_density))*dot_product(v, v)
+    if (gravity) e(2) = self%mass*g0*x(2)
+  end function end_energy
+
   !> True for a canopy end whose mass and drag change with time (it deploys).
   elemental logical function end_inflating(self)
     class(line_end), intent(in) :: self   !< end
@@ -341,8 +359,8 @@ contains
     end if
   end subroutine end_check
 
-  !> Validate a canopy end: a point mass whose mass is the canopy's, drag areas
-  !> 0 <= packed < open, a filling time set when it deploys.
+  !> Validate a canopy end: a point mass, drag areas 0 <= packed < open, a
+  !> filling time set when it deploys.
   subroutine check_canopy(self, name, error)
     type(line_end), intent(in) :: self                     !< end with canopy_end
     character(len=*), intent(in) :: name                   !< which end, for the message
@@ -350,9 +368,6 @@ contains
     associate (c => self%canopy)
       if (self%kind /= end_point_mass) then
         call fatal_error(error, name // ": a canopy needs a point_mass end, not " // end_kind_name(self%kind))
-      else if (c%mass /= self%mass) then
-        call fatal_error(error, name // ": the canopy's mass " // str(c%mass) // " kg differs from the end's " // &
-          str(self%mass) // " kg")
       else if (.not. (c%packed_drag_area >= 0.0_dp .and. c%packed_drag_area < c%drag_area .and. &
           ieee_is_finite(c%drag_area))) then
         call fatal_error(error, name // ": the canopy's drag areas (packed " // str(c%packed_drag_area) // &

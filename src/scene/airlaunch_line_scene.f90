@@ -14,7 +14,7 @@
 !> variable), `run_line_scene` runs and writes the netCDF-4 output
 !> (written so far, with status = "failed", if the run fails).
 module airlaunch_line_scene
-  use airlaunch_kinds, only: dp, g0, rad2deg
+  use airlaunch_kinds, only: dp, rad2deg
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_namelist
@@ -229,7 +229,7 @@ contains
     type(line_scene), intent(inout) :: self                !< scene
     type(error_type), allocatable, intent(inout) :: error  !< set on a non-finite state
     integer :: n, k, st, m, i
-    real(dp) :: t
+    real(dp) :: t, ek(2)
     type(line_energy) :: e
     type(line_end) :: en
     n = self%model%n
@@ -258,12 +258,11 @@ contains
     do i = 1, 2
       en = self%cfg%end_b
       if (i == 1) en = self%cfg%end_a
-      if (en%kind /= end_point_mass) cycle
       k = merge(0, n, i == 1)
-      ! a canopy's apparent mass moves with it (its weight is the canopy's only)
-      e%kinetic = e%kinetic + 0.5_dp*(en%mass + en%apparent_mass(t, self%x(:, k), self%cfg%line%air, &
-        self%cfg%line%air_density))*dot_product(self%v(:, k), self%v(:, k))
-      if (self%cfg%line%gravity) e%potential = e%potential + en%mass*g0*self%x(2, k)
+      ek = en%energy(t, self%x(:, k), self%v(:, k), self%cfg%line%gravity, self%cfg%line%air, &
+        self%cfg%line%air_density)
+      e%kinetic = e%kinetic + ek(1)
+      e%potential = e%potential + ek(2)
     end do
     self%energy(:, m) = [e%kinetic, e%elastic, e%potential]
     self%rigid(m) = rigidize(self%model, self%x, self%v)
@@ -405,8 +404,8 @@ contains
     call require_nonnegative(f, "line_scene", "b_drag_area", b_drag_area, "m^2", error)
     if (trim(a_kind) == "point_mass") call require_positive(f, "line_scene", "a_mass", a_mass, "kg", error)
     if (trim(b_kind) == "point_mass") call require_positive(f, "line_scene", "b_mass", b_mass, "kg", error)
-    if (.not. allocated(error)) call read_canopy(f, a_kind, b_kind, [a_mass, a_drag_area, b_mass, &
-      b_drag_area], air, run%t_end, chute, chute_echo, error)
+    if (.not. allocated(error)) call read_canopy(f, a_kind, b_kind, merge(a_mass, b_mass, trim(a_kind) == &
+      "canopy"), merge(a_drag_area, b_drag_area, trim(a_kind) == "canopy"), air, run%t_end, chute, chute_echo, error)
     call require_choice(f, "line_scene", "initial_shape", initial_shape, &
       [character(len=16) :: "straight", "sag"], error)
     call require_nonnegative(f, "line_scene", "initial_sag", initial_sag, "m", error)
@@ -476,17 +475,18 @@ contains
   !> scene's, docs/input.md), allowed only with such an end.  Its mass and
   !> drag areas are the group's: the end's a_/b_mass and a_/b_drag_area must
   !> stay 0 (the default, which the resolved input echoes).
-  subroutine read_canopy(f, a_kind, b_kind, point_data, air, t_end, chute, echo, error)
+  subroutine read_canopy(f, a_kind, b_kind, point_mass, point_drag_area, air, t_end, chute, echo, error)
     type(nml_file), intent(in) :: f                        !< scanned input
     character(len=*), intent(in) :: a_kind, b_kind         !< the ends' kinds
-    real(dp), intent(in) :: point_data(4)                  !< a_mass, a_drag_area, b_mass, b_drag_area
+    real(dp), intent(in) :: point_mass, point_drag_area    !< the canopy end's a_/b_mass, a_/b_drag_area
     logical, intent(in) :: air                             !< &line air
     real(dp), intent(in) :: t_end                          !< &run t_end [s]
     type(parachute), intent(out) :: chute                  !< the canopy
     character(len=:), allocatable, intent(inout) :: echo   !< the resolved &parachute
     type(error_type), allocatable, intent(inout) :: error  !< set on bad input
     character(len=1) :: e
-    integer :: i, j
+    character(len=*), parameter :: where = "the canopy's mass and drag areas are &parachute mass, " // &
+      "drag_area and packed_drag_area"
     if (trim(a_kind) /= "canopy" .and. trim(b_kind) /= "canopy") then
       if (f%has_group("parachute")) call fatal_error(error, f%path // ": &parachute: the group is not " // &
         "allowed without a canopy end (a_kind or b_kind = 'canopy'; a point_mass end takes a_/b_mass and " // &
@@ -499,16 +499,16 @@ contains
       return
     end if
     e = merge("a", "b", trim(a_kind) == "canopy")
-    do i = 1, 2
-      j = i + merge(0, 2, e == "a")
-      if (point_data(j) /= 0.0_dp) then
-        call fatal_error(error, f%path // ": &line_scene: " // e // trim(merge("_mass     ", "_drag_area", &
-          i == 1)) // " = " // str(point_data(j)) // " " // trim(merge("kg ", "m^2", i == 1)) // &
-          " is not allowed with " // e // "_kind = 'canopy' (must be 0, the default): the canopy's mass " // &
-          "and drag areas are &parachute mass, drag_area and packed_drag_area")
-        return
-      end if
-    end do
+    if (point_mass /= 0.0_dp) then
+      call fatal_error(error, f%path // ": &line_scene: " // e // "_mass = " // str(point_mass) // " kg is not " // &
+        "allowed with " // e // "_kind = 'canopy' (must be 0, the default): " // where)
+      return
+    end if
+    if (point_drag_area /= 0.0_dp) then
+      call fatal_error(error, f%path // ": &line_scene: " // e // "_drag_area = " // str(point_drag_area) // &
+        " m^2 is not allowed with " // e // "_kind = 'canopy' (must be 0, the default): " // where)
+      return
+    end if
     if (.not. air) then
       call fatal_error(error, f%path // ": &line: air = .false. is not allowed with " // e // "_kind = " // &
         "'canopy': a canopy's drag, filling and apparent mass come from the air; use a point_mass end")
@@ -634,6 +634,7 @@ contains
     type(nc_writer) :: w
     integer :: m, n, i, k
     real(dp), allocatable :: r1(:), r3(:, :)
+    type(line_end) :: chute_end
     m = scene%n_out
     n = scene%model%n
     call w%create(path, error)
@@ -709,10 +710,8 @@ contains
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)
-    if (scene%cfg%end_a%inflating()) call w%add_real_att("/", "canopy_fill_time_s", &
-      scene%cfg%end_a%canopy%fill_time, error)
-    if (scene%cfg%end_b%inflating()) call w%add_real_att("/", "canopy_fill_time_s", &
-      scene%cfg%end_b%canopy%fill_time, error)
+    chute_end = canopy_end_of(scene%cfg)
+    if (chute_end%inflating()) call w%add_real_att("/", "canopy_fill_time_s", chute_end%canopy%fill_time, error)
     call w%finish(error)
   end subroutine write_output
 
@@ -722,12 +721,19 @@ contains
     character(len=:), allocatable :: note
     type(line_end) :: en
     note = ""
-    en = scene%cfg%end_b
-    if (scene%cfg%end_a%canopy_end) en = scene%cfg%end_a
+    en = canopy_end_of(scene%cfg)
     if (.not. en%inflating()) return
     note = "canopy: deploys at t = " // str(en%canopy%deploy_time) // " s, fills in t_f = n D0 / V = " // &
       str(en%canopy%fill_time) // " s (V = " // str(air_speed(scene%cfg%line, en)) // " m/s)" // new_line("a")
   end function canopy_note
+
+  !> The scene's canopy end (at most one), or end b if it has none.
+  pure function canopy_end_of(cfg) result(en)
+    type(line_scene_config), intent(in) :: cfg   !< the scene
+    type(line_end) :: en
+    en = cfg%end_b
+    if (cfg%end_a%canopy_end) en = cfg%end_a
+  end function canopy_end_of
 
   !> A line that nothing does work on: no end moved on a path (fixed, free and
   !> point-mass ends) and no wind (in still air, drag, the dashpot and the

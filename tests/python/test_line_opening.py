@@ -12,6 +12,7 @@ Independent references:
   64.7146 m (without weight: the weight, 176 N of line and 18 N of canopy across an 78.8 kN
   pull, changes the tension by ~0.2 N)."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -20,9 +21,21 @@ import xarray as xr
 from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
 
 OPENING = ROOT / "input" / "line_opening.nml"
-LINE_CD_N, LINE_D, LINE_RHO, EA, LENGTH = 1.2, 0.025, 0.3, 1.0e6, 60.0   # the file's &line values
-RHO_AIR, U_AIR, CD_T = 0.41351, 194.7, 0.01
-CANOPY_MASS, CDS_OPEN, CDS_PACKED, CD0, FILL_CONSTANT, DEPLOY = 1.8, 10.0, 0.1, 0.75, 8.0, 0.2
+CD0, FILL_CONSTANT = 0.75, 8.0   # &parachute defaults (the file keeps them)
+
+
+def value(name):
+    """A scalar set in the example file (`  name = value`)."""
+    found = re.findall(rf"^  {name} = ([-0-9.eE+]+)", OPENING.read_text(), flags=re.M)
+    assert len(found) == 1, name
+    return float(found[0])
+
+
+LINE_CD_N, LINE_D, LINE_RHO = value("cd_normal"), value("diameter"), value("mass_per_length")
+EA, LENGTH, CD_T, RHO_AIR = value("ea"), value("length"), value("cd_tangential"), value("air_density")
+U_AIR = 194.7   # |wind| of the file (its one vector: checked in the test)
+CANOPY_MASS, CDS_OPEN, CDS_PACKED = value("mass"), value("drag_area"), value("packed_drag_area")
+DEPLOY = value("deploy_time")
 
 
 def towed_line():
@@ -42,9 +55,10 @@ def test_the_canopy_opens_the_hook_and_settles_into_the_tow(airlaunch_exe, tmp_p
     d0 = math.sqrt(4 * CDS_OPEN / (math.pi * CD0))
     t_fill = FILL_CONSTANT * d0 / U_AIR
     apparent = RHO_AIR * math.pi / 6 * (0.7 * d0) ** 3
-    # the criteria: packed below the critical drag area, full far above it
-    critical_packed = CANOPY_MASS * LINE_CD_N * LINE_D / LINE_RHO
-    assert CDS_PACKED < critical_packed
+    # the file's canopy is where the criteria put it (a guard on the example, not on the
+    # code): packed below the fishhook's critical drag area, full far above it
+    assert "wind = -194.7, 0.0, 0.0" in OPENING.read_text()
+    assert CDS_PACKED < CANOPY_MASS * LINE_CD_N * LINE_D / LINE_RHO
     assert CDS_OPEN / (CANOPY_MASS + apparent) > 10 * LINE_CD_N * LINE_D / LINE_RHO
     support, stretched = towed_line()
     with xr.open_dataset(out) as ds:
@@ -61,14 +75,19 @@ def test_the_canopy_opens_the_hook_and_settles_into_the_tow(airlaunch_exe, tmp_p
     # left of it at t >= 1.6 s moves the tension by +-0.2 % (measured), the weight by ~3e-6
     late = t >= 1.6
     assert np.abs(tension[late] / support - 1).max() < 0.01, tension[late]
+    # the canopy's distance from the tie: the stretched length, to what the tension's 1 %
+    # bound moves the stretch (0.01 T L / EA = 7e-4 of the length; the measured 0.23 % swing
+    # 1.7e-4) and the chord of the line's weight sag (w L^2 / 8T = 1.7 cm: 8/3 (sag/L)^2 =
+    # 2e-7); measured 3e-5
     tip = np.linalg.norm(x[-1, -1] - x[-1, 0])
-    assert tip == pytest.approx(stretched, rel=0.005), (tip, stretched)
+    assert tip == pytest.approx(stretched, rel=1e-3), (tip, stretched)
 
 
 def test_the_paper_marching_scheme_opens_it_alike(airlaunch_exe, tmp_path):
     """The inflating canopy at the marching scheme's far end (its mass and drag at the step's
-    end, Eq. (16)): the same hook and the same tow as the default scheme, to the first-order
-    time error of the marching scheme (cm on the nodes at N = 60, test_line_fishhook)."""
+    end, Eq. (16)): the same hook and the same canopy track as the default scheme, to the
+    first-order time error of the marching scheme (~2 cm on the nodes at N = 60,
+    test_line_fishhook; measured 1.4 cm here, bound 5 times that)."""
     runs = {}
     for scheme, extra in (("cvode", ""), ("marching", "\n  dt = 1.2e-4")):
         nml = nml_variant(tmp_path, scheme, base=OPENING, edits=[
