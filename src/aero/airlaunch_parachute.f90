@@ -59,7 +59,7 @@ contains
     real(dp), intent(in) :: t
     real(dp) :: tau
     r = 0.0_dp
-    if (p%deploy_time < 0.0_dp .or. p%fill_time <= 0.0_dp) return
+    if (p%deploy_time < 0.0_dp .or. p%fill_time <= 0.0_dp .or. t <= p%deploy_time) return
     tau = (t - p%deploy_time)/p%fill_time
     if (tau <= 0.0_dp .or. tau >= 1.0_dp) return
     r = p%inflation_exponent*tau**(p%inflation_exponent - 1.0_dp)/p%fill_time

@@ -46,7 +46,8 @@ module airlaunch_line_cvode
   use airlaunch_line_model, only: line_model, line_energy, node_state_name
   use airlaunch_line_mass, only: line_mass_matrix
   use airlaunch_line_ends, only: line_end, end_point_mass
-  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, scheme_peak_tension
+  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, scheme_peak_tension, &
+    check_fill_target
   implicit none
   private
   public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, line_force_jacobian
@@ -125,6 +126,8 @@ module airlaunch_line_cvode
     procedure :: get_state => cvode_get_state
     procedure :: stats => cvode_scheme_stats
     procedure :: set_body_motion => cvode_set_body_motion
+    procedure :: set_stop_time => cvode_set_stop_time
+    procedure :: set_fill_time => cvode_set_fill_time
     procedure :: free => cvode_free
   end type line_cvode
 
@@ -557,6 +560,30 @@ contains
     y = self%solver%y
     call self%solver%reinit(self%t, y, error)
   end subroutine cvode_set_body_motion
+
+  !> Do not step past t_stop.
+  subroutine cvode_set_stop_time(self, t_stop, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    real(dp), intent(in) :: t_stop                         !< stop time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    if (self%sys%n_state() == 0) return
+    call self%solver%set_stop_time(t_stop, error)
+  end subroutine cvode_set_stop_time
+
+  !> The canopy at end `which` deploys now and fills in `fill_time`: CVODE
+  !> restarts here (the drag area's growth starts with a kink for j < 2).
+  subroutine cvode_set_fill_time(self, which, fill_time, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    integer, intent(in) :: which                           !< 1 = node 0, 2 = node N
+    real(dp), intent(in) :: fill_time                      !< filling time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    real(dp), allocatable :: y(:)
+    call check_fill_target(self%sys%ends, which, fill_time, error)
+    if (allocated(error)) return
+    self%sys%ends(which)%canopy%fill_time = fill_time
+    y = self%solver%y
+    call self%solver%reinit(self%t, y, error)
+  end subroutine cvode_set_fill_time
 
   !> Release CVODE and the system.
   subroutine cvode_free(self)

@@ -55,7 +55,8 @@ module airlaunch_line_ends
     logical :: canopy_end = .false.         !< point mass: the canopy below, not drag_area
     type(parachute) :: canopy               !< canopy_end: its drag areas, inflation and apparent
                                             !< mass (its own `mass` is not read: the end's is;
-                                            !< fill_time set by set_fill_time when it is 0)
+                                            !< its fill_time is the owner's, e.g. from the
+                                            !< air speed at the deployment: fill_time)
     ! body ends: the owner's two samples
     real(dp) :: body_t(2) = [0.0_dp, 1.0_dp]  !< sample times [s]
     real(dp) :: body_x(3, 2) = 0.0_dp         !< sample positions [m]
@@ -68,7 +69,7 @@ module airlaunch_line_ends
     procedure :: apparent_mass => end_apparent_mass
     procedure :: energy => end_energy
     procedure :: inflating => end_inflating
-    procedure :: set_fill_time => end_set_fill_time
+    procedure :: fill_time => end_fill_time
     procedure :: set_body_motion => end_set_body_motion
     procedure :: check => end_check
   end type line_end
@@ -297,14 +298,13 @@ contains
     end_inflating = self%kind == end_point_mass .and. self%canopy_end .and. self%canopy%deploy_time >= 0.0_dp
   end function end_inflating
 
-  !> A deploying canopy's filling time t_f = n D0 / V (Knacke, NWC TP 6575,
-  !> ch. 5) from the air speed `speed` it deploys into, unless already set.
-  pure subroutine end_set_fill_time(self, speed)
-    class(line_end), intent(inout) :: self   !< end
-    real(dp), intent(in) :: speed            !< air speed relative to the end at deployment [m/s]
-    if (.not. self%inflating() .or. self%canopy%fill_time > 0.0_dp) return
-    if (speed > 0.0_dp) self%canopy%fill_time = self%canopy%fill_constant*parachute_nominal_diameter(self%canopy)/speed
-  end subroutine end_set_fill_time
+  !> A canopy's filling time t_f = n D0 / V [s] (Knacke, NWC TP 6575, ch. 5)
+  !> when it deploys into the air speed V = `speed` (> 0) relative to it.
+  pure real(dp) function end_fill_time(self, speed) result(t_f)
+    class(line_end), intent(in) :: self   !< canopy end
+    real(dp), intent(in) :: speed         !< air speed relative to the end at its deployment [m/s]
+    t_f = self%canopy%fill_constant*parachute_nominal_diameter(self%canopy)/speed
+  end function end_fill_time
 
   !> Drag area of a point-mass end at time t [m^2]: a canopy's inflation law,
   !> otherwise the fixed drag_area.
@@ -378,8 +378,7 @@ contains
           "inflation_exponent >= 1")
       else if (self%inflating() .and. .not. (c%fill_time > 0.0_dp .and. ieee_is_finite(c%fill_time))) then
         call fatal_error(error, name // ": the canopy deploys at " // str(c%deploy_time) // " s but its " // &
-          "filling time " // str(c%fill_time) // " s is not > 0 (t_f = n D0 / V needs an air speed " // &
-          "relative to the end)")
+          "filling time " // str(c%fill_time) // " s is not > 0 and finite")
       end if
     end associate
   end subroutine check_canopy

@@ -64,7 +64,7 @@ module airlaunch_line_marching
   use airlaunch_linalg, only: solve_general
   use airlaunch_line_model, only: line_model, marching_diverged, far_end_not_converged
   use airlaunch_line_ends, only: line_end, end_point_mass
-  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats
+  use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, check_fill_target
   implicit none
   private
   public :: line_marching, new_line_marching
@@ -102,6 +102,8 @@ module airlaunch_line_marching
     procedure :: get_state => marching_get_state
     procedure :: stats => marching_stats
     procedure :: set_body_motion => marching_set_body_motion
+    procedure :: set_stop_time => marching_set_stop_time
+    procedure :: set_fill_time => marching_set_fill_time
     procedure :: free => marching_free
   end type line_marching
 
@@ -446,6 +448,31 @@ contains
     call self%ends(which)%set_body_motion(t1, x1, v1, t2, x2, v2)
     self%t_stop = t2
   end subroutine marching_set_body_motion
+
+  !> End a step on t_stop (the steps are dt, one shorter step lands on it).
+  subroutine marching_set_stop_time(self, t_stop, error)
+    class(line_marching), intent(inout) :: self            !< scheme
+    real(dp), intent(in) :: t_stop                         !< stop time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    if (.not. (t_stop > self%tn)) then
+      call fatal_error(error, "line (marching): stop time " // str(t_stop) // " s is not after t = " // &
+        str(self%tn) // " s")
+      return
+    end if
+    self%t_stop = t_stop
+  end subroutine marching_set_stop_time
+
+  !> The canopy at end `which` deploys now and fills in `fill_time` (its mass
+  !> and drag are taken per step: nothing else to restart).
+  subroutine marching_set_fill_time(self, which, fill_time, error)
+    class(line_marching), intent(inout) :: self            !< scheme
+    integer, intent(in) :: which                           !< 1 = node 0, 2 = node N
+    real(dp), intent(in) :: fill_time                      !< filling time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    call check_fill_target(self%ends, which, fill_time, error)
+    if (allocated(error)) return
+    self%ends(which)%canopy%fill_time = fill_time
+  end subroutine marching_set_fill_time
 
   !> Release the work arrays.
   subroutine marching_free(self)

@@ -8,9 +8,11 @@ module airlaunch_line_scheme
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_peak_search, only: peak_tracker
+  use airlaunch_line_ends, only: line_end
   implicit none
   private
   public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options, scheme_peak_tension
+  public :: check_fill_target
 
   !> How to integrate a line (namelist group `&line_scene`, scheme part).
   type :: line_scheme_options
@@ -68,6 +70,8 @@ module airlaunch_line_scheme
     procedure(state_interface), deferred :: get_state
     procedure(stats_interface), deferred :: stats
     procedure(body_interface), deferred :: set_body_motion
+    procedure(stop_interface), deferred :: set_stop_time
+    procedure(fill_interface), deferred :: set_fill_time
     procedure(free_interface), deferred :: free
   end type line_scheme
 
@@ -101,6 +105,22 @@ module airlaunch_line_scheme
       real(dp), intent(in) :: t1, t2, x1(3), v1(3), x2(3), v2(3)
       type(error_type), allocatable, intent(inout) :: error
     end subroutine body_interface
+    !> Do not step past t_stop (> t): a change of the system known in advance.
+    subroutine stop_interface(self, t_stop, error)
+      import :: line_scheme, dp, error_type
+      class(line_scheme), intent(inout) :: self
+      real(dp), intent(in) :: t_stop
+      type(error_type), allocatable, intent(inout) :: error
+    end subroutine stop_interface
+    !> The canopy at end `which` (1 = node 0, 2 = node N) deploys at the current
+    !> time and fills in `fill_time` [s]; the integrator restarts there.
+    subroutine fill_interface(self, which, fill_time, error)
+      import :: line_scheme, dp, error_type
+      class(line_scheme), intent(inout) :: self
+      integer, intent(in) :: which
+      real(dp), intent(in) :: fill_time
+      type(error_type), allocatable, intent(inout) :: error
+    end subroutine fill_interface
     !> Release resources (safe to call twice).
     subroutine free_interface(self)
       import :: line_scheme
@@ -141,6 +161,23 @@ contains
     if (associated(self%peak)) deallocate(self%peak)
     nullify(self%peak)
   end subroutine scheme_release_peak
+
+  !> An error unless end `which` of `ends` (1 = node 0, 2 = node N) is a
+  !> deploying canopy and `fill_time` > 0 (set_fill_time's arguments).
+  subroutine check_fill_target(ends, which, fill_time, error)
+    type(line_end), intent(in) :: ends(2)                  !< the scheme's ends
+    integer, intent(in) :: which                           !< the end
+    real(dp), intent(in) :: fill_time                      !< its filling time [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set if not
+    if (which < 1 .or. which > 2) then
+      call fatal_error(error, "line: end index " // str(which) // " is not allowed: 1 (node 0) or 2 (node N)")
+    else if (.not. ends(which)%inflating()) then
+      call fatal_error(error, "line: end " // str(which) // " is not a deploying canopy: no filling time to set")
+    else if (.not. (fill_time > 0.0_dp .and. fill_time <= huge(1.0_dp))) then
+      call fatal_error(error, "line: a filling time of " // str(fill_time) // " s is not allowed: must be > 0 " // &
+        "and finite")
+    end if
+  end subroutine check_fill_target
 
   !> Validate the scheme options (one line naming the variable, its value and
   !> what is allowed).

@@ -70,6 +70,10 @@ module airlaunch_line_scene
     logical :: ready = .false.                       !< init succeeded
     !> largest segment strain of the initial shape (negative: all slack)
     real(dp) :: initial_strain = 0.0_dp
+    !> the deploying canopy's end (1 = a, 2 = b) while its deployment is ahead, else 0
+    integer :: deploy_pending = 0
+    !> air speed relative to the canopy when it deployed [m/s] (-1: not yet, or no canopy)
+    real(dp) :: deploy_speed = -1.0_dp
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -92,9 +96,11 @@ contains
     self%cfg = cfg
     call self%model%init(cfg%line, error)
     if (allocated(error)) return
-    ! a deploying canopy fills in t_f = n D0 / V, V its initial air speed
-    call self%cfg%end_a%set_fill_time(air_speed(cfg%line, cfg%end_a))
-    call self%cfg%end_b%set_fill_time(air_speed(cfg%line, cfg%end_b))
+    ! a deploying canopy fills in t_f = n D0 / V, V the air speed relative to it
+    ! when it deploys: at the start (deploy_time 0) from its initial velocity,
+    ! later from the state there (deploy)
+    call prepare_deployment(self, error)
+    if (allocated(error)) return
     call self%cfg%end_a%check("end_a", error)
     if (allocated(error)) return
     call self%cfg%end_b%check("end_b", error)
@@ -171,6 +177,10 @@ contains
     call new_line_scheme(self%scheme, self%model, self%cfg%end_a, self%cfg%end_b, self%x, self%v, 0.0_dp, &
       opts, error)
     if (allocated(error)) return
+    if (self%deploy_pending > 0) then
+      call self%scheme%set_stop_time(deployment_time(self%cfg), error)
+      if (allocated(error)) return
+    end if
 
     n_max = ceiling(cfg%t_end/cfg%output_interval - 1.0e-9_dp) + 1
     allocate(self%time(n_max), self%tip(3, n_max), self%tip_velocity(3, n_max), &
@@ -181,16 +191,91 @@ contains
     self%ready = .true.
   end subroutine scene_init
 
-  !> Speed of the air relative to an end at t = 0 [m/s] (0 with the air off).
-  pure real(dp) function air_speed(line, en) result(speed)
-    type(line_params), intent(in) :: line   !< the line (wind, air)
-    type(line_end), intent(in) :: en        !< the end
+  !> A deploying canopy end's filling time: set at once when it deploys at the
+  !> start, else pending (deploy sets it when the run gets there; until then
+  !> the canopy is packed whatever its filling time: a placeholder).
+  subroutine prepare_deployment(self, error)
+    type(line_scene), intent(inout) :: self                !< scene (cfg set)
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    type(line_end) :: en
     real(dp) :: x(3), v(3)
-    speed = 0.0_dp
-    if (.not. line%air) return
-    call en%motion(0.0_dp, x, v)
-    speed = norm2(line%wind - v)
-  end function air_speed
+    self%deploy_pending = 0
+    self%deploy_speed = -1.0_dp
+    en = canopy_end_of(self%cfg)
+    if (.not. en%inflating()) return
+    if (en%canopy%deploy_time > 0.0_dp) then
+      self%deploy_pending = canopy_index(self%cfg)
+      en%canopy%fill_time = huge(1.0_dp)
+      call put_end(self%cfg, en)
+    else
+      call en%motion(0.0_dp, x, v)
+      call set_deployment(self, 0.0_dp, v, error)
+    end if
+  end subroutine prepare_deployment
+
+  !> The canopy deploys at t with velocity v: its filling time from the air
+  !> speed |wind - v| (an error naming the time if it is 0).
+  subroutine set_deployment(self, t, v, error)
+    type(line_scene), intent(inout) :: self                !< scene
+    real(dp), intent(in) :: t, v(3)                        !< deployment time [s], the end's velocity [m/s]
+    type(error_type), allocatable, intent(inout) :: error  !< set if there is no air speed
+    type(line_end) :: en
+    real(dp) :: speed
+    speed = norm2(self%cfg%line%wind - v)
+    if (.not. (speed > 0.0_dp)) then
+      call fatal_error(error, "line_scene: the canopy at end_" // merge("a", "b", canopy_index(self%cfg) == 1) // &
+        " deploys at t = " // str(t) // " s with no air speed relative to it (wind - velocity = 0 m/s): " // &
+        "its filling time n D0 / V needs V > 0; deploy it later or into a stream")
+      return
+    end if
+    self%deploy_speed = speed
+    en = canopy_end_of(self%cfg)
+    en%canopy%fill_time = en%fill_time(speed)
+    call put_end(self%cfg, en)
+  end subroutine set_deployment
+
+  !> Integrate to the pending deployment, set the canopy's filling time from
+  !> its air speed there and restart the scheme.
+  subroutine deploy(self, error)
+    type(line_scene), intent(inout) :: self                !< scene (a deployment pending)
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    type(line_end) :: en
+    integer :: which
+    which = self%deploy_pending
+    call self%scheme%advance(deployment_time(self%cfg), error)
+    if (allocated(error)) return
+    call self%scheme%get_state(self%x, self%v)
+    call set_deployment(self, self%scheme%t, self%v(:, merge(0, self%model%n, which == 1)), error)
+    if (allocated(error)) return
+    en = canopy_end_of(self%cfg)
+    call self%scheme%set_fill_time(which, en%canopy%fill_time, error)
+    self%deploy_pending = 0
+  end subroutine deploy
+
+  !> The canopy's deployment time [s].
+  pure real(dp) function deployment_time(cfg) result(t)
+    type(line_scene_config), intent(in) :: cfg   !< the scene (with a canopy end)
+    type(line_end) :: en
+    en = canopy_end_of(cfg)
+    t = en%canopy%deploy_time
+  end function deployment_time
+
+  !> Which end carries the canopy (1 = a, 2 = b; 2 if none).
+  pure integer function canopy_index(cfg) result(which)
+    type(line_scene_config), intent(in) :: cfg   !< the scene
+    which = merge(1, 2, cfg%end_a%canopy_end)
+  end function canopy_index
+
+  !> Store the canopy end `en` back into the scene's inputs.
+  pure subroutine put_end(cfg, en)
+    type(line_scene_config), intent(inout) :: cfg   !< the scene
+    type(line_end), intent(in) :: en                !< its canopy end
+    if (canopy_index(cfg) == 1) then
+      cfg%end_a = en
+    else
+      cfg%end_b = en
+    end if
+  end subroutine put_end
 
   !> Integrate to t_end, recording at every output time (t = 0 included).
   subroutine scene_run(self, error)
@@ -211,6 +296,10 @@ contains
     do i = 2, n_max
       if (allocated(error)) exit
       t_out = min((i - 1)*self%cfg%output_interval, self%cfg%t_end)
+      if (self%deploy_pending > 0) then
+        if (deployment_time(self%cfg) <= t_out) call deploy(self, error)
+        if (allocated(error)) exit
+      end if
       call self%scheme%advance(t_out, error)
       if (allocated(error)) exit
       call record(self, error)
@@ -655,6 +744,8 @@ contains
       "force of the line on its end nodes: end tension plus the end half-segment's weight and drag", error)
     call w%add_var_2d("line_tip_position", ["xyz ", "time"], scene%tip(:, 1:m), "m", &
       "position of node N (end b), earth frame", error)
+    call w%add_var_2d("line_tip_velocity", ["xyz ", "time"], scene%tip_velocity(:, 1:m), "m s-1", &
+      "velocity of node N (end b), earth frame", error)
     allocate(r1(m), r3(3, m))
     r1 = scene%energy(1, 1:m)
     call w%add_var_1d("line_energy_kinetic", ["time"], r1, "J", &
@@ -711,7 +802,10 @@ contains
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)
     chute_end = canopy_end_of(scene%cfg)
-    if (chute_end%inflating()) call w%add_real_att("/", "canopy_fill_time_s", chute_end%canopy%fill_time, error)
+    if (chute_end%inflating() .and. scene%deploy_speed > 0.0_dp) then   ! (a failed run may stop before it)
+      call w%add_real_att("/", "canopy_fill_time_s", chute_end%canopy%fill_time, error)
+      call w%add_real_att("/", "canopy_deploy_air_speed_m_s", scene%deploy_speed, error)
+    end if
     call w%finish(error)
   end subroutine write_output
 
@@ -723,8 +817,12 @@ contains
     note = ""
     en = canopy_end_of(scene%cfg)
     if (.not. en%inflating()) return
-    note = "canopy: deploys at t = " // str(en%canopy%deploy_time) // " s, fills in t_f = n D0 / V = " // &
-      str(en%canopy%fill_time) // " s (V = " // str(air_speed(scene%cfg%line, en)) // " m/s)" // new_line("a")
+    if (scene%deploy_speed > 0.0_dp) then
+      note = "canopy: deploys at t = " // str(en%canopy%deploy_time) // " s into " // str(scene%deploy_speed) // &
+        " m/s of air speed, fills in t_f = n D0 / V = " // str(en%canopy%fill_time) // " s" // new_line("a")
+    else
+      note = "canopy: deploys at t = " // str(en%canopy%deploy_time) // " s (not reached)" // new_line("a")
+    end if
   end function canopy_note
 
   !> The scene's canopy end (at most one), or end b if it has none.

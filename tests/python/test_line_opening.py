@@ -7,6 +7,9 @@ Independent references:
   area m Cd_n d / rho = 0.18 m^2 (tests/python/test_line_fishhook.py): the hook forms.
 - Once the canopy is full its drag per unit mass, CdS / (m + m_a) = 10 / (1.8 + 5.19)
   m^2/kg, is 14 times the line's Cd_n d / rho: the end leads, no hook (the same criterion).
+- The filling time is Knacke's t_f = n D0 / V with V the air speed relative to the canopy when
+  it deploys: the run's own record of the canopy's velocity at t_d (the packed canopy has been
+  swept aft by then), and, for a line falling freely in still air, V = g t_d.
 - The settled tow is the towed line of tests/unit/test_line_towed.f90, whose closed form
   T(u) = (T_end + EA) e^(f u / EA) - EA gives 78 775 N at the support and a stretched length of
   64.7146 m (without weight: the weight, 176 N of line and 18 N of canopy across an 78.8 kN
@@ -53,7 +56,6 @@ def test_the_canopy_opens_the_hook_and_settles_into_the_tow(airlaunch_exe, tmp_p
     res = run_airlaunch(airlaunch_exe, OPENING, "--output", out)
     assert res.returncode == 0, res.stderr
     d0 = math.sqrt(4 * CDS_OPEN / (math.pi * CD0))
-    t_fill = FILL_CONSTANT * d0 / U_AIR
     apparent = RHO_AIR * math.pi / 6 * (0.7 * d0) ** 3
     # the file's canopy is where the criteria put it (a guard on the example, not on the
     # code): packed below the fishhook's critical drag area, full far above it
@@ -62,8 +64,25 @@ def test_the_canopy_opens_the_hook_and_settles_into_the_tow(airlaunch_exe, tmp_p
     assert CDS_OPEN / (CANOPY_MASS + apparent) > 10 * LINE_CD_N * LINE_D / LINE_RHO
     support, stretched = towed_line()
     with xr.open_dataset(out) as ds:
-        assert ds.attrs["canopy_fill_time_s"] == pytest.approx(t_fill, rel=1e-12)
         t = ds["time"].values
+        # the filling time from the air speed at the deployment (a record's time: the state
+        # there is the one the run deployed from)
+        at = np.flatnonzero(np.isclose(t, DEPLOY, rtol=0, atol=1e-12))
+        assert at.size == 1
+        wind = np.array([-U_AIR, 0.0, 0.0])
+        speed = np.linalg.norm(wind - ds["line_tip_velocity"].values[at[0]])
+        assert ds.attrs["canopy_deploy_air_speed_m_s"] == pytest.approx(speed, rel=1e-12)
+        t_fill = FILL_CONSTANT * d0 / speed
+        assert ds.attrs["canopy_fill_time_s"] == pytest.approx(t_fill, rel=1e-12)
+        # the recorded velocity is the canopy's: the central difference of its position over
+        # the neighbouring records (h = 5 ms) differs by the jerk's h^2/6 (the records' second
+        # difference of the velocity: 0.019 m/s, 1.6e-4 of V; measured 1.45e-4), bound 1e-3;
+        # the packed canopy has been swept aft (measured V = 124.1 m/s)
+        tip = ds["line_tip_position"].values
+        step = t[at[0] + 1] - t[at[0] - 1]
+        v_fd = (tip[at[0] + 1] - tip[at[0] - 1]) / step
+        assert np.linalg.norm(wind - v_fd) == pytest.approx(speed, rel=1e-3)
+        assert speed < 0.9 * U_AIR
         x = ds["line_node_position"].values          # (time, node, xyz); the stream runs along -x
         tension = ds["line_end_tension"].values[:, 0]   # (time, end): the tie's segment
     depth = x[:, -1, 0] - x[:, :, 0].min(axis=1)
@@ -120,8 +139,8 @@ def test_the_paper_marching_scheme_opens_it_alike(airlaunch_exe, tmp_path):
      "deploy_time = 2.0 s is not allowed: must be < &run t_end = 2.0 s"),
     ([(r"^  packed_drag_area = 0.1 .*$", "  packed_drag_area = 20.0")],
      "packed_drag_area = 20.0 is not allowed (must be < drag_area = 10.0 m^2)"),
-    ([(r"^  wind = .*$", "  wind = 0.0, 0.0, 0.0")],
-     "filling time 0.0 s is not > 0"),
+    ([(r"^  wind = .*$", "  wind = 0.0, 0.0, 0.0"), (r"^  deploy_time = 0.2 .*$", "  deploy_time = 0.0")],
+     "deploys at t = 0.0 s with no air speed relative to it"),
 ])
 def test_canopy_input_errors(airlaunch_exe, tmp_path, edits, fragment):
     nml = nml_variant(tmp_path, "bad", base=OPENING, edits=edits)
@@ -129,3 +148,54 @@ def test_canopy_input_errors(airlaunch_exe, tmp_path, edits, fragment):
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     line = assert_input_error(res, fragment, out)
     assert "line_opening" not in line and "bad.nml" in line
+
+
+@pytest.mark.parametrize("scheme", ["cvode", "marching"])
+def test_the_filling_time_takes_the_air_speed_at_the_deployment(airlaunch_exe, tmp_path, scheme):
+    """A line with the packed canopy at its end falls from rest in still air, drag-free (the line
+    without diameter, the packed canopy without drag area) and unstretched: every node falls
+    freely, so the canopy deploys at t_d into the air speed g t_d and fills in n D0 / (g t_d).
+    Both schemes integrate a constant acceleration exactly (BDF2's and the explicit march's
+    velocities are linear in t): bound 1e-9, for the round-off of the steps."""
+    deploy, g = 0.5, 9.80665
+    nml = tmp_path / "drop.nml"
+    extra = "\n  dt = 1.0e-4" if scheme == "marching" else ""
+    nml.write_text(f"""&run
+  scene = 'line'
+  t_end = 1.0
+  output_dt = 0.05
+/
+&line
+  length = 10.0
+  n_seg = 10
+  ea = 1.0e6
+  mass_per_length = 0.3
+  damping = 100.0
+  diameter = 0.0
+  gravity = .true.
+  air = .true.
+  wind = 0.0, 0.0, 0.0
+  air_density = 1.225
+/
+&line_scene
+  a_kind = 'free'
+  a_position = 0.0, 1000.0, 0.0
+  b_kind = 'canopy'
+  b_position = 10.0, 1000.0, 0.0
+  scheme = '{scheme}'{extra}
+/
+&parachute
+  mass = 20.0
+  drag_area = 30.0
+  packed_drag_area = 0.0
+  deploy_time = {deploy}
+/
+""")
+    out = tmp_path / "drop.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    d0 = math.sqrt(4 * 30.0 / (math.pi * CD0))
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "completed"
+        assert ds.attrs["canopy_deploy_air_speed_m_s"] == pytest.approx(g * deploy, rel=1e-9)
+        assert ds.attrs["canopy_fill_time_s"] == pytest.approx(FILL_CONSTANT * d0 / (g * deploy), rel=1e-9)
