@@ -249,6 +249,10 @@ contains
     if (allocated(error)) return
     en = canopy_end_of(self%cfg)
     call self%scheme%set_fill_time(which, en%canopy%fill_time, error)
+    if (allocated(error)) return
+    ! the filling's end: the entrained air's momentum force stops with a jump
+    if (self%scheme%t + en%canopy%fill_time < self%cfg%t_end) &
+      call self%scheme%set_stop_time(self%scheme%t + en%canopy%fill_time, error)
     self%deploy_pending = 0
   end subroutine deploy
 
@@ -300,7 +304,10 @@ contains
         if (deployment_time(self%cfg) <= t_out) call deploy(self, error)
         if (allocated(error)) exit
       end if
-      call self%scheme%advance(t_out, error)
+      ! (CVODE returns at a stop time before t_out: the end of a canopy's filling)
+      do while (self%scheme%t < t_out .and. .not. allocated(error))
+        call self%scheme%advance(t_out, error)
+      end do
       if (allocated(error)) exit
       call record(self, error)
     end do

@@ -65,6 +65,10 @@ def test_the_canopy_opens_the_hook_and_settles_into_the_tow(airlaunch_exe, tmp_p
     support, stretched = towed_line()
     with xr.open_dataset(out) as ds:
         t = ds["time"].values
+        # the records stay on the output cadence through the stops at the deployment and at
+        # the filling's end (a stop is not a record)
+        assert np.allclose(t, np.arange(t.size) * value("output_dt"), rtol=0, atol=1e-12), t
+        assert t[-1] == pytest.approx(value("t_end"), abs=1e-12)
         # the filling time from the air speed at the deployment (a record's time: the state
         # there is the one the run deployed from)
         at = np.flatnonzero(np.isclose(t, DEPLOY, rtol=0, atol=1e-12))
