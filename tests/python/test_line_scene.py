@@ -12,7 +12,7 @@ from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
 
 
 @pytest.mark.parametrize("name", ["line_pendulum", "line_catenary", "line_parachute", "line_fishhook",
-                                  "line_opening"])
+                                  "line_opening", "line_airdrop"])
 def test_line_examples_run(airlaunch_exe, tmp_path, name):
     out = tmp_path / f"{name}.nc"
     res = run_airlaunch(airlaunch_exe, ROOT / "input" / f"{name}.nml", "--output", out)
@@ -25,7 +25,7 @@ def test_line_examples_run(airlaunch_exe, tmp_path, name):
             assert ds[v].attrs.get("units"), f"{v} has no units"
         assert not np.isnan(ds["line_node_position"].values).any()
         assert (ds["line_tension"].values >= 0).all()
-        # pendulum and catenary: fixed and point-mass ends, no air -> passive, energy may only
+        # pendulum, catenary and airdrop: fixed and point-mass ends, no wind -> passive, energy may only
         # fall (a rise of 1e-6 of the energy exchanged is rounding of the recorded sums);
         # the parachute, fishhook and opening lines are driven by the wind (and the parachute line by its
         # moving nose): no such invariant
