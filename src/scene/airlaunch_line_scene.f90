@@ -70,8 +70,8 @@ module airlaunch_line_scene
     logical :: ready = .false.                       !< init succeeded
     !> largest segment strain of the initial shape (negative: all slack)
     real(dp) :: initial_strain = 0.0_dp
-    !> the deploying canopy's end (1 = a, 2 = b) while its deployment is ahead, else 0
-    integer :: deploy_pending = 0
+    !> a canopy's deployment is ahead (its filling time not yet known)
+    logical :: deploy_pending = .false.
     !> air speed relative to the canopy when it deployed [m/s] (-1: not yet, or no canopy)
     real(dp) :: deploy_speed = -1.0_dp
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
@@ -177,7 +177,7 @@ contains
     call new_line_scheme(self%scheme, self%model, self%cfg%end_a, self%cfg%end_b, self%x, self%v, 0.0_dp, &
       opts, error)
     if (allocated(error)) return
-    if (self%deploy_pending > 0) then
+    if (self%deploy_pending) then
       call self%scheme%set_stop_time(deployment_time(self%cfg), error)
       if (allocated(error)) return
     end if
@@ -199,12 +199,12 @@ contains
     type(error_type), allocatable, intent(inout) :: error  !< set on bad input
     type(line_end) :: en
     real(dp) :: x(3), v(3)
-    self%deploy_pending = 0
+    self%deploy_pending = .false.
     self%deploy_speed = -1.0_dp
     en = canopy_end_of(self%cfg)
     if (.not. en%inflating()) return
     if (en%canopy%deploy_time > 0.0_dp) then
-      self%deploy_pending = canopy_index(self%cfg)
+      self%deploy_pending = .true.
       en%canopy%fill_time = huge(1.0_dp)
       call put_end(self%cfg, en)
     else
@@ -241,7 +241,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     type(line_end) :: en
     integer :: which
-    which = self%deploy_pending
+    which = canopy_index(self%cfg)
     call self%scheme%advance(deployment_time(self%cfg), error)
     if (allocated(error)) return
     call self%scheme%get_state(self%x, self%v)
@@ -253,7 +253,7 @@ contains
     ! the filling's end: the entrained air's momentum force stops with a jump
     if (self%scheme%t + en%canopy%fill_time < self%cfg%t_end) &
       call self%scheme%set_stop_time(self%scheme%t + en%canopy%fill_time, error)
-    self%deploy_pending = 0
+    self%deploy_pending = .false.
   end subroutine deploy
 
   !> The canopy's deployment time [s].
@@ -300,7 +300,7 @@ contains
     do i = 2, n_max
       if (allocated(error)) exit
       t_out = min((i - 1)*self%cfg%output_interval, self%cfg%t_end)
-      if (self%deploy_pending > 0) then
+      if (self%deploy_pending) then
         if (deployment_time(self%cfg) <= t_out) call deploy(self, error)
         if (allocated(error)) exit
       end if
