@@ -40,6 +40,13 @@ def assert_input_error(res, fragment, out):
     return lines[0]
 
 
+def nml_scalar(path, name):
+    """A scalar set in an example file (`  name = value`, exactly once)."""
+    found = re.findall(rf"^  {name} = ([-0-9.eE+]+)", pathlib.Path(path).read_text(), flags=re.M)
+    assert len(found) == 1, name
+    return float(found[0])
+
+
 def nml_variant(tmp_path, name="variant", edits=(), line=(), base=PAPER):
     """A copy of the input file `base` (default: the paper scenario) with regex
     `edits` (each must match exactly one line) and extra `&line` assignments

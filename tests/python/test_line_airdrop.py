@@ -12,23 +12,20 @@ Independent references:
   largest rise itself, which a wrong sign of the entrained air's momentum would make
   positive (+ (3/2) (dm_a/dt) v^2)."""
 import math
-import re
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, run_airlaunch
+from conftest import ROOT, nml_scalar, run_airlaunch
 
 AIRDROP = ROOT / "input" / "line_airdrop.nml"
 G = 9.80665
 
 
 def value(name):
-    """A scalar set in the example file (`  name = value`)."""
-    found = re.findall(rf"^  {name} = ([-0-9.eE+]+)", AIRDROP.read_text(), flags=re.M)
-    assert len(found) == 1, name
-    return float(found[0])
+    """A scalar set in the example file."""
+    return nml_scalar(AIRDROP, name)
 
 
 def steady_descent_rate():
@@ -63,12 +60,14 @@ def test_the_airdrop_opens_and_settles_into_the_steady_descent(airlaunch_exe, tm
         # the forward motion is gone (70 m/s at the exit; measured 1.3e-3 m/s)
         assert abs(v[-1, 0]) < 0.01 * v_t
         # the platform hangs below the canopy, the line straight and stretched by the
-        # platform's weight less its drag (EA eps = m g - q (Cd A)_p): within 1 cm of
-        # L (1 + eps)
+        # platform's weight less its drag (EA eps = m g - q (Cd A)_p): the distance of the
+        # ends is L (1 + eps) but for the line's own weight, which adds rho_l g L^2 / (2 EA)
+        # = 0.2 mm, and what is left of the swing; bound 1 mm, measured +0.18 mm (the
+        # vertical span alone is also shortened by the swing's L (1 - cos theta) = 0.6 mm)
         q = 0.5 * value("air_density") * v_t ** 2
         pull = value("a_mass") * G - q * value("a_drag_area")
-        span = x[-1, -1] - x[-1, 0]
-        assert span[1] == pytest.approx(value("length") * (1 + pull / value("ea")), abs=0.01)
+        span = np.linalg.norm(x[-1, -1] - x[-1, 0])
+        assert span == pytest.approx(value("length") * (1 + pull / value("ea")), abs=1e-3)
         # the opening shock comes while the canopy fills: the peak of the riser's tension
         i = int(tension[:, 0].argmax())
         t_fill = ds.attrs["canopy_fill_time_s"]

@@ -15,23 +15,20 @@ Independent references:
   64.7146 m (without weight: the weight, 176 N of line and 18 N of canopy across an 78.8 kN
   pull, changes the tension by ~0.2 N)."""
 import math
-import re
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
+from conftest import ROOT, nml_scalar, assert_input_error, nml_variant, run_airlaunch
 
 OPENING = ROOT / "input" / "line_opening.nml"
 CD0, FILL_CONSTANT = 0.75, 8.0   # &parachute defaults (the file keeps them)
 
 
 def value(name):
-    """A scalar set in the example file (`  name = value`)."""
-    found = re.findall(rf"^  {name} = ([-0-9.eE+]+)", OPENING.read_text(), flags=re.M)
-    assert len(found) == 1, name
-    return float(found[0])
+    """A scalar set in the example file."""
+    return nml_scalar(OPENING, name)
 
 
 LINE_CD_N, LINE_D, LINE_RHO = value("cd_normal"), value("diameter"), value("mass_per_length")
