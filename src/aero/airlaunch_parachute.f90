@@ -1,6 +1,7 @@
 !> Parachute canopy as a point mass with drag and apparent (added) mass.
 !>
-!> Drag: F = -1/2 rho (Cd S)(t) |v| v along the air-relative velocity.
+!> Drag: F = -1/2 rho (Cd S)(t) |u| u, u = v - w_gust(x) the velocity relative to
+!> the air (w_gust: the air-launch scene's discrete gust, zero without one).
 !> Inflation (Knacke, Parachute Recovery Systems Design Manual, NWC TP 6575,
 !> 1991, ch. 5): filling time t_f = n D0 / V at the deployment speed, with
 !> the canopy fill constant n (about 8 for a solid flat circular canopy), and
@@ -13,6 +14,7 @@
 module airlaunch_parachute
   use airlaunch_kinds, only: dp, pi, g0
   use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
   public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter, &
@@ -30,6 +32,9 @@ module airlaunch_parachute
     real(dp) :: packed_drag_area = 0.05_dp  !< Cd S of the packed/streaming canopy [m^2]
     real(dp) :: added_mass_factor = 1.0_dp  !< k_a
     real(dp) :: fill_time = 0.0_dp       !< t_f [s], set from the deployment speed
+    !> the air-launch scene's discrete gust: canopy_node_acceleration and
+    !> canopy_node_jacobian take the velocity relative to it (inactive by default)
+    type(gust_field) :: gust
   end type parachute
 
 contains
@@ -117,14 +122,15 @@ contains
     real(dp), intent(out) :: drag(3)          !< canopy drag [N]
     logical, intent(out) :: ok
     type(air_state) :: air
-    real(dp) :: w(3)
+    real(dp) :: w(3), u(3)
     acc = 0.0_dp
     drag = 0.0_dp
     air = isa(x(2))
     ok = air%in_range
     if (.not. ok) return
-    if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(v)*v - &
-      parachute_added_mass_rate(p, air%density, t)*v
+    u = v - gust_velocity(p%gust, x)   ! the velocity relative to the air
+    if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(u)*u - &
+      parachute_added_mass_rate(p, air%density, t)*u
     w = 0.0_dp
     if (with_weight) w(2) = -g0*p%mass
     acc = (line_force + drag + w)/canopy_node_mass(p, t, air%density, node_mass)
@@ -132,11 +138,12 @@ contains
 
   !> What the Jacobian of canopy_node_acceleration needs at (t, x, v): the
   !> node's whole mass (its share of the line + canopy + apparent mass) and the
-  !> velocity derivative of the canopy's drag, d/dv (-1/2 rho CdS |v| v) =
-  !> -1/2 rho CdS (|v| I + v v^T/|v|), and of the apparent mass's momentum
-  !> term, -(dm_a/dt) I (zero without drag).  The altitude
-  !> dependence of the density (in drag and apparent mass) is left out: an
-  !> approximate Newton matrix, off by (d rho/dh)/rho ~ 1e-4 per metre.
+  !> velocity derivative of the canopy's drag, d/dv (-1/2 rho CdS |u| u) =
+  !> -1/2 rho CdS (|u| I + u u^T/|u|), u = v - w_gust(x), and of the apparent
+  !> mass's momentum term, -(dm_a/dt) I (zero without drag).  The altitude
+  !> dependence of the density (in drag and apparent mass) and the gust's
+  !> change along x are left out: an approximate Newton matrix, off by
+  !> (d rho/dh)/rho ~ 1e-4 per metre.
   !> `ok` is false if the node left the atmosphere model.
   pure subroutine canopy_node_jacobian(p, t, x, v, node_mass, with_drag, mass, drag_dv, ok)
     type(parachute), intent(in) :: p
@@ -148,7 +155,7 @@ contains
     real(dp), intent(out) :: drag_dv(3, 3)    !< d drag / d v [N s/m]
     logical, intent(out) :: ok
     type(air_state) :: air
-    real(dp) :: speed, c
+    real(dp) :: speed, c, u(3)
     integer :: i, j
     drag_dv = 0.0_dp
     mass = 0.0_dp
@@ -157,12 +164,13 @@ contains
     if (.not. ok) return
     mass = canopy_node_mass(p, t, air%density, node_mass)
     if (.not. with_drag) return
-    speed = norm2(v)
+    u = v - gust_velocity(p%gust, x)   ! the velocity relative to the air
+    speed = norm2(u)
     if (speed > 0.0_dp) then
       c = -0.5_dp*air%density*parachute_drag_area(p, t)
       do j = 1, 3
         do i = 1, 3
-          drag_dv(i, j) = c*v(i)*v(j)/speed
+          drag_dv(i, j) = c*u(i)*u(j)/speed
         end do
         drag_dv(j, j) = drag_dv(j, j) + c*speed
       end do

@@ -24,7 +24,8 @@
 !> where f_k lumps half of the distributed load f of each adjacent segment:
 !>  - weight rho l0 g (earth frame: y up, so g = (0, -g0, 0)),
 !>  - aerodynamic drag from the air velocity relative to the segment midpoint,
-!>    u = wind - (v_{k-1}+v_k)/2, split into its tangential part u_t = (u.t)t and
+!>    u = wind + w_gust(midpoint) - (v_{k-1}+v_k)/2 (w_gust: the air-launch
+!>    scene's discrete gust, airlaunch_gust; zero elsewhere), split into its tangential part u_t = (u.t)t and
 !>    cross-flow part u_n = u - u_t (the independence principle):
 !>        D = 1/2 rho_air ell_d [ Cd_n d |u_n| u_n + Cd_t pi d |u_t| u_t ],
 !>    i.e. cross-flow drag on the projected area d*ell_d and skin friction on the
@@ -78,6 +79,7 @@ module airlaunch_line_model
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
   public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
@@ -109,6 +111,9 @@ module airlaunch_line_model
     real(dp), allocatable :: node_mass(:)    !< lumped node masses m_k, k = 0..N [kg]
     !> beta of the segment mass matrix (0: lumped, 1/12: mixed; see the header)
     real(dp) :: mass_coupling = 0.0_dp
+    !> a discrete gust in the air, read at each segment's midpoint (the
+    !> air-launch scene's &gust; inactive by default)
+    type(gust_field) :: gust
   contains
     procedure :: init => model_init
     procedure :: forces => model_forces
@@ -244,7 +249,7 @@ contains
       f(:, k) = f(:, k) - tk*t
       if (self%p%air .and. ell > tiny_len) then
         ! distributed drag f of Eq. (8), half to each node
-        u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
+        u = self%p%wind + gust_velocity(self%gust, 0.5_dp*(x(:, k-1) + x(:, k))) - 0.5_dp*(v(:, k-1) + v(:, k))
         ut = dot_product(u, t)*t
         un = u - ut
         rho_a = rho_lo
@@ -338,7 +343,9 @@ contains
   !> area does not move with dx),
   !> and, with the ISA density, its local gradient along y (the density fit's
   !> dependence on the lowest and highest node is left out: an approximate
-  !> Jacobian there, exact with a fixed `air_density`).  Settling damping:
+  !> Jacobian there, exact with a fixed `air_density`; likewise the gust's
+  !> change along x, w_gust' <= pi |U|/(2H), is left out of dD/dx: u holds the
+  !> gust's value).  Settling damping:
   !> -alpha m_k I on the diagonal.  Hot path: no allocation.
   subroutine model_force_jacobian(self, x, v, dfdx, dfdv)
     class(line_model), intent(in) :: self        !< line
@@ -388,7 +395,7 @@ contains
         call add_segment_blocks(dfdv, k, cb, -cb)
       end if
       if (self%p%air) then
-        u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
+        u = self%p%wind + gust_velocity(self%gust, 0.5_dp*(x(:, k-1) + x(:, k))) - 0.5_dp*(v(:, k-1) + v(:, k))
         ud = dot_product(u, t)
         ut = ud*t
         un = u - ut

@@ -157,6 +157,7 @@ contains
     integer :: nmax, k, n
     n = r%dsys%line%n
     call set_direct_options(run, n_state, r%dsys%has_line, r%dopts)
+    r%dopts%max_step = gust_step_limit(cfg)
     nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
     allocate(r%t_out(nmax))
     r%nout = 0
@@ -198,11 +199,28 @@ contains
     ropt%inner_max_order = 2
     ropt%max_steps = run%max_steps
     ropt%t_end = run%t_end
+    ropt%max_step = gust_step_limit(cfg)
     if (run%max_order > 0) then
       ropt%chain_max_order = run%max_order
       ropt%inner_max_order = run%max_order
     end if
   end function rigidized_options
+
+  !> The largest step of the scene's CVODE integrators [s] (0: unlimited): with
+  !> a &gust, a quarter of its passage 2H/V0 at the flight speed.  CVODE reads
+  !> the right-hand side only at the points of its steps, so a longer step
+  !> (the trimmed flight before the gust takes steps of seconds) could step
+  !> over the whole gust and never see it; a quarter keeps at least four steps
+  !> in the gust at any point of the scene.
+  function gust_step_limit(cfg) result(h)
+    type(scenario_config), intent(in) :: cfg
+    real(dp) :: h
+    type(air_state) :: air
+    h = 0.0_dp
+    if (cfg%gust%vertical == 0.0_dp .and. cfg%gust%lateral == 0.0_dp) return
+    air = isa(cfg%flight%altitude)
+    h = 0.25_dp*2.0_dp*cfg%gust%gradient_length/(cfg%flight%mach*air%sound_speed)
+  end function gust_step_limit
 
   !> The chain of the rigidized coupling: the same aircraft, rocket, cut joint
   !> and loads as the direct system `dsys`, three bodies (rocket, virtual

@@ -2,7 +2,9 @@
 !> separation system (src/multibody): aircraft aerodynamics and thrust (with
 !> the elevator hold), rocket aerodynamics with the bay shielding, and the
 !> line's end force at the rocket's tie-down point (direct coupling: the line
-!> nodes are integrated with the bodies, DESIGN §4 (b)).
+!> nodes are integrated with the bodies, DESIGN §4 (b)).  Both bodies' air
+!> velocity is the discrete gust's (airlaunch_gust) at their centre of mass:
+!> the aerodynamics take v - w_gust(r).
 module airlaunch_launch_loads
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
@@ -12,6 +14,7 @@ module airlaunch_launch_loads
   use airlaunch_aircraft_aero, only: aircraft_aero, aircraft_aero_eval, aircraft_aero_out
   use airlaunch_rocket_aero, only: rocket_aero, rocket_aero_eval
   use airlaunch_rigid_body, only: rigid_body
+  use airlaunch_gust, only: gust_field, gust_velocity
   use airlaunch_force_source, only: force_source, add_point_force
   use airlaunch_cut_joint, only: phase_free
   implicit none
@@ -26,6 +29,7 @@ module airlaunch_launch_loads
     real(dp) :: tie_down(3) = 0.0_dp                !< line attachment, rocket axes [m]
     logical :: aircraft_aero_on = .true.            !< false for a prescribed aircraft
     logical :: line_on = .true.                     !< false: the scene has no line
+    type(gust_field) :: gust                        !< the &gust (inactive by default)
     ! --- set by the scene before each evaluation
     integer :: phase = 0                            !< current Case
     real(dp) :: line_force(3) = 0.0_dp              !< line end force on the rocket, earth [N]
@@ -54,7 +58,8 @@ contains
           return
         end if
         e = dcm_to_euler(b0%c)
-        self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, matmul(transpose(b0%c), b0%v), &
+        self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, &
+          matmul(transpose(b0%c), b0%v - gust_velocity(self%gust, b0%r)), &
           b0%w, e(2))
         force(:, 0) = force(:, 0) + matmul(b0%c, self%aircraft_out%force)
         moment(:, 0) = moment(:, 0) + self%aircraft_out%moment
@@ -71,7 +76,8 @@ contains
         edge_e = b0%r + matmul(b0%c, self%edge_point)
         x_shield = dot_product(b1%c(:, 1), edge_e - b1%r)
       end if
-      call rocket_aero_eval(self%rocket, air%density, matmul(transpose(b1%c), b1%v), b1%w, x_shield, f, m)
+      call rocket_aero_eval(self%rocket, air%density, matmul(transpose(b1%c), b1%v - gust_velocity(self%gust, b1%r)), &
+        b1%w, x_shield, f, m)
       force(:, 1) = force(:, 1) + matmul(b1%c, f)
       moment(:, 1) = moment(:, 1) + m
       if (self%line_on) call add_point_force(b1, self%tie_down, self%line_force, force(:, 1), moment(:, 1))

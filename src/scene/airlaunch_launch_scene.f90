@@ -6,6 +6,7 @@ module airlaunch_launch_scene
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_gust, only: gust_field, make_gust
   use airlaunch_rotation, only: quat_from_euler
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_linalg, only: solve_banded
@@ -107,6 +108,7 @@ contains
       type(cut_joint_geometry) :: geo
       type(cut_joint_options) :: jopt
       type(launch_loads) :: loads
+      type(gust_field) :: gust
       type(line_params) :: lp
       real(dp) :: radius, r_rocket(3), r_tie(3)
       integer :: n, i, status
@@ -180,6 +182,16 @@ contains
       loads%tie_down = sys%tie_down
       loads%aircraft_aero_on = cfg%aircraft%dynamics /= "prescribed"
       loads%line_on = sys%has_line
+      ! the &gust, met by the aircraft's CG at hit_time if it flies on at V0
+      ! (the trim and the line's settling are of the still-air flight: at
+      ! t = 0 the gust is ahead of every point the scene reads it at)
+      gust = make_gust([0.0_dp, cfg%gust%vertical, cfg%gust%lateral], cfg%gust%gradient_length, &
+        b0%r(1) + v0*cfg%gust%hit_time)
+      loads%gust = gust
+      if (sys%has_line) then
+        sys%line%gust = gust
+        sys%chute%gust = gust
+      end if
       call sys%sep%add_source(loads)
       sys%iloads = size(sys%sep%sources)
 

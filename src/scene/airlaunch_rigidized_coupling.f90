@@ -48,7 +48,9 @@
 !> motion, with the line model's law (cross-flow on d*ell, skin friction on
 !> pi*d*ell) integrated over `drag_strips` strips of the rod, air density
 !> log-linear between the rod's ends (as airlaunch_line_model); the canopy's
-!> drag -1/2 rho (Cd S)(t) |v| v and weight at B3.  The apparent mass of the
+!> drag -1/2 rho (Cd S)(t) |v| v and weight at B3 (every velocity relative to the
+!> air: the &gust's, airlaunch_gust, at B3 and at each strip's centre is
+!> subtracted).  The apparent mass of the
 !> canopy is an acceleration-dependent load, which force sources do not
 !> support, so it is added to B3's mass (refreshed every outer step).
 !>
@@ -69,6 +71,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, parachute_added_mass_rate, &
     parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
+  use airlaunch_gust, only: gust_velocity
   use airlaunch_clearance, only: clearance_geometry, clearance_rate
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
@@ -118,6 +121,9 @@ module airlaunch_rigidized_coupling
     !> is sized towards it (cut at the outer step's stop time), not towards the
     !> next output time (cvode_options%t_final)
     real(dp) :: t_end = 0.0_dp
+    !> largest step of the chain's and the line's CVODE [s] (0: unlimited; the
+    !> scene's &gust sets it, so that no step jumps over the gust)
+    real(dp) :: max_step = 0.0_dp
   end type rigidized_settings
 
   !> The virtual rigid body of the line (§2.4) as the chain uses it.
@@ -363,6 +369,7 @@ contains
         wp = cross(b2%w, p)   ! a function result inside matmul: heap temporary
         vp = b2%v + matmul(b2%c, wp) + (0.5_dp - s/self%length)*self%v_eps
         u = -vp
+        if (self%chute%gust%active) u = u + gust_velocity(self%chute%gust, b2%r + matmul(b2%c, p))
         ut = dot_product(u, e)*e
         un = u - ut
         rho = rho0*exp(slope*(b2%r(2) + s*e(2) - min(y0, y1)))
@@ -378,7 +385,7 @@ contains
         call fatal_error(error, "parachute altitude " // str(b3%r(2)) // " m is outside the atmosphere model")
         return
       end if
-      vp = b3%v + self%v_eps
+      vp = b3%v + self%v_eps - gust_velocity(self%chute%gust, b3%r)   ! relative to the air
       ! drag and the filling canopy's apparent-mass momentum (canopy_node_acceleration)
       self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp - &
         parachute_added_mass_rate(self%chute, air%density, t)*vp
@@ -620,7 +627,7 @@ contains
     if (allocated(error)) return
     copt = cvode_options(method="bdf", linear_solver="dense", rtol=opts%chain_rtol, &
       atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000, \
-      max_total_steps=opts%max_steps, t_final=opts%t_end)
+      max_total_steps=opts%max_steps, t_final=opts%t_end, max_step=opts%max_step)
     call self%chain_solver%init(self%chain, t0, y, copt, error)
     if (allocated(error)) return
     ! --- the line's integrator
@@ -629,7 +636,8 @@ contains
     atol_l = opts%inner_atol
     lopt = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%inner_rtol, atol_vector=atol_l, &
-      max_order=opts%inner_max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, t_final=opts%t_end)
+      max_order=opts%inner_max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, t_final=opts%t_end, &
+      max_step=opts%max_step)
     self%t = t0
     call sample_ends(self, t0, self%chain_solver%y)
     call self%line%near%set_body_motion(t0, self%tie_x, self%tie_v, t0 + opts%outer_dt, &

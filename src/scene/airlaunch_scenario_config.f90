@@ -1,5 +1,5 @@
 !> Inputs of the air-launch scene (the paper's scenario, §5.2): namelist groups
-!> &flight, &aircraft, &bay, &rocket, &parachute, &line (see docs/input.md).
+!> &flight, &aircraft, &bay, &rocket, &parachute, &line, &gust (see docs/input.md).
 !> Values the paper gives are the defaults; values it does not give are
 !> documented choices in input/airlaunch_paper.nml.
 module airlaunch_scenario_config
@@ -16,12 +16,17 @@ module airlaunch_scenario_config
   use airlaunch_trim, only: trim_alpha_min_deg, trim_alpha_max_deg
   implicit none
   private
-  public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config
+  public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config, gust_config
   public :: read_scenario_config, scenario_groups, read_parachute
 
   !> Groups of the air-launch scene.
-  character(len=16), parameter :: scenario_groups(7) = [character(len=16) :: "run", "flight", &
-    "aircraft", "bay", "rocket", "parachute", "line"]
+  character(len=16), parameter :: scenario_groups(8) = [character(len=16) :: "run", "flight", &
+    "aircraft", "bay", "rocket", "parachute", "line", "gust"]
+
+  !> Largest peak gust velocity &gust takes [m/s]: 4x the largest design gust
+  !> of CS-25.341(a) in true air speed below 20 km (U_ref 13.41 m/s EAS, with
+  !> F_g = 1 and H = 107 m, is 26 m/s TAS at 20 km).
+  real(dp), parameter :: gust_speed_max = 100.0_dp
 
   !> Variables of &line (air-launch scene).
   type(nml_var), parameter :: line_vars(20) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
@@ -114,6 +119,16 @@ module airlaunch_scenario_config
     real(dp) :: inner_dt = 0.0_dp           !< rigidized, marching: sub-step [s] (0: 0.9 of its stability limit)
   end type line_config
 
+  !> A discrete 1 - cosine gust (airlaunch_gust) the flight meets: its peak
+  !> velocity across the flight path, its gradient distance H (the gust is 2H
+  !> long) and the time the aircraft's CG, flying on at V0, reaches its front.
+  type :: gust_config
+    real(dp) :: vertical = 0.0_dp            !< peak upward gust velocity [m/s] (earth y)
+    real(dp) :: lateral = 0.0_dp             !< peak lateral gust velocity [m/s] (earth z)
+    real(dp) :: gradient_length = 107.0_dp   !< H [m] (CS-25.341: 9 ... 107 m)
+    real(dp) :: hit_time = 1.0_dp            !< the aircraft's CG at the gust's front [s]
+  end type gust_config
+
   !> Everything the air-launch scene reads.
   type :: scenario_config
     type(flight_config) :: flight
@@ -122,6 +137,7 @@ module airlaunch_scenario_config
     type(rocket_config) :: rocket
     type(parachute) :: chute
     type(line_config) :: line
+    type(gust_config) :: gust
   end type scenario_config
 
 contains
@@ -144,6 +160,7 @@ contains
     else
       if (.not. allocated(error)) call read_no_line(f, cfg%line, echo, error)
     end if
+    if (.not. allocated(error)) call read_gust(f, cfg%gust, echo, error)
     if (.not. allocated(error)) call check_geometry(f, cfg, error)
     if (allocated(error) .or. .not. present(t_end)) return
     if (cfg%line%enabled .and. cfg%chute%deploy_time >= t_end) then
@@ -152,6 +169,9 @@ contains
     else if (cfg%bay%release_time >= t_end) then
       call fatal_error(error, f%path // ": &bay: release_time = " // str(cfg%bay%release_time) // &
         " is not allowed (the rocket would never be released: the run ends at t_end = " // str(t_end) // " s)")
+    else if ((cfg%gust%vertical /= 0.0_dp .or. cfg%gust%lateral /= 0.0_dp) .and. cfg%gust%hit_time >= t_end) then
+      call fatal_error(error, f%path // ": &gust: hit_time = " // str(cfg%gust%hit_time) // &
+        " is not allowed (the aircraft would never meet the gust: the run ends at t_end = " // str(t_end) // " s)")
     end if
   end subroutine read_scenario_config
 
@@ -474,6 +494,45 @@ contains
     write(u, nml=parachute)
     call echo_namelist_unit(u, echo)
   end subroutine read_parachute
+
+  !> &gust: a discrete 1 - cosine gust (airlaunch_gust); no gust with both
+  !> peak velocities zero (the default).  The group is echoed in any case, so a
+  !> sweep may vary its values over a base scenario without it.
+  subroutine read_gust(f, c, echo, error)
+    type(nml_file), intent(in) :: f
+    type(gust_config), intent(inout) :: c
+    character(len=:), allocatable, intent(inout) :: echo
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: vertical, lateral, gradient_length, hit_time
+    integer :: u, ios
+    logical :: present
+    character(len=256) :: msg
+    namelist /gust/ vertical, lateral, gradient_length, hit_time
+    type(nml_var), parameter :: vars(4) = [nml_var("vertical", "real"), nml_var("lateral", "real"), &
+      nml_var("gradient_length", "real"), nml_var("hit_time", "real")]
+    vertical = c%vertical; lateral = c%lateral; gradient_length = c%gradient_length; hit_time = c%hit_time
+    call open_group(f, "gust", vars, u, present, error)
+    if (allocated(error)) return
+    if (present) then
+      read(u, nml=gust, iostat=ios, iomsg=msg)
+      close(u)
+      if (ios /= 0) then
+        call f%diagnose("gust", vars, msg, error)
+        return
+      end if
+    end if
+    call require_range(f, "gust", "vertical", vertical, -gust_speed_max, gust_speed_max, "m/s", error)
+    call require_range(f, "gust", "lateral", lateral, -gust_speed_max, gust_speed_max, "m/s", error)
+    ! below 1 m the gust is shorter than any body, whose air velocity is read
+    ! at one point (its centre of mass)
+    call require_range(f, "gust", "gradient_length", gradient_length, 1.0_dp, 1.0e5_dp, "m", error)
+    call require_nonnegative(f, "gust", "hit_time", hit_time, "s", error)
+    if (allocated(error)) return
+    c = gust_config(vertical, lateral, gradient_length, hit_time)
+    open(newunit=u, status="scratch", action="readwrite")
+    write(u, nml=gust)
+    call echo_namelist_unit(u, echo)
+  end subroutine read_gust
 
   subroutine read_line(f, c, echo, error)
     type(nml_file), intent(in) :: f
