@@ -128,7 +128,8 @@ contains
     air = isa(x(2))
     ok = air%in_range
     if (.not. ok) return
-    u = v - gust_velocity(p%gust, x)   ! the velocity relative to the air
+    u = v   ! the velocity relative to the air
+    if (p%gust%active) u = v - gust_velocity(p%gust, x)
     if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(u)*u - &
       parachute_added_mass_rate(p, air%density, t)*u
     w = 0.0_dp
@@ -164,7 +165,8 @@ contains
     if (.not. ok) return
     mass = canopy_node_mass(p, t, air%density, node_mass)
     if (.not. with_drag) return
-    u = v - gust_velocity(p%gust, x)   ! the velocity relative to the air
+    u = v   ! the velocity relative to the air
+    if (p%gust%active) u = v - gust_velocity(p%gust, x)
     speed = norm2(u)
     if (speed > 0.0_dp) then
       c = -0.5_dp*air%density*parachute_drag_area(p, t)

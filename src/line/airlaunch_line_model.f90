@@ -216,7 +216,7 @@ contains
     real(dp), intent(out) :: tension(:)        !< segment tensions T_k, k = 1..N [N]
     integer, intent(out) :: status             !< 0 ok, 1 non-finite tension
     integer :: k, n
-    real(dp) :: dx(3), t(3), u(3), ut(3), un(3), drag(3)
+    real(dp) :: dx(3), t(3), u(3), ut(3), un(3), drag(3), mid(3)
     real(dp) :: ell, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope
     real(dp) :: qn, qt
 
@@ -249,7 +249,11 @@ contains
       f(:, k) = f(:, k) - tk*t
       if (self%p%air .and. ell > tiny_len) then
         ! distributed drag f of Eq. (8), half to each node
-        u = self%p%wind + gust_velocity(self%gust, 0.5_dp*(x(:, k-1) + x(:, k))) - 0.5_dp*(v(:, k-1) + v(:, k))
+        u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
+        if (self%gust%active) then
+          mid = 0.5_dp*(x(:, k-1) + x(:, k))
+          u = u + gust_velocity(self%gust, mid)
+        end if
         ut = dot_product(u, t)*t
         un = u - ut
         rho_a = rho_lo
@@ -354,7 +358,7 @@ contains
     real(dp), intent(out) :: dfdx(:, :, -1:, 0:) !< df_j/dx_(j+d) (3, 3, -1:1, 0:N) [N/m]
     real(dp), intent(out) :: dfdv(:, :, -1:, 0:) !< df_j/dv_(j+d) (3, 3, -1:1, 0:N) [N s/m]
     integer :: k, i
-    real(dp) :: dx(3), dv(3), t(3), pdv(3), u(3), ut(3), un(3), drag(3)
+    real(dp) :: dx(3), dv(3), t(3), pdv(3), u(3), ut(3), un(3), drag(3), mid(3)
     real(dp) :: p(3, 3), tt(3, 3), kb(3, 3), cb(3, 3), an(3, 3), at(3, 3), gu(3, 3), ddx(3, 3), dut(3, 3)
     real(dp) :: ell, ell_d, eps, tk, ea, cd, tiny_len, rho_a, y_lo, rho_lo, log_slope, qn, qt, un_n, ut_n, ud
 
@@ -395,7 +399,11 @@ contains
         call add_segment_blocks(dfdv, k, cb, -cb)
       end if
       if (self%p%air) then
-        u = self%p%wind + gust_velocity(self%gust, 0.5_dp*(x(:, k-1) + x(:, k))) - 0.5_dp*(v(:, k-1) + v(:, k))
+        u = self%p%wind - 0.5_dp*(v(:, k-1) + v(:, k))
+        if (self%gust%active) then
+          mid = 0.5_dp*(x(:, k-1) + x(:, k))
+          u = u + gust_velocity(self%gust, mid)
+        end if
         ud = dot_product(u, t)
         ut = ud*t
         un = u - ut

@@ -49,7 +49,7 @@ contains
     real(dp), intent(inout) :: moment(:, 0:)
     type(error_type), allocatable, intent(inout) :: error
     type(air_state) :: air
-    real(dp) :: e(3), f(3), m(3), x_shield, edge_e(3)
+    real(dp) :: e(3), f(3), m(3), x_shield, edge_e(3), v_air(3), v_body(3)
     associate(b0 => bodies(0), b1 => bodies(1))
       if (self%aircraft_aero_on) then
         air = isa(b0%r(2))
@@ -58,8 +58,10 @@ contains
           return
         end if
         e = dcm_to_euler(b0%c)
-        self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, &
-          matmul(transpose(b0%c), b0%v - gust_velocity(self%gust, b0%r)), &
+        v_air = b0%v
+        if (self%gust%active) v_air = v_air - gust_velocity(self%gust, b0%r)
+        v_body = matmul(transpose(b0%c), v_air)
+        self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, v_body, &
           b0%w, e(2))
         force(:, 0) = force(:, 0) + matmul(b0%c, self%aircraft_out%force)
         moment(:, 0) = moment(:, 0) + self%aircraft_out%moment
@@ -76,8 +78,10 @@ contains
         edge_e = b0%r + matmul(b0%c, self%edge_point)
         x_shield = dot_product(b1%c(:, 1), edge_e - b1%r)
       end if
-      call rocket_aero_eval(self%rocket, air%density, matmul(transpose(b1%c), b1%v - gust_velocity(self%gust, b1%r)), &
-        b1%w, x_shield, f, m)
+      v_air = b1%v
+      if (self%gust%active) v_air = v_air - gust_velocity(self%gust, b1%r)
+      v_body = matmul(transpose(b1%c), v_air)
+      call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m)
       force(:, 1) = force(:, 1) + matmul(b1%c, f)
       moment(:, 1) = moment(:, 1) + m
       if (self%line_on) call add_point_force(b1, self%tie_down, self%line_force, force(:, 1), moment(:, 1))

@@ -327,7 +327,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     type(air_state) :: air
     real(dp) :: e(3), ds, s, p(3), vp(3), u(3), ut(3), un(3), drag(3), qn, qt, rho, rho0, slope, y0, y1
-    real(dp) :: wp(3), dl(3), mp(3)
+    real(dp) :: wp(3), dl(3), mp(3), xs(3)
     integer :: j
     if (ubound(bodies, 1) < 3) then
       call fatal_error(error, "rigidized loads need the chain rocket - line - parachute (bodies 0..3)")
@@ -369,7 +369,10 @@ contains
         wp = cross(b2%w, p)   ! a function result inside matmul: heap temporary
         vp = b2%v + matmul(b2%c, wp) + (0.5_dp - s/self%length)*self%v_eps
         u = -vp
-        if (self%chute%gust%active) u = u + gust_velocity(self%chute%gust, b2%r + matmul(b2%c, p))
+        if (self%chute%gust%active) then
+          xs = b2%r + matmul(b2%c, p)
+          u = u + gust_velocity(self%chute%gust, xs)
+        end if
         ut = dot_product(u, e)*e
         un = u - ut
         rho = rho0*exp(slope*(b2%r(2) + s*e(2) - min(y0, y1)))
@@ -385,7 +388,8 @@ contains
         call fatal_error(error, "parachute altitude " // str(b3%r(2)) // " m is outside the atmosphere model")
         return
       end if
-      vp = b3%v + self%v_eps - gust_velocity(self%chute%gust, b3%r)   ! relative to the air
+      vp = b3%v + self%v_eps   ! relative to the air:
+      if (self%chute%gust%active) vp = vp - gust_velocity(self%chute%gust, b3%r)
       ! drag and the filling canopy's apparent-mass momentum (canopy_node_acceleration)
       self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp - &
         parachute_added_mass_rate(self%chute, air%density, t)*vp

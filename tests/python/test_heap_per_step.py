@@ -59,15 +59,23 @@ def launch_variant(tmp_path, name, t_end, base=PAPER, line=()):
                               (r"^\s*t_end\s*=.*$", f"  t_end = {t_end}")))
 
 
-@pytest.mark.parametrize("coupling", ["direct", "rigidized", "paper method"])
+@pytest.mark.parametrize("coupling", ["direct", "rigidized", "paper method", "direct in a gust",
+                                      "rigidized in a gust"])
 def test_paper_scenario_allocates_nothing_per_step(exe, tmp_path, coupling):
     """The launch system's right-hand sides, events, Jacobians and band solves
     (direct), the rigidized coupling's chain and sub-stepped line, and its line
-    marched the paper's way (inner_scheme = 'marching': 10 617 steps in all)."""
+    marched the paper's way (inner_scheme = 'marching': 10 617 steps in all);
+    and both couplings with a &gust that every body, node and strip reads
+    through both runs' extra steps (2H = 2 km: from 1 s to past 11 s)."""
     line = {"direct": (), "rigidized": ("  coupling = 'rigidized'",),
-            "paper method": ("  coupling = 'rigidized'", "  inner_scheme = 'marching'")}[coupling]
-    check_two_lengths(exe, tmp_path, f"paper_{coupling.replace(' ', '_')}", launch_variant(tmp_path, "short", 2.0, line=line),
-                      launch_variant(tmp_path, "long", 15.0, line=line))
+            "paper method": ("  coupling = 'rigidized'", "  inner_scheme = 'marching'"),
+            "direct in a gust": (), "rigidized in a gust": ("  coupling = 'rigidized'",)}[coupling]
+    runs = [launch_variant(tmp_path, name, t_end, line=line) for name, t_end in (("short", 2.0), ("long", 15.0))]
+    if "gust" in coupling:
+        for nml in runs:
+            nml.write_text(nml.read_text() + "&gust vertical = 3.0, lateral = 1.0, gradient_length = 1000.0, "
+                           "hit_time = 1.0 /\n")
+    check_two_lengths(exe, tmp_path, f"paper_{coupling.replace(' ', '_')}", *runs)
 
 
 def test_scene_without_line_allocates_nothing_per_step(exe, tmp_path):
