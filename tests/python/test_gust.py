@@ -189,3 +189,43 @@ def test_bad_gust_input_is_one_line(airlaunch_exe, tmp_path, gust, fragment):
     nml = nml_variant(tmp_path, "bad", edits=((r"^\s*output\s*=.*$", f"  output = '{out}'"),))
     nml.write_text(nml.read_text() + f"&gust {gust} /\n")
     assert_input_error(run_airlaunch(airlaunch_exe, nml), fragment, out)
+
+
+def test_example_sweep_over_the_gust(airlaunch_exe, tmp_path):
+    """input/sweep_gust.nml, cut to 2 x 2 cases (peak 0 and -18.3 m/s, met at
+    2.0 and 3.0 s): the sweep varies the &gust of a base that has none, its
+    whole definition checks, every case completes, and a zero peak is no gust
+    at all: both zero cases equal, bit for bit, the base run alone with the
+    sweep's settings (no step cap, nothing read), while the downdraft met as
+    the rocket reaches the ramp edge changes the clearance."""
+    from test_sweep_support import make_table, run_sweep
+
+    text = (ROOT / "input" / "sweep_gust.nml").read_text()
+    text = text.replace("base = 'input/airlaunch_paper.nml'", f"base = '{PAPER}'")
+    text = text.replace("output_dir = 'output/sweep_gust'", "output_dir = 'out'")
+    text = text.replace("criteria = 'input/criteria_paper.nml'", f"criteria = '{ROOT / 'input' / 'criteria_paper.nml'}'")
+    text = text.replace("lower = -18.3, upper = 18.3, levels = 9", "lower = -18.3, upper = 0.0, levels = 2")
+    text = text.replace("values = 0.0, 1.0, 2.0, 2.5, 3.0, 3.5, 4.0", "values = 2.0, 3.0")
+    definition = tmp_path / "sweep_gust.nml"
+    definition.write_text(text)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 0, res.stderr
+    res = run_sweep(definition, tmp_path)
+    assert res.returncode == 0, res.stderr
+    alone = nml_variant(tmp_path, "alone", edits=((r"^\s*output\s*=.*$", f"  output = '{tmp_path / 'alone.nc'}'"),))
+    alone.write_text(alone.read_text().replace("&run\n", "&run\n  stop_when_final = .true.\n", 1))
+    with run(airlaunch_exe, alone, tmp_path / "alone.nc") as ds:
+        still = {k: ds.attrs[k] for k in ("separation_time_s", "min_clearance_m", "pitch_max_time_s",
+                                          "max_load_factor_excursion")}
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        assert (s["status"].values == 0).all()
+        assert sorted(s["gust%vertical"].values.tolist()) == [-18.3, -18.3, 0.0, 0.0]
+        for i in range(s.sizes["case"]):
+            row = {k: float(s[k].values[i]) for k in still}
+            if s["gust%vertical"].values[i] == 0.0:
+                assert row == still, (row, still)
+            elif s["gust%hit_time"].values[i] == 3.0:
+                print(f"downdraft at the edge: clearance {row['min_clearance_m']:.3f} m, still air "
+                      f"{still['min_clearance_m']:.3f} m")
+                assert abs(row["min_clearance_m"] - still["min_clearance_m"]) > 0.5
