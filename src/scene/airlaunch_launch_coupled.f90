@@ -211,7 +211,9 @@ contains
   !> the right-hand side only at the points of its steps, so a longer step
   !> (the trimmed flight before the gust takes steps of seconds) could step
   !> over the whole gust and never see it; a quarter keeps at least four steps
-  !> in the gust at any point of the scene.
+  !> in the gust at any point of the scene.  The direct coupling lifts the cap
+  !> once every point has passed the gust (event launch_gust_root); the
+  !> rigidized coupling's integrators keep it.
   function gust_step_limit(cfg) result(h)
     type(scenario_config), intent(in) :: cfg
     real(dp) :: h
@@ -433,6 +435,15 @@ contains
         if (allocated(err)) return
         cycle
       end if
+      if (which(launch_gust_root) /= 0) then
+        ! every point of the scene is past the gust: its step cap goes
+        call lift_gust_cap(r, err)
+        if (allocated(err)) return
+        if (all(which(1:launch_clearance_root) == 0)) then
+          if (r%dsolver%t >= t_target) return
+          cycle
+        end if
+      end if
       call r%dsys%prepare(r%dsolver%t, r%dsolver%y, status)
       call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), &
         which(1:separation_nroots), which(launch_pitch_root), r%dsys%find_pitch_max, which(launch_clearance_root), &
@@ -456,6 +467,17 @@ contains
     call fatal_error(err, phase_name(r%dsys%sep%phase) // ", t = " // str(r%dsolver%t) // &
       " s: too many events before the output time")
   end subroutine direct_advance
+
+  !> The gust has passed every point of the direct system (event
+  !> launch_gust_root, or found at a resumption): no more watching, and
+  !> CVODE's step is free again.
+  subroutine lift_gust_cap(r, err)
+    type(coupled_run), intent(inout) :: r
+    type(error_type), allocatable, intent(inout) :: err
+    r%dsys%gust_watch = .false.
+    r%dopts%max_step = 0.0_dp
+    call r%dsolver%set_max_step(0.0_dp, err)
+  end subroutine lift_gust_cap
 
   !> The direct coupling resumes at time t: the aircraft and the rocket from
   !> `machine` (bodies loaded, absolute), its phase machine, the line nodes
@@ -495,6 +517,10 @@ contains
     else
       call r%dsolver%init(r%dsys, t, y, r%dopts, err)
       r%dsolver_started = .true.
+    end if
+    ! the gust passed while the rigidized coupling ran
+    if (.not. allocated(err) .and. r%dsys%gust_watch) then
+      if (r%dsys%gust_clearance() > 0.0_dp) call lift_gust_cap(r, err)
     end if
     if (.not. allocated(err)) call stop_at_next_kink(r, t, err)
   end subroutine direct_resume

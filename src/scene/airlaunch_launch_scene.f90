@@ -21,7 +21,8 @@ module airlaunch_launch_scene
     phase_preparation
   use airlaunch_line_model, only: line_params
   use airlaunch_launch_loads, only: launch_loads
-  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root
+  use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, &
+    launch_gust_root
   use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
     record_milestones, write_milestones, event_or_minus, handle_launch_event, clearance_geometry_of
   use airlaunch_coupling_choice, only: coupling_plan, auto_settings, coupling_direct, coupling_rigidized, &
@@ -188,6 +189,8 @@ contains
       gust = make_gust([0.0_dp, cfg%gust%vertical, cfg%gust%lateral], cfg%gust%gradient_length, &
         b0%r(1) + v0*cfg%gust%hit_time)
       loads%gust = gust
+      sys%gust_watch = gust%active
+      sys%gust_back = gust%x_front + 2*gust%gradient
       if (sys%has_line) then
         sys%line%gust = gust
         sys%chute%gust = gust

@@ -38,13 +38,16 @@ module airlaunch_launch_system
   use airlaunch_clearance, only: clearance_geometry, clearance_rate
   implicit none
   private
-  public :: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root
+  public :: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, launch_gust_root
 
   !> Events: the separation scene's and the pitch maximum.
   !> event functions: the separation scene's, then the rocket's Euler pitch
   !> rate (its first maximum) and the clearance's rate (its minima), in Case 3
+  !> and, while a &gust is watched, the last point of the scene passing its back
+  !> edge (after which the step cap the gust needs is lifted)
   integer, parameter :: launch_pitch_root = separation_nroots + 1, launch_clearance_root = separation_nroots + 2
-  integer, parameter :: launch_nroots = separation_nroots + 2
+  integer, parameter :: launch_gust_root = separation_nroots + 3
+  integer, parameter :: launch_nroots = separation_nroots + 3
   !> Rigid part of the state (aircraft + rocket).
   integer, parameter :: rigid_size = 26
   !> Largest distance in the state vector between a state and one its rate
@@ -68,6 +71,10 @@ module airlaunch_launch_system
     logical :: find_pitch_max = .true.      !< event 5 active in Case 3
     type(clearance_geometry) :: clr         !< the clearance milestone's points (event 6)
     logical :: has_line = .true.            !< false: no line, no parachute (state = rigid part)
+    !> a &gust ahead of a point of the scene: event 7 watches for the last point
+    !> to pass the gust's back edge at x = gust_back
+    logical :: gust_watch = .false.
+    real(dp) :: gust_back = 0.0_dp          !< x_front + 2H [m]
     ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
     real(dp), allocatable :: yabs(:), ydabs(:)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)
@@ -83,6 +90,7 @@ module airlaunch_launch_system
     procedure :: load_bodies => launch_load_bodies
     procedure :: to_absolute => launch_to_absolute
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
+    procedure :: gust_clearance => launch_gust_clearance
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: has_jacobian => launch_has_jacobian
@@ -230,10 +238,26 @@ contains
       if (allocated(self%sep%failure)) self%failure = self%sep%failure
       return
     end if
+    if (self%gust_watch) g(launch_gust_root) = self%gust_clearance()
     if (self%sep%phase /= phase_free) return
     if (self%find_pitch_max) g(launch_pitch_root) = self%euler_pitch_rate()
     g(launch_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine launch_roots
+
+  !> How far the scene's last point (the aircraft's and the rocket's centres
+  !> of mass, the line's nodes) is past the gust's back edge [m]: negative while
+  !> any of them may still read the gust (bodies and nodes loaded: to_absolute).
+  real(dp) function launch_gust_clearance(self) result(d)
+    class(launch_system), intent(in) :: self
+    integer :: k
+    d = min(self%yabs(1), self%yabs(14))
+    if (self%has_line) then
+      do k = 1, self%line%n
+        d = min(d, self%x(1, k))
+      end do
+    end if
+    d = d - self%gust_back
+  end function launch_gust_clearance
 
   !> The positions with x' = v: both bodies' (relative) positions and every
   !> node's, for the position-reduced Newton solver.
