@@ -25,7 +25,8 @@
 !>  - weight rho l0 g (earth frame: y up, so g = (0, -g0, 0)),
 !>  - aerodynamic drag from the air velocity relative to the segment midpoint,
 !>    u = wind + w_gust(midpoint) - (v_{k-1}+v_k)/2 (w_gust: the air-launch
-!>    scene's discrete gust, airlaunch_gust; zero elsewhere), split into its tangential part u_t = (u.t)t and
+!>    scene's discrete gust, airlaunch_gust; zero elsewhere), split into its
+!>    tangential part u_t = (u.t)t and
 !>    cross-flow part u_n = u - u_t (the independence principle):
 !>        D = 1/2 rho_air ell_d [ Cd_n d |u_n| u_n + Cd_t pi d |u_t| u_t ],
 !>    i.e. cross-flow drag on the projected area d*ell_d and skin friction on the
