@@ -803,10 +803,12 @@ contains
   end subroutine solver_free
 
   !> Take CVODE's stop time away (SUNDIALS 6.4 has no call to clear it: it is
-  !> moved beyond any time); CVODE's flag.
+  !> moved beyond any time, to 1e100 s; at huge(1.0) CVODE's test
+  !> (t_n + h - t_stop) h overflowed, harmless without traps but a SIGFPE in
+  !> the Checked build's programs); CVODE's flag.
   integer(c_int) function clear_stop_time(self) result(ierr)
     class(cvode_solver), intent(inout) :: self  !< solver
-    ierr = FCVodeSetStopTime(self%mem, huge(1.0_dp))
+    ierr = FCVodeSetStopTime(self%mem, 1.0e100_dp)
     if (ierr == 0) self%stop_time = huge(1.0_dp)
   end function clear_stop_time
 
