@@ -14,7 +14,7 @@
 module airlaunch_parachute
   use airlaunch_kinds, only: dp, pi, g0
   use airlaunch_atmosphere, only: isa, air_state
-  use airlaunch_gust, only: gust_field, gust_velocity
+  use airlaunch_gust, only: gust_field, air_relative_velocity
   implicit none
   private
   public :: parachute, parachute_drag_area, parachute_added_mass, parachute_nominal_diameter, &
@@ -128,8 +128,7 @@ contains
     air = isa(x(2))
     ok = air%in_range
     if (.not. ok) return
-    u = v   ! the velocity relative to the air
-    if (p%gust%active) u = v - gust_velocity(p%gust, x)
+    u = air_relative_velocity(p%gust, x, v)
     if (with_drag) drag = -0.5_dp*air%density*parachute_drag_area(p, t)*norm2(u)*u - &
       parachute_added_mass_rate(p, air%density, t)*u
     w = 0.0_dp
@@ -165,8 +164,7 @@ contains
     if (.not. ok) return
     mass = canopy_node_mass(p, t, air%density, node_mass)
     if (.not. with_drag) return
-    u = v   ! the velocity relative to the air
-    if (p%gust%active) u = v - gust_velocity(p%gust, x)
+    u = air_relative_velocity(p%gust, x, v)
     speed = norm2(u)
     if (speed > 0.0_dp) then
       c = -0.5_dp*air%density*parachute_drag_area(p, t)

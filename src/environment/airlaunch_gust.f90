@@ -20,7 +20,7 @@ module airlaunch_gust
   use airlaunch_kinds, only: dp, pi
   implicit none
   private
-  public :: gust_field, gust_velocity, make_gust
+  public :: gust_field, gust_velocity, make_gust, air_relative_velocity
 
   !> One discrete gust (inactive by default: zero everywhere).
   type :: gust_field
@@ -58,4 +58,13 @@ contains
     if (s <= 0.0_dp .or. s >= 2.0_dp*g%gradient) return
     w = (0.5_dp*(1.0_dp - cos(pi*s/g%gradient)))*g%amplitude
   end function gust_velocity
+
+  !> The velocity v of a point at x relative to the air: v - w(x) [m/s].
+  pure function air_relative_velocity(g, x, v) result(u)
+    type(gust_field), intent(in) :: g
+    real(dp), intent(in) :: x(3)           !< earth frame [m]
+    real(dp), intent(in) :: v(3)           !< earth frame [m/s]
+    real(dp) :: u(3)
+    u = v - gust_velocity(g, x)
+  end function air_relative_velocity
 end module airlaunch_gust

@@ -157,7 +157,13 @@ contains
     integer :: nmax, k, n
     n = r%dsys%line%n
     call set_direct_options(run, n_state, r%dsys%has_line, r%dopts)
-    r%dopts%max_step = gust_step_limit(cfg)
+    ! with a &gust, a quarter of its passage 2H/V0 (launch_system%gust_max_step):
+    ! CVODE reads the right-hand side only at the points of its steps, so a
+    ! longer step (the trimmed flight before the gust takes steps of seconds)
+    ! could step over the whole gust and never see it.  The direct coupling
+    ! lifts the cap once every point has passed the gust (event
+    ! launch_gust_root); the rigidized coupling's integrators keep it.
+    r%dopts%max_step = r%dsys%gust_max_step
     nmax = ceiling(run%t_end/run%output_dt + 1.0e-9_dp) + 1
     allocate(r%t_out(nmax))
     r%nout = 0
@@ -178,6 +184,7 @@ contains
     if (.not. r%plan%uses_rigidized()) return
     allocate(r%xl(3, 0:n), r%vl(3, 0:n), r%ten(n))
     r%ropt = rigidized_options(run, cfg)
+    r%ropt%max_step = r%dsys%gust_max_step
     call build_chain(cfg, r%dsys, r%chain, error)
   end subroutine prepare_run
 
@@ -199,30 +206,11 @@ contains
     ropt%inner_max_order = 2
     ropt%max_steps = run%max_steps
     ropt%t_end = run%t_end
-    ropt%max_step = gust_step_limit(cfg)
     if (run%max_order > 0) then
       ropt%chain_max_order = run%max_order
       ropt%inner_max_order = run%max_order
     end if
   end function rigidized_options
-
-  !> The largest step of the scene's CVODE integrators [s] (0: unlimited): with
-  !> a &gust, a quarter of its passage 2H/V0 at the flight speed.  CVODE reads
-  !> the right-hand side only at the points of its steps, so a longer step
-  !> (the trimmed flight before the gust takes steps of seconds) could step
-  !> over the whole gust and never see it; a quarter keeps at least four steps
-  !> in the gust at any point of the scene.  The direct coupling lifts the cap
-  !> once every point has passed the gust (event launch_gust_root); the
-  !> rigidized coupling's integrators keep it.
-  function gust_step_limit(cfg) result(h)
-    type(scenario_config), intent(in) :: cfg
-    real(dp) :: h
-    type(air_state) :: air
-    h = 0.0_dp
-    if (cfg%gust%vertical == 0.0_dp .and. cfg%gust%lateral == 0.0_dp) return
-    air = isa(cfg%flight%altitude)
-    h = 0.25_dp*2.0_dp*cfg%gust%gradient_length/(cfg%flight%mach*air%sound_speed)
-  end function gust_step_limit
 
   !> The chain of the rigidized coupling: the same aircraft, rocket, cut joint
   !> and loads as the direct system `dsys`, three bodies (rocket, virtual
@@ -439,7 +427,7 @@ contains
         ! every point of the scene is past the gust: its step cap goes
         call lift_gust_cap(r, err)
         if (allocated(err)) return
-        if (all(which(1:launch_clearance_root) == 0)) then
+        if (all(which(:launch_gust_root - 1) == 0)) then
           if (r%dsolver%t >= t_target) return
           cycle
         end if

@@ -14,7 +14,7 @@ module airlaunch_launch_loads
   use airlaunch_aircraft_aero, only: aircraft_aero, aircraft_aero_eval, aircraft_aero_out
   use airlaunch_rocket_aero, only: rocket_aero, rocket_aero_eval
   use airlaunch_rigid_body, only: rigid_body
-  use airlaunch_gust, only: gust_field, gust_velocity
+  use airlaunch_gust, only: gust_field, air_relative_velocity
   use airlaunch_force_source, only: force_source, add_point_force
   use airlaunch_cut_joint, only: phase_free
   implicit none
@@ -58,8 +58,7 @@ contains
           return
         end if
         e = dcm_to_euler(b0%c)
-        v_air = b0%v
-        if (self%gust%active) v_air = v_air - gust_velocity(self%gust, b0%r)
+        v_air = air_relative_velocity(self%gust, b0%r, b0%v)
         v_body = matmul(transpose(b0%c), v_air)
         self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, v_body, &
           b0%w, e(2))
@@ -78,8 +77,7 @@ contains
         edge_e = b0%r + matmul(b0%c, self%edge_point)
         x_shield = dot_product(b1%c(:, 1), edge_e - b1%r)
       end if
-      v_air = b1%v
-      if (self%gust%active) v_air = v_air - gust_velocity(self%gust, b1%r)
+      v_air = air_relative_velocity(self%gust, b1%r, b1%v)
       v_body = matmul(transpose(b1%c), v_air)
       call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m)
       force(:, 1) = force(:, 1) + matmul(b1%c, f)

@@ -191,6 +191,7 @@ contains
       loads%gust = gust
       sys%gust_watch = gust%active
       sys%gust_back = gust%x_front + 2*gust%gradient
+      if (gust%active) sys%gust_max_step = 0.25_dp*2*gust%gradient/v0
       if (sys%has_line) then
         sys%line%gust = gust
         sys%chute%gust = gust

@@ -75,6 +75,9 @@ module airlaunch_launch_system
     !> to pass the gust's back edge at x = gust_back
     logical :: gust_watch = .false.
     real(dp) :: gust_back = 0.0_dp          !< x_front + 2H [m]
+    !> largest step of the scene's integrators while a gust is ahead [s] (0:
+    !> no gust, unlimited): a quarter of its passage 2H/V0 (launch_coupled)
+    real(dp) :: gust_max_step = 0.0_dp
     ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
     real(dp), allocatable :: yabs(:), ydabs(:)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)

@@ -71,7 +71,7 @@ module airlaunch_rigidized_coupling
   use airlaunch_parachute, only: parachute, parachute_drag_area, parachute_added_mass, parachute_added_mass_rate, &
     parachute_nominal_diameter
   use airlaunch_launch_loads, only: launch_loads
-  use airlaunch_gust, only: gust_velocity
+  use airlaunch_gust, only: gust_velocity, air_relative_velocity
   use airlaunch_clearance, only: clearance_geometry, clearance_rate
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
@@ -388,8 +388,7 @@ contains
         call fatal_error(error, "parachute altitude " // str(b3%r(2)) // " m is outside the atmosphere model")
         return
       end if
-      vp = b3%v + self%v_eps   ! relative to the air:
-      if (self%chute%gust%active) vp = vp - gust_velocity(self%chute%gust, b3%r)
+      vp = air_relative_velocity(self%chute%gust, b3%r, b3%v + self%v_eps)
       ! drag and the filling canopy's apparent-mass momentum (canopy_node_acceleration)
       self%chute_drag = -0.5_dp*air%density*parachute_drag_area(self%chute, t)*norm2(vp)*vp - &
         parachute_added_mass_rate(self%chute, air%density, t)*vp
