@@ -190,11 +190,22 @@ contains
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s
     if (r%has_line) then
-      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN, first reached at " // at(r%peak_tension_time) // new_line("a")
+      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN, first reached at " // &
+        at(r%peak_tension_time) // new_line("a") // break_note(r)
     else
       s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
     end if
   end function tension_note
+
+  !> Where and when the line parted (&line breaking_strength or break_time).
+  function break_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s, parted
+    parted = "line break: segment " // str(r%line_break_segment) // " parted at " // at(r%line_break_time) // &
+      ", " // str(r%line_breaks) // " segment(s) in all" // new_line("a")
+    s = "line break: none" // new_line("a")
+    if (r%line_break_segment > 0) s = parted
+  end function break_note
 
   ! The notes below format their numbers whether or not the milestone was
   ! reached, so that a run's summary costs the same heap allocations either way

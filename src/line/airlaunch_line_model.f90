@@ -40,6 +40,12 @@
 !>  - optionally a settling aid: a linear damper to the earth frame,
 !>    -alpha m_k v_k (mass-proportional "Rayleigh" damping, alpha [1/s]), used
 !>    only to let static problems (catenary) settle; zero by default.
+!> A parted segment (`parted`, set by the air-launch scene where the line breaks:
+!> &line breaking_strength or break_time) carries no tension and no drag from
+!> then on: its two halves stay with their nodes as mass (the lumped node
+!> masses are unchanged) but their drag - half a segment each, at most 1/N of
+!> the line's - is left out (the chord between the parted nodes no longer says
+!> where the halves trail).
 !> The compatibility Eq. (10) d/dt((1+eps) t) = dV/ds is satisfied identically by
 !> the node kinematics: d/dt dx_k = v_k - v_{k-1}.
 !>
@@ -115,6 +121,11 @@ module airlaunch_line_model
     !> a discrete gust in the air, read at each segment's midpoint (the
     !> air-launch scene's &gust; inactive by default)
     type(gust_field) :: gust
+    !> the segments the line has broken at (their tension and drag are zero
+    !> from then on; the air-launch scene's break, see the header), and how
+    !> many there are (0: the line is whole)
+    logical, allocatable :: parted(:)
+    integer :: n_parted = 0
   contains
     procedure :: init => model_init
     procedure :: forces => model_forces
@@ -125,6 +136,7 @@ module airlaunch_line_model
     procedure :: stable_step => model_stable_step
     procedure :: total_mass => model_total_mass
     procedure :: end_tangent => model_end_tangent
+    procedure :: part => model_part
   end type line_model
 
   !> Mechanical energy of the line [J] (end bodies not included).
@@ -161,6 +173,9 @@ contains
     end do
     self%node_mass(0) = 0.5_dp*self%node_mass(0)
     self%node_mass(self%n) = 0.5_dp*self%node_mass(self%n)
+    if (allocated(self%parted)) deallocate(self%parted)
+    allocate(self%parted(self%n), source=.false.)
+    self%n_parted = 0
     self%mass_coupling = 0.0_dp
     if (params%mass == "mixed") self%mass_coupling = mixed_mass_coupling
   end subroutine model_init
@@ -237,6 +252,12 @@ contains
     qt = 0.5_dp*self%p%cd_tangential*pi*self%p%diameter
 
     do k = 1, n
+      if (self%n_parted > 0) then
+        if (self%parted(k)) then
+          tension(k) = 0.0_dp
+          cycle
+        end if
+      end if
       dx = x(:, k) - x(:, k-1)
       ell = length3(dx)
       if (ell > tiny_len) then
@@ -300,6 +321,10 @@ contains
     integer :: k
     real(dp) :: ell, t(3), dx(3)
     do k = 1, self%n
+      tension(k) = 0.0_dp
+      if (self%n_parted > 0) then
+        if (self%parted(k)) cycle
+      end if
       dx = x(:, k) - x(:, k-1)
       ell = length3(dx)
       t = 0.0_dp
@@ -380,6 +405,9 @@ contains
     qt = 0.5_dp*self%p%cd_tangential*pi*self%p%diameter
 
     do k = 1, self%n
+      if (self%n_parted > 0) then
+        if (self%parted(k)) cycle
+      end if
       dx = x(:, k) - x(:, k-1)
       ell = length3(dx)
       if (.not. (ell > tiny_len)) cycle
@@ -514,6 +542,16 @@ contains
     end if
   end subroutine air_density_fit
 
+  !> The line breaks at segment k (1..N; nothing if it has already parted
+  !> there): from now on the segment carries no tension and no drag.
+  subroutine model_part(self, k)
+    class(line_model), intent(inout) :: self   !< line
+    integer, intent(in) :: k                   !< segment
+    if (self%parted(k)) return
+    self%parted(k) = .true.
+    self%n_parted = self%n_parted + 1
+  end subroutine model_part
+
   !> Kinetic, elastic and gravitational energy of the line's nodes.
   function model_energy(self, x, v) result(e)
     class(line_model), intent(in) :: self   !< line
@@ -528,6 +566,9 @@ contains
     end do
     do k = 1, self%n
       eps = norm2(x(:, k) - x(:, k-1))/self%l0 - 1.0_dp
+      if (self%n_parted > 0) then
+        if (self%parted(k)) eps = 0.0_dp
+      end if
       if (eps > 0.0_dp) e%elastic = e%elastic + 0.5_dp*self%p%ea*self%l0*eps**2
       ! 1/2 v^T M v of the mixed mass: the lumped sum less beta rho l0 |dv|^2 / 2 per segment
       if (self%mass_coupling > 0.0_dp) e%kinetic = e%kinetic - 0.5_dp*self%mass_coupling* &

@@ -413,6 +413,15 @@ contains
         err%message = phase_name(r%dsys%sep%phase) // ": " // err%message
         return
       end if
+      if (break_is_due(r%dsys, r%dsolver%t)) then
+        ! the scheduled cut (the solver stopped at break_time: stop_at_next_kink)
+        call part_line(r, r%dsys%break_segment, res, err)
+        if (allocated(err)) return
+        if (.not. event) then
+          if (r%dsolver%t >= t_target) return
+          cycle
+        end if
+      end if
       if (.not. event) then
         if (r%dsolver%t >= t_target) return
         ! stopped at a scheduled kink (stop_at_next_kink): restart there, so that
@@ -423,14 +432,20 @@ contains
         if (allocated(err)) return
         cycle
       end if
+      if (which(launch_break_root) /= 0) then
+        ! the largest tension reached the breaking strength: its segment parts
+        call part_line(r, 0, res, err)
+        if (allocated(err)) return
+      end if
       if (which(launch_gust_root) /= 0) then
         ! every point of the scene is past the gust: its step cap goes
         call lift_gust_cap(r, err)
         if (allocated(err)) return
-        if (all(which(:launch_gust_root - 1) == 0)) then
-          if (r%dsolver%t >= t_target) return
-          cycle
-        end if
+      end if
+      if (all(which(:launch_gust_root - 1) == 0)) then
+        ! the line's break or the gust's passing alone: the phases are as they were
+        if (r%dsolver%t >= t_target) return
+        cycle
       end if
       call r%dsys%prepare(r%dsolver%t, r%dsolver%y, status)
       call handle_launch_event(res, r%dsolver%t, r%dsys%sep, r%dsys%yabs(1:rigid_size), &
@@ -455,6 +470,54 @@ contains
     call fatal_error(err, phase_name(r%dsys%sep%phase) // ", t = " // str(r%dsolver%t) // &
       " s: too many events before the output time")
   end subroutine direct_advance
+
+  !> The scheduled cut of the line (&line break_time) is due at time t: the
+  !> line is still whole and the time has come.
+  logical function break_is_due(sys, t)
+    type(launch_system), intent(in) :: sys
+    real(dp), intent(in) :: t
+    break_is_due = .false.
+    if (.not. sys%has_line) return
+    break_is_due = sys%break_time > 0.0_dp .and. t >= sys%break_time
+  end function break_is_due
+
+  !> The line parts at the direct solver's time: at segment k (the scheduled
+  !> cut), or, for k = 0 (a breaking-strength event), at the segment of the
+  !> largest tension and at any other that has reached the strength with it.
+  !> From now on those segments carry nothing (line_model%part), and CVODE
+  !> restarts there, its right-hand side having jumped.
+  subroutine part_line(r, k, res, err)
+    type(coupled_run), intent(inout) :: r
+    integer, intent(in) :: k
+    type(launch_result), intent(inout) :: res
+    type(error_type), allocatable, intent(inout) :: err
+    real(dp), allocatable :: y(:)
+    integer :: status, j, first, before
+    y = r%dsolver%y
+    before = r%dsys%line%n_parted
+    associate(s => r%dsys)
+      if (k > 0) then
+        first = k
+        call s%line%part(k)
+        s%break_time = -1.0_dp   ! done
+      else
+        call s%prepare(r%dsolver%t, y, status)
+        first = maxloc(s%tension, 1)
+        call s%line%part(first)
+        do j = 1, s%line%n
+          if (s%tension(j) >= s%breaking_strength) call s%line%part(j)
+        end do
+      end if
+      if (res%line_breaks == 0) then
+        res%line_break_time = r%dsolver%t
+        res%line_break_segment = first
+      end if
+      res%line_breaks = res%line_breaks + s%line%n_parted - before
+      res%parted_segments = pack([(j, j = 1, s%line%n)], s%line%parted)
+    end associate
+    call r%dsolver%reinit(r%dsolver%t, y, err)
+    if (.not. allocated(err)) call stop_at_next_kink(r, r%dsolver%t, err)
+  end subroutine part_line
 
   !> The gust has passed every point of the direct system (event
   !> launch_gust_root, or found at a resumption): no more watching, and
@@ -531,6 +594,7 @@ contains
         if (c%deploy_time >= 0.0_dp .and. c%fill_time > 0.0_dp .and. c%deploy_time + c%fill_time > t) &
           next = min(next, c%deploy_time + c%fill_time)
       end associate
+      if (r%dsys%break_time > t) next = min(next, r%dsys%break_time)
     end if
     if (next < huge(1.0_dp)) call r%dsolver%set_stop_time(next, err)
   end subroutine stop_at_next_kink

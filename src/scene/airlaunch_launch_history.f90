@@ -36,6 +36,10 @@ module airlaunch_launch_history
     real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
     real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
     real(dp) :: max_constraint_residual = 0.0_dp
+    real(dp) :: line_break_time = -1.0_dp    !< the line first parted [s] (-1: it did not)
+    integer :: line_break_segment = 0        !< there, at this segment (1: the rocket's tie-down; 0: whole)
+    integer :: line_breaks = 0               !< segments parted in all
+    integer, allocatable :: parted_segments(:)  !< which (ascending; unallocated: none)
     real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
     real(dp) :: end_time = 0.0_dp
     logical :: has_line = .true.   !< false: no line (no peak tension; its attributes are left out)
@@ -361,6 +365,10 @@ contains
     if (res%has_line) then
       call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
       call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
+      call w%add_real_att("/", "line_break_time_s", res%line_break_time, error)
+      call w%add_int_att("/", "line_break_segment", [res%line_break_segment], error)
+      call w%add_int_att("/", "line_breaks", [res%line_breaks], error)
+      if (allocated(res%parted_segments)) call w%add_int_att("/", "line_parted_segments", res%parted_segments, error)
     end if
     call w%add_real_att("/", "max_aircraft_pitch_excursion_deg", res%max_aircraft_pitch_excursion_deg, error)
     call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)

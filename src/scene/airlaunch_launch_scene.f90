@@ -22,7 +22,7 @@ module airlaunch_launch_scene
   use airlaunch_line_model, only: line_params
   use airlaunch_launch_loads, only: launch_loads
   use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, &
-    launch_gust_root
+    launch_gust_root, launch_break_root
   use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
     record_milestones, write_milestones, event_or_minus, handle_launch_event, clearance_geometry_of
   use airlaunch_coupling_choice, only: coupling_plan, auto_settings, coupling_direct, coupling_rigidized, &
@@ -97,6 +97,17 @@ contains
       end if
       f_tie = f_new
     end do
+    ! a strength the trimmed flight's steady tension already reaches: the line
+    ! would part before the run starts (event 8 watches for a crossing only)
+    if (sys%has_line .and. sys%breaking_strength > 0.0_dp) then
+      if (maxval(sys%tension) >= sys%breaking_strength) then
+        res%status = "invalid_input"
+        call fatal_error(error, "&line: breaking_strength = " // str(sys%breaking_strength) // " N is not " // &
+          "allowed: the trimmed flight's steady line tension is already " // str(maxval(sys%tension)) // &
+          " N (segment " // str(maxloc(sys%tension, 1)) // ") at t = 0 s (give a strength above it, or 0 " // &
+          "for a line that never breaks)")
+      end if
+    end if
   contains
     !> One pass: the trim with the line's force f_line (earth frame) at the
     !> tie-down point, the bodies in the trimmed flight, the line settled.
@@ -195,6 +206,9 @@ contains
       if (sys%has_line) then
         sys%line%gust = gust
         sys%chute%gust = gust
+        sys%breaking_strength = cfg%line%breaking_strength
+        sys%break_time = cfg%line%break_time
+        sys%break_segment = cfg%line%break_segment
       end if
       call sys%sep%add_source(loads)
       sys%iloads = size(sys%sep%sources)

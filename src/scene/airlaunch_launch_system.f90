@@ -21,7 +21,10 @@
 !> Events: the four of the separation scene (release, CG past the edge, nose
 !> past the edge, edge normal force zero) and, in Case 3 until it is found, the
 !> first maximum of the rocket's Euler pitch (Euler pitch rate
-!> theta' = sin(gamma) w_y + cos(gamma) w_z crossing zero downwards).
+!> theta' = sin(gamma) w_y + cos(gamma) w_z crossing zero downwards); the
+!> clearance's minima, the gust's passing, and the line reaching its breaking
+!> strength (the largest segment tension, a continuous function of the state,
+!> crossing it: the segment carrying it parts, line_model%part).
 module airlaunch_launch_system
   use airlaunch_kinds, only: dp, g0
   use airlaunch_error, only: error_type
@@ -39,15 +42,17 @@ module airlaunch_launch_system
   implicit none
   private
   public :: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, launch_gust_root
+  public :: launch_break_root
 
   !> Events: the separation scene's and the pitch maximum.
   !> event functions: the separation scene's, then the rocket's Euler pitch
   !> rate (its first maximum) and the clearance's rate (its minima), in Case 3
   !> and, while a &gust is watched, the last point of the scene passing its back
-  !> edge (after which the step cap the gust needs is lifted)
+  !> edge (after which the step cap the gust needs is lifted), and, while the
+  !> line is intact and has a breaking strength, its margin to the strength
   integer, parameter :: launch_pitch_root = separation_nroots + 1, launch_clearance_root = separation_nroots + 2
-  integer, parameter :: launch_gust_root = separation_nroots + 3
-  integer, parameter :: launch_nroots = separation_nroots + 3
+  integer, parameter :: launch_gust_root = separation_nroots + 3, launch_break_root = separation_nroots + 4
+  integer, parameter :: launch_nroots = separation_nroots + 4
   !> Rigid part of the state (aircraft + rocket).
   integer, parameter :: rigid_size = 26
   !> Largest distance in the state vector between a state and one its rate
@@ -78,6 +83,13 @@ module airlaunch_launch_system
     !> largest step of the scene's integrators while a gust is ahead [s] (0:
     !> no gust, unlimited): a quarter of its passage 2H/V0 (launch_coupled)
     real(dp) :: gust_max_step = 0.0_dp
+    !> a segment of the line breaks when its tension reaches this [N] (event
+    !> 8: the largest tension of the segments still whole); 0: none ever does
+    real(dp) :: breaking_strength = 0.0_dp
+    !> the line is cut at segment break_segment at this time [s] (a scheduled
+    !> stop of the direct solver, launch_coupled); < 0: never, or done
+    real(dp) :: break_time = -1.0_dp
+    integer :: break_segment = 1
     ! --- work arrays and outputs of the last evaluation (no allocation in rhs)
     real(dp), allocatable :: yabs(:), ydabs(:)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)
@@ -94,6 +106,7 @@ module airlaunch_launch_system
     procedure :: to_absolute => launch_to_absolute
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
     procedure :: gust_clearance => launch_gust_clearance
+    procedure :: strength_margin => launch_strength_margin
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: has_jacobian => launch_has_jacobian
@@ -242,10 +255,32 @@ contains
       return
     end if
     if (self%gust_watch) g(launch_gust_root) = self%gust_clearance()
+    if (self%breaking_strength > 0.0_dp .and. self%has_line) then
+      g(launch_break_root) = self%strength_margin(status)
+      if (status /= rhs_ok) return
+    end if
     if (self%sep%phase /= phase_free) return
     if (self%find_pitch_max) g(launch_pitch_root) = self%euler_pitch_rate()
     g(launch_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine launch_roots
+
+  !> The breaking strength less the largest segment tension [N] (bodies and
+  !> nodes loaded: to_absolute; the tie-down node is set here), with the
+  !> segments' tensions in self%tension.
+  real(dp) function launch_strength_margin(self, status) result(margin)
+    class(launch_system), intent(inout) :: self
+    integer, intent(out) :: status
+    self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
+    self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
+    call self%line%tensions(self%x, self%v, self%tension, status)
+    margin = self%breaking_strength - maxval(self%tension)
+    if (status /= 0) then
+      self%failure = "line tension is not finite"
+      status = rhs_fatal
+    else
+      status = rhs_ok
+    end if
+  end function launch_strength_margin
 
   !> How far the scene's last point (the aircraft's and the rocket's centres
   !> of mass, the line's nodes) is past the gust's back edge [m]: negative while

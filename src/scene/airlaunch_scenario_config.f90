@@ -29,13 +29,14 @@ module airlaunch_scenario_config
   real(dp), parameter :: gust_speed_max = 100.0_dp
 
   !> Variables of &line (air-launch scene).
-  type(nml_var), parameter :: line_vars(20) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
+  type(nml_var), parameter :: line_vars(23) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
     nml_var("cd_tangential", "real"), nml_var("coupling", "string", 16), nml_var("outer_dt", "real"), &
     nml_var("inner_rtol", "real"), nml_var("far_end", "string", 16), nml_var("coupling_by_phase", "string", 16), &
     nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real"), &
-    nml_var("auto_min_steps", "real"), nml_var("inner_scheme", "string", 16), nml_var("inner_dt", "real")]
+    nml_var("auto_min_steps", "real"), nml_var("inner_scheme", "string", 16), nml_var("inner_dt", "real"), &
+    nml_var("breaking_strength", "real"), nml_var("break_time", "real"), nml_var("break_segment", "integer")]
 
   !> The couplings `&line coupling` may name (DESIGN §4 (a), (b)), and the two
   !> ways of choosing between them during a run.
@@ -117,6 +118,10 @@ module airlaunch_scenario_config
     !> rigidized: the line's sub-steps by "cvode" (BDF) or "marching" (the paper's, §2.3)
     character(len=16) :: inner_scheme = "cvode"
     real(dp) :: inner_dt = 0.0_dp           !< rigidized, marching: sub-step [s] (0: 0.9 of its stability limit)
+    !> the line breaks at the first segment whose tension reaches this [N] (0: never)
+    real(dp) :: breaking_strength = 0.0_dp
+    real(dp) :: break_time = -1.0_dp        !< the line is cut at break_segment at this time [s] (-1: never)
+    integer :: break_segment = 1            !< the segment break_time cuts (1: at the rocket's tie-down)
   end type line_config
 
   !> A discrete 1 - cosine gust (airlaunch_gust) the flight meets: its peak
@@ -172,6 +177,9 @@ contains
     else if ((cfg%gust%vertical /= 0.0_dp .or. cfg%gust%lateral /= 0.0_dp) .and. cfg%gust%hit_time >= t_end) then
       call fatal_error(error, f%path // ": &gust: hit_time = " // str(cfg%gust%hit_time) // &
         " is not allowed (the aircraft would never meet the gust: the run ends at t_end = " // str(t_end) // " s)")
+    else if (cfg%line%enabled .and. cfg%line%break_time >= t_end) then
+      call fatal_error(error, f%path // ": &line: break_time = " // str(cfg%line%break_time) // &
+        " is not allowed (the line would never be cut: the run ends at t_end = " // str(t_end) // " s)")
     end if
   end subroutine read_scenario_config
 
@@ -541,15 +549,15 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
-    real(dp) :: inner_dt
-    integer :: n_seg, u, ios
+    real(dp) :: inner_dt, breaking_strength, break_time
+    integer :: n_seg, u, ios, break_segment
     character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: present
     character(len=256) :: msg
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
       coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, auto_min_strain, auto_max_strain_change, &
-      auto_dwell, auto_min_steps, inner_scheme, inner_dt
+      auto_dwell, auto_min_steps, inner_scheme, inner_dt, breaking_strength, break_time, break_segment
     enabled = .true.
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -559,6 +567,7 @@ contains
     auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
     auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
     inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
+    breaking_strength = c%breaking_strength; break_time = c%break_time; break_segment = c%break_segment
     call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -592,6 +601,7 @@ contains
       call check_marching_step(f, inner_dt, ea, mass_per_length, length/n_seg, damping, error)
     call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps, &
       error)
+    call check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, error)
     if (.not. allocated(error) .and. coupling /= "direct" .and. far_end == "chain" .and. n_seg < 2) &
       call fatal_error(error, f%path // ": &line: n_seg = " // str(n_seg) // " is not allowed with " // &
         "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
@@ -605,8 +615,41 @@ contains
     c%auto_min_steps = auto_min_steps
     c%inner_scheme = inner_scheme
     c%inner_dt = inner_dt
+    c%breaking_strength = breaking_strength
+    c%break_time = break_time
+    c%break_segment = break_segment
     call echo_line(c, echo)
   end subroutine read_line
+
+  !> The line's break (a strength, or a cut at a given time and segment): the
+  !> direct coupling only - the rigidized line is one rod of the chain, which
+  !> cannot part (and 'per_phase' and 'auto' may hand the line to it).
+  subroutine check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: coupling
+    integer, intent(in) :: n_seg, break_segment
+    real(dp), intent(in) :: breaking_strength, break_time
+    type(error_type), allocatable, intent(inout) :: error
+    call require_nonnegative(f, "line", "breaking_strength", breaking_strength, "N; 0: the line never breaks", &
+      error)
+    call require_set(f, "line", "break_time", break_time, "s", error)
+    if (allocated(error)) return
+    if (.not. (break_time > 0.0_dp .or. break_time == -1.0_dp)) then
+      call fatal_error(error, f%path // ": &line: break_time = " // str(break_time) // " is not allowed " // &
+        "(must be > 0 s, or -1 for no scheduled break)")
+    else if (break_segment < 1 .or. break_segment > n_seg) then
+      call fatal_error(error, f%path // ": &line: break_segment = " // str(break_segment) // " is not allowed " // &
+        "(must be an integer in [1, n_seg = " // str(n_seg) // "]: 1 at the rocket's tie-down, n_seg at the " // &
+        "parachute)")
+    else if (break_segment /= 1 .and. break_time == -1.0_dp) then
+      call fatal_error(error, f%path // ": &line: break_segment = " // str(break_segment) // " is not allowed " // &
+        "without break_time (it is the segment the scheduled break cuts: set break_time or remove it)")
+    else if ((breaking_strength > 0.0_dp .or. break_time > 0.0_dp) .and. coupling /= "direct") then
+      call fatal_error(error, f%path // ": &line: a line break (breaking_strength or break_time) is not " // &
+        "allowed with coupling = '" // trim(coupling) // "' (only the direct coupling's line can part: " // &
+        "set coupling = 'direct')")
+    end if
+  end subroutine check_break
 
   !> The resolved &line group: the variables of the chosen coupling mode only
   !> (coupling_by_phase with 'per_phase', the auto_* thresholds with 'auto'),
@@ -616,12 +659,13 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
-    real(dp) :: inner_dt
-    integer :: n_seg, u
+    real(dp) :: inner_dt, breaking_strength, break_time
+    integer :: n_seg, u, break_segment
     character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
-      coupling, outer_dt, inner_rtol, far_end, inner_scheme, inner_dt
+      coupling, outer_dt, inner_rtol, far_end, inner_scheme, inner_dt, breaking_strength, break_time, &
+      break_segment
     enabled = c%enabled
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -631,6 +675,7 @@ contains
     auto_min_strain = c%auto_min_strain; auto_max_strain_change = c%auto_max_strain_change
     auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
     inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
+    breaking_strength = c%breaking_strength; break_time = c%break_time; break_segment = c%break_segment
     open(newunit=u, status="scratch", action="readwrite")
     select case (coupling)
     case ("per_phase")
@@ -645,14 +690,14 @@ contains
     subroutine write_per_phase(unit)
       integer, intent(in) :: unit
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
-        coupling, outer_dt, inner_rtol, far_end, coupling_by_phase
+        coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, breaking_strength, break_time, break_segment
       write(unit, nml=line)
     end subroutine write_per_phase
     subroutine write_auto(unit)
       integer, intent(in) :: unit
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
         coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell, &
-        auto_min_steps
+        auto_min_steps, breaking_strength, break_time, break_segment
       write(unit, nml=line)
     end subroutine write_auto
   end subroutine echo_line
