@@ -6,6 +6,11 @@
 !>    central differences of line_model%forces, block by block, on a line with
 !>    taut and slack segments; every force is local, so the differences outside
 !>    the three blocks of a node must vanish too.
+!>    The same with two taut segments parted (line_model%part, the air-launch
+!>    scene's break): they carry no tension, their nodes' other forces and
+!>    every force away from them are unchanged bit for bit, the elastic energy
+!>    loses exactly their 1/2 EA l0 eps^2, and the Jacobian still equals the
+!>    central differences of the forces (it skips what the forces skip).
 !> 2. line_system%jacobian (the band matrix CVODE receives: identity blocks,
 !>    force blocks over the node masses, a point-mass end with drag, a fixed
 !>    end left out of the state) against central differences of line_system%rhs,
@@ -37,6 +42,7 @@ program test_line_jacobian
 
   call fixed_seed()   ! the same random states in every run
   call model_blocks()
+  call parted_blocks()
   call system_band()
   call pendulum_same_track()
   call finish()
@@ -104,6 +110,54 @@ contains
     call check_close(err_v, 0.0_dp, "df/dv blocks", abs=1.0e-8_dp*big_v)
     call check_close(outside, 0.0_dp, "no coupling beyond the neighbours", abs=1.0e-8_dp*big_x)
   end subroutine model_blocks
+
+  subroutine parted_blocks()
+    type(line_model) :: model, whole
+    real(dp) :: x(3, 0:n), v(3, 0:n), f(3, 0:n), fw(3, 0:n), ten(n), tw(n)
+    real(dp) :: dfdx(3, 3, -1:1, 0:n), dfdv(3, 3, -1:1, 0:n)
+    real(dp) :: err_x, err_v, big_x, big_v, outside, eps, lost
+    integer :: k, st, cut(2), j, q
+    type(line_energy) :: e, ew
+    call section("a parted line: two taut segments cut (line_model%part)")
+    call test_line(model, x, v)
+    whole = model
+    cut = [1, 6]   ! taut by test_line's strain pattern (+2 % on segments 1, 2, 5, 6)
+    lost = 0.0_dp
+    do j = 1, 2
+      k = cut(j)
+      eps = norm2(x(:, k) - x(:, k-1))/model%l0 - 1.0_dp
+      call check(eps > 1.0e-3_dp, "segment " // str(k) // " stretched before the cut (" // str(eps) // ")")
+      lost = lost + 0.5_dp*model%p%ea*model%l0*eps**2
+      call model%part(k)
+    end do
+    call model%part(cut(2))   ! a second cut of the same segment changes nothing
+    call check(model%n_parted == 2, "two segments parted (" // str(model%n_parted) // ")")
+    call model%forces(x, v, f, ten, st)
+    call whole%forces(x, v, fw, tw, st)
+    call check(all(ten(cut) == 0.0_dp) .and. all(tw(cut) > 0.0_dp), "the parted segments carry no tension")
+    call check(all(pack(ten, [(all(k /= cut), k = 1, n)]) == pack(tw, [(all(k /= cut), k = 1, n)])), &
+      "the other tensions unchanged, bit for bit")
+    call check(all(f(:, 2:4) == fw(:, 2:4)) .and. all(f(:, 7:n) == fw(:, 7:n)), &
+      "the forces on nodes away from the cuts unchanged, bit for bit")
+    call check(any(f(:, 0) /= fw(:, 0)) .and. any(f(:, 6) /= fw(:, 6)), "the cut segments' nodes lose their pull")
+    e = model%energy(x, v)
+    ew = whole%energy(x, v)
+    call check_close(ew%elastic - e%elastic, lost, "elastic energy less the parted segments' 1/2 EA l0 eps^2", &
+      rel=1.0e-12_dp)
+    call model%force_jacobian(x, v, dfdx, dfdv)
+    err_x = 0.0_dp; err_v = 0.0_dp; outside = 0.0_dp
+    big_x = maxval(abs(dfdx)); big_v = maxval(abs(dfdv))
+    do j = 0, n
+      do q = 1, 3
+        call compare_column(model, x, v, .false., q, j, dfdx, err_x, outside)
+        call compare_column(model, x, v, .true., q, j, dfdv, err_v, outside)
+      end do
+    end do
+    print '(a, 2es10.2, a, 2es10.2)', "  largest entries df/dx, df/dv:", big_x, big_v, "; errors:", err_x, err_v
+    call check_close(err_x, 0.0_dp, "parted line: df/dx blocks", abs=1.0e-8_dp*big_x)
+    call check_close(err_v, 0.0_dp, "parted line: df/dv blocks", abs=1.0e-8_dp*big_v)
+    call check_close(outside, 0.0_dp, "parted line: no coupling beyond the neighbours", abs=1.0e-8_dp*big_x)
+  end subroutine parted_blocks
 
   !> Central difference of the forces along x(q, j) (or v(q, j)) against the
   !> blocks' column: largest difference into err, largest force change beyond
