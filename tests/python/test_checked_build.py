@@ -9,7 +9,8 @@ harmless in Release, where nothing traps, but it hid whatever else a trap
 would have caught in a whole run.  The milestones are compared as printed (3
 to 9 digits; the integration statistics line is left out, as optimisation
 levels may round differently); measured: every line the same, step counts
-included."""
+included.  Also the paper scenario in a gust, rigidized, and with its line
+cut at 2 s (a breaking strength watched too)."""
 import re
 
 import pytest
@@ -36,11 +37,13 @@ def checked_exe():
     return CHECKED
 
 
-@pytest.mark.parametrize("example", EXAMPLES + ["airlaunch_paper.nml in a gust", "airlaunch_paper.nml rigidized"])
+@pytest.mark.parametrize("example", EXAMPLES + ["airlaunch_paper.nml in a gust", "airlaunch_paper.nml rigidized",
+                                     "airlaunch_paper.nml line cut"])
 def test_checked_build_runs_the_example(checked_exe, tmp_path, example):
     name = example.split()[0]
-    nml = nml_variant(tmp_path, "case", base=ROOT / "input" / name,
-                      line=("  coupling = 'rigidized'",) if example.endswith("rigidized") else ())
+    line = {"rigidized": ("  coupling = 'rigidized'",),
+            "cut": ("  breaking_strength = 300.0e3", "  break_time = 2.0")}.get(example.split()[-1], ())
+    nml = nml_variant(tmp_path, "case", base=ROOT / "input" / name, line=line)
     if example.endswith("gust"):
         nml.write_text(nml.read_text() + "&gust vertical = -16.6, gradient_length = 60.0, hit_time = 3.0 /\n")
     assert printed(checked_exe, nml, tmp_path / "c.nc") == printed(BIN / "airlaunch", nml, tmp_path / "r.nc")

@@ -60,16 +60,20 @@ def launch_variant(tmp_path, name, t_end, base=PAPER, line=()):
 
 
 @pytest.mark.parametrize("coupling", ["direct", "rigidized", "paper method", "direct in a gust",
-                                      "rigidized in a gust"])
+                                      "rigidized in a gust", "direct, line cut"])
 def test_paper_scenario_allocates_nothing_per_step(exe, tmp_path, coupling):
     """The launch system's right-hand sides, events, Jacobians and band solves
     (direct), the rigidized coupling's chain and sub-stepped line, and its line
     marched the paper's way (inner_scheme = 'marching': 10 617 steps in all);
     and both couplings with a &gust that every body, node and strip reads
-    through both runs' extra steps (2H = 2 km: from 1 s to past 11 s)."""
+    through both runs' extra steps (2H = 2 km: from 1 s to past 11 s); and
+    the direct coupling with its line cut at the tie-down at 1.5 s (in both
+    runs) and a breaking strength watched after every step: the extra steps
+    carry the parted line and evaluate the strength's event function."""
     line = {"direct": (), "rigidized": ("  coupling = 'rigidized'",),
             "paper method": ("  coupling = 'rigidized'", "  inner_scheme = 'marching'"),
-            "direct in a gust": (), "rigidized in a gust": ("  coupling = 'rigidized'",)}[coupling]
+            "direct in a gust": (), "rigidized in a gust": ("  coupling = 'rigidized'",),
+            "direct, line cut": ("  breaking_strength = 300.0e3", "  break_time = 1.5")}[coupling]
     runs = [launch_variant(tmp_path, name, t_end, line=line) for name, t_end in (("short", 2.0), ("long", 15.0))]
     if "gust" in coupling:
         for nml in runs:

@@ -202,3 +202,56 @@ def test_bad_break_input(airlaunch_exe, tmp_path, line, edits, fragment):
     nml = nml_variant(tmp_path, edits=edits, line=line)
     out = tmp_path / "bad.nc"
     assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out), fragment, out)
+
+
+def test_example_sweep_over_the_line_failure(airlaunch_exe, tmp_path):
+    """input/sweep_line_break.nml cut to 2 x 2 cases (cut at 3.0 and 11.0 s,
+    at the tie-down and at the parachute): the sweep varies the &line break of
+    a base with a whole line, its definition checks, every case completes, and
+    a cut after the firing moment (10.46 s) changes nothing before it: the
+    separation, the pitch maximum and the clearance are the base run's alone
+    with the sweep's settings, to the integration error.  Not bit for bit:
+    CVODE sizes its first step after a restart (the release) for the stop time
+    when that comes before its output time (cvHin), so the stop at the cut
+    changes the steps.  Bounds: 1e-6 relative on the separation time and the
+    clearance (0.1 rtol; measured 9e-9 and 1.6e-8), 1e-8 deg on the pitch
+    maximum (the rocket reaches the vertical: 90 deg to 6e-11 in both), 1e-3 s
+    on its time (the pitch is flat at its maximum, so its time moves with the
+    steps: measured 3.2e-4 s).  A cut at 3.0 s, as the rocket reaches the ramp
+    edge, loses the firing attitude (below 75 deg, the paper's criterion)."""
+    from test_sweep_support import make_table, run_sweep
+    from conftest import PAPER, ROOT
+
+    text = (ROOT / "input" / "sweep_line_break.nml").read_text()
+    text = text.replace("base = 'input/airlaunch_paper.nml'", f"base = '{PAPER}'")
+    text = text.replace("output_dir = 'output/sweep_line_break'", "output_dir = 'out'")
+    text = text.replace("criteria = 'input/criteria_paper.nml'", f"criteria = '{ROOT / 'input' / 'criteria_paper.nml'}'")
+    text = text.replace("values = 0.3, 0.8, 1.2, 1.6, 2.0, 2.5, 3.0, 3.5, 3.9, 4.5, 6.0, 9.0, 11.0", "values = 3.0, 11.0")
+    assert "values = 3.0, 11.0" in text
+    definition = tmp_path / "sweep_line_break.nml"
+    definition.write_text(text)
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 0, res.stderr
+    res = run_sweep(definition, tmp_path)
+    assert res.returncode == 0, res.stderr
+    alone = nml_variant(tmp_path, "alone", edits=((r"^\s*output\s*=.*$", f"  output = '{tmp_path / 'alone.nc'}'"),))
+    alone.write_text(alone.read_text().replace("&run\n", "&run\n  stop_when_final = .true.\n", 1))
+    ds, _ = _run(airlaunch_exe, alone, tmp_path / "alone.nc")
+    whole = {k: ds.attrs[k] for k in ("separation_time_s", "min_clearance_m", "pitch_max_time_s", "pitch_max_deg")}
+    ds.close()
+    assert whole["pitch_max_time_s"] < 11.0
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        assert (s["status"].values == 0).all()
+        assert sorted(s["line%break_segment"].values.tolist()) == [1, 1, 15, 15]
+        for i in range(s.sizes["case"]):
+            row = {k: float(s[k].values[i]) for k in whole}
+            assert float(s["line_break_time_s"].values[i]) == float(s["line%break_time"].values[i])
+            assert int(s["line_breaks"].values[i]) == 1
+            if s["line%break_time"].values[i] == 11.0:
+                for k in ("separation_time_s", "min_clearance_m"):
+                    assert row[k] == pytest.approx(whole[k], rel=1e-6, abs=0), k
+                assert row["pitch_max_deg"] == pytest.approx(whole["pitch_max_deg"], abs=1e-8)
+                assert row["pitch_max_time_s"] == pytest.approx(whole["pitch_max_time_s"], abs=1e-3)
+            else:
+                assert row["pitch_max_deg"] < 75.0
