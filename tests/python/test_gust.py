@@ -198,27 +198,17 @@ def test_example_sweep_over_the_gust(airlaunch_exe, tmp_path):
     at all: both zero cases equal, bit for bit, the base run alone with the
     sweep's settings (no step cap, nothing read), while the downdraft met as
     the rocket reaches the ramp edge changes the clearance."""
-    from test_sweep_support import make_table, run_sweep
+    from test_sweep_support import run_example_sweep
 
-    text = (ROOT / "input" / "sweep_gust.nml").read_text()
-    text = text.replace("base = 'input/airlaunch_paper.nml'", f"base = '{PAPER}'")
-    text = text.replace("output_dir = 'output/sweep_gust'", "output_dir = 'out'")
-    text = text.replace("criteria = 'input/criteria_paper.nml'", f"criteria = '{ROOT / 'input' / 'criteria_paper.nml'}'")
-    text = text.replace("lower = -18.3, upper = 18.3, levels = 9", "lower = -18.3, upper = 0.0, levels = 2")
-    text = text.replace("values = 0.0, 1.0, 2.0, 2.5, 3.0, 3.5, 4.0", "values = 2.0, 3.0")
-    definition = tmp_path / "sweep_gust.nml"
-    definition.write_text(text)
-    make_table(definition, tmp_path)
-    res = run_sweep(definition, tmp_path, None, "--check")
-    assert res.returncode == 0, res.stderr
-    res = run_sweep(definition, tmp_path)
-    assert res.returncode == 0, res.stderr
+    summary = run_example_sweep("sweep_gust", tmp_path, [
+        ("lower = -18.3, upper = 18.3, levels = 9", "lower = -18.3, upper = 0.0, levels = 2"),
+        ("values = 0.0, 1.0, 2.0, 2.5, 3.0, 3.5, 4.0", "values = 2.0, 3.0")])
     alone = nml_variant(tmp_path, "alone", edits=((r"^\s*output\s*=.*$", f"  output = '{tmp_path / 'alone.nc'}'"),))
     alone.write_text(alone.read_text().replace("&run\n", "&run\n  stop_when_final = .true.\n", 1))
     with run(airlaunch_exe, alone, tmp_path / "alone.nc") as ds:
         still = {k: ds.attrs[k] for k in ("separation_time_s", "min_clearance_m", "pitch_max_time_s",
                                           "max_load_factor_excursion")}
-    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+    with xr.open_dataset(summary) as s:
         assert (s["status"].values == 0).all()
         assert sorted(s["gust%vertical"].values.tolist()) == [-18.3, -18.3, 0.0, 0.0]
         for i in range(s.sizes["case"]):

@@ -219,29 +219,17 @@ def test_example_sweep_over_the_line_failure(airlaunch_exe, tmp_path):
     on its time (the pitch is flat at its maximum, so its time moves with the
     steps: measured 3.2e-4 s).  A cut at 3.0 s, as the rocket reaches the ramp
     edge, loses the firing attitude (below 75 deg, the paper's criterion)."""
-    from test_sweep_support import make_table, run_sweep
-    from conftest import PAPER, ROOT
+    from test_sweep_support import run_example_sweep
 
-    text = (ROOT / "input" / "sweep_line_break.nml").read_text()
-    text = text.replace("base = 'input/airlaunch_paper.nml'", f"base = '{PAPER}'")
-    text = text.replace("output_dir = 'output/sweep_line_break'", "output_dir = 'out'")
-    text = text.replace("criteria = 'input/criteria_paper.nml'", f"criteria = '{ROOT / 'input' / 'criteria_paper.nml'}'")
-    text = text.replace("values = 0.3, 0.8, 1.2, 1.6, 2.0, 2.5, 3.0, 3.5, 3.9, 4.5, 6.0, 9.0, 11.0", "values = 3.0, 11.0")
-    assert "values = 3.0, 11.0" in text
-    definition = tmp_path / "sweep_line_break.nml"
-    definition.write_text(text)
-    make_table(definition, tmp_path)
-    res = run_sweep(definition, tmp_path, None, "--check")
-    assert res.returncode == 0, res.stderr
-    res = run_sweep(definition, tmp_path)
-    assert res.returncode == 0, res.stderr
+    summary = run_example_sweep("sweep_line_break", tmp_path, [
+        ("values = 0.3, 0.8, 1.2, 1.6, 2.0, 2.5, 3.0, 3.5, 3.9, 4.5, 6.0, 9.0, 11.0", "values = 3.0, 11.0")])
     alone = nml_variant(tmp_path, "alone", edits=((r"^\s*output\s*=.*$", f"  output = '{tmp_path / 'alone.nc'}'"),))
     alone.write_text(alone.read_text().replace("&run\n", "&run\n  stop_when_final = .true.\n", 1))
     ds, _ = _run(airlaunch_exe, alone, tmp_path / "alone.nc")
     whole = {k: ds.attrs[k] for k in ("separation_time_s", "min_clearance_m", "pitch_max_time_s", "pitch_max_deg")}
     ds.close()
     assert whole["pitch_max_time_s"] < 11.0
-    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+    with xr.open_dataset(summary) as s:
         assert (s["status"].values == 0).all()
         assert sorted(s["line%break_segment"].values.tolist()) == [1, 1, 15, 15]
         for i in range(s.sizes["case"]):

@@ -58,6 +58,27 @@ def make_table(definition, cwd):
     return write_table(defn, pathlib.Path(cwd) / defn.table_path)
 
 
+def run_example_sweep(name, tmp_path, edits):
+    """input/NAME.nml with its paths made absolute (base, criteria) and its
+    output in tmp_path/out, cut down by the text `edits` (old, new: each must
+    match), written to tmp_path; its table drawn, checked (--check) and run on
+    one rank: returns the summary's path."""
+    text = (ROOT / "input" / f"{name}.nml").read_text()
+    for old, new in [("base = 'input/airlaunch_paper.nml'", f"base = '{ROOT / 'input' / 'airlaunch_paper.nml'}'"),
+                     (f"output_dir = 'output/{name}'", "output_dir = 'out'"),
+                     ("criteria = 'input/criteria_paper.nml'", f"criteria = '{ROOT / 'input' / 'criteria_paper.nml'}'"),
+                     *edits]:
+        assert old in text, old
+        text = text.replace(old, new)
+    definition = tmp_path / f"{name}.nml"
+    definition.write_text(text)
+    make_table(definition, tmp_path)
+    for args in (("--check",), ()):
+        res = run_sweep(definition, tmp_path, None, *args)
+        assert res.returncode == 0, res.stderr
+    return tmp_path / "out" / "summary.nc"
+
+
 def mpirun(ranks):
     """mpirun with the flags this machine needs (root, more ranks than cores)."""
     cmd = ["mpirun"]

@@ -76,9 +76,8 @@ contains
   subroutine model_blocks()
     type(line_model) :: model
     real(dp) :: x(3, 0:n), v(3, 0:n)
-    real(dp) :: dfdx(3, 3, -1:1, 0:n), dfdv(3, 3, -1:1, 0:n)
-    real(dp) :: err_x, err_v, big_x, big_v, outside, ell, tk
-    integer :: j, q, k, n_taut, n_slack
+    real(dp) :: ell, tk
+    integer :: k, n_taut, n_slack
     call section("force blocks against central differences (taut and slack segments, drag, damping)")
     call test_line(model, x, v)
     n_taut = 0; n_slack = 0
@@ -95,6 +94,18 @@ contains
       call check(abs(ell/model%l0 - 1.0_dp) > 1.0e-3_dp, "segment " // str(k) // " away from the kink")
     end do
     call check(n_taut >= 3 .and. n_slack >= 3, "taut and slack segments: " // str(n_taut) // " / " // str(n_slack))
+    call blocks_against_differences(model, x, v, "")
+  end subroutine model_blocks
+
+  !> The force blocks of `model` at (x, v) against central differences of its
+  !> forces, every column (labels prefixed by `what`).
+  subroutine blocks_against_differences(model, x, v, what)
+    type(line_model), intent(in) :: model
+    real(dp), intent(in) :: x(3, 0:n), v(3, 0:n)
+    character(len=*), intent(in) :: what
+    real(dp) :: dfdx(3, 3, -1:1, 0:n), dfdv(3, 3, -1:1, 0:n)
+    real(dp) :: err_x, err_v, big_x, big_v, outside
+    integer :: j, q
     call model%force_jacobian(x, v, dfdx, dfdv)
     err_x = 0.0_dp; err_v = 0.0_dp; outside = 0.0_dp
     big_x = maxval(abs(dfdx)); big_v = maxval(abs(dfdv))
@@ -105,18 +116,17 @@ contains
       end do
     end do
     print '(a, 2es10.2, a, 2es10.2)', "  largest entries df/dx, df/dv:", big_x, big_v, "; errors:", err_x, err_v
-    call check(big_x > 1.0e4_dp .and. big_v > 10.0_dp, "blocks not trivially zero")
-    call check_close(err_x, 0.0_dp, "df/dx blocks", abs=1.0e-8_dp*big_x)
-    call check_close(err_v, 0.0_dp, "df/dv blocks", abs=1.0e-8_dp*big_v)
-    call check_close(outside, 0.0_dp, "no coupling beyond the neighbours", abs=1.0e-8_dp*big_x)
-  end subroutine model_blocks
+    call check(big_x > 1.0e4_dp .and. big_v > 10.0_dp, what // "blocks not trivially zero")
+    call check_close(err_x, 0.0_dp, what // "df/dx blocks", abs=1.0e-8_dp*big_x)
+    call check_close(err_v, 0.0_dp, what // "df/dv blocks", abs=1.0e-8_dp*big_v)
+    call check_close(outside, 0.0_dp, what // "no coupling beyond the neighbours", abs=1.0e-8_dp*big_x)
+  end subroutine blocks_against_differences
 
   subroutine parted_blocks()
     type(line_model) :: model, whole
     real(dp) :: x(3, 0:n), v(3, 0:n), f(3, 0:n), fw(3, 0:n), ten(n), tw(n)
-    real(dp) :: dfdx(3, 3, -1:1, 0:n), dfdv(3, 3, -1:1, 0:n)
-    real(dp) :: err_x, err_v, big_x, big_v, outside, eps, lost
-    integer :: k, st, cut(2), j, q
+    real(dp) :: eps, lost
+    integer :: k, st, cut(2), j
     type(line_energy) :: e, ew
     call section("a parted line: two taut segments cut (line_model%part)")
     call test_line(model, x, v)
@@ -144,19 +154,7 @@ contains
     ew = whole%energy(x, v)
     call check_close(ew%elastic - e%elastic, lost, "elastic energy less the parted segments' 1/2 EA l0 eps^2", &
       rel=1.0e-12_dp)
-    call model%force_jacobian(x, v, dfdx, dfdv)
-    err_x = 0.0_dp; err_v = 0.0_dp; outside = 0.0_dp
-    big_x = maxval(abs(dfdx)); big_v = maxval(abs(dfdv))
-    do j = 0, n
-      do q = 1, 3
-        call compare_column(model, x, v, .false., q, j, dfdx, err_x, outside)
-        call compare_column(model, x, v, .true., q, j, dfdv, err_v, outside)
-      end do
-    end do
-    print '(a, 2es10.2, a, 2es10.2)', "  largest entries df/dx, df/dv:", big_x, big_v, "; errors:", err_x, err_v
-    call check_close(err_x, 0.0_dp, "parted line: df/dx blocks", abs=1.0e-8_dp*big_x)
-    call check_close(err_v, 0.0_dp, "parted line: df/dv blocks", abs=1.0e-8_dp*big_v)
-    call check_close(outside, 0.0_dp, "parted line: no coupling beyond the neighbours", abs=1.0e-8_dp*big_x)
+    call blocks_against_differences(model, x, v, "parted line: ")
   end subroutine parted_blocks
 
   !> Central difference of the forces along x(q, j) (or v(q, j)) against the
