@@ -471,8 +471,8 @@ contains
       " s: too many events before the output time")
   end subroutine direct_advance
 
-  !> The scheduled cut of the line (&line break_time) is due at time t: the
-  !> line is still whole and the time has come.
+  !> The scheduled cut of the line (&line break_time) is due at time t: it
+  !> has not been made, and its time has come.
   logical function break_is_due(sys, t)
     type(launch_system), intent(in) :: sys
     real(dp), intent(in) :: t
@@ -502,6 +502,10 @@ contains
         s%break_time = -1.0_dp   ! done
       else
         call s%prepare(r%dsolver%t, y, status)
+        if (status /= 0) then   ! rhs_fatal: a tension not finite
+          call fatal_error(err, phase_name(s%sep%phase) // ", t = " // str(r%dsolver%t) // " s: " // s%failure)
+          return
+        end if
         first = maxloc(s%tension, 1)
         call s%line%part(first)
         do j = 1, s%line%n

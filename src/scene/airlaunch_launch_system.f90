@@ -48,8 +48,8 @@ module airlaunch_launch_system
   !> event functions: the separation scene's, then the rocket's Euler pitch
   !> rate (its first maximum) and the clearance's rate (its minima), in Case 3
   !> and, while a &gust is watched, the last point of the scene passing its back
-  !> edge (after which the step cap the gust needs is lifted), and, while the
-  !> line is intact and has a breaking strength, its margin to the strength
+  !> edge (after which the step cap the gust needs is lifted), and, when the
+  !> line has a breaking strength, its segments' margin to it
   integer, parameter :: launch_pitch_root = separation_nroots + 1, launch_clearance_root = separation_nroots + 2
   integer, parameter :: launch_gust_root = separation_nroots + 3, launch_break_root = separation_nroots + 4
   integer, parameter :: launch_nroots = separation_nroots + 4
@@ -256,7 +256,7 @@ contains
     end if
     if (self%gust_watch) g(launch_gust_root) = self%gust_clearance()
     if (self%breaking_strength > 0.0_dp .and. self%has_line) then
-      g(launch_break_root) = self%strength_margin(status)
+      g(launch_break_root) = self%strength_margin(t, status)
       if (status /= rhs_ok) return
     end if
     if (self%sep%phase /= phase_free) return
@@ -267,15 +267,16 @@ contains
   !> The breaking strength less the largest segment tension [N] (bodies and
   !> nodes loaded: to_absolute; the tie-down node is set here), with the
   !> segments' tensions in self%tension.
-  real(dp) function launch_strength_margin(self, status) result(margin)
+  real(dp) function launch_strength_margin(self, t, status) result(margin)
     class(launch_system), intent(inout) :: self
+    real(dp), intent(in) :: t
     integer, intent(out) :: status
     self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
     self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
     call self%line%tensions(self%x, self%v, self%tension, status)
     margin = self%breaking_strength - maxval(self%tension)
     if (status /= 0) then
-      self%failure = "line tension is not finite"
+      self%failure = "line tension is not finite at t = " // str(t) // " s"
       status = rhs_fatal
     else
       status = rhs_ok
