@@ -476,8 +476,6 @@ contains
   logical function break_is_due(sys, t)
     type(launch_system), intent(in) :: sys
     real(dp), intent(in) :: t
-    break_is_due = .false.
-    if (.not. sys%has_line) return
     break_is_due = sys%break_time > 0.0_dp .and. t >= sys%break_time
   end function break_is_due
 
@@ -492,18 +490,18 @@ contains
     type(launch_result), intent(inout) :: res
     type(error_type), allocatable, intent(inout) :: err
     real(dp), allocatable :: y(:)
-    integer :: status, j, first, before
+    integer :: status, j, first
     y = r%dsolver%y
-    before = r%dsys%line%n_parted
     associate(s => r%dsys)
       if (k > 0) then
         first = k
         call s%line%part(k)
         s%break_time = -1.0_dp   ! done
       else
-        call s%prepare(r%dsolver%t, y, status)
+        call s%load_bodies(r%dsolver%t, y)
+        call s%line_tensions(r%dsolver%t, status)
         if (status /= 0) then   ! rhs_fatal: a tension not finite
-          call fatal_error(err, phase_name(s%sep%phase) // ", t = " // str(r%dsolver%t) // " s: " // s%failure)
+          call fatal_error(err, phase_name(s%sep%phase) // ": " // s%failure)
           return
         end if
         first = maxloc(s%tension, 1)
@@ -516,7 +514,7 @@ contains
         res%line_break_time = r%dsolver%t
         res%line_break_segment = first
       end if
-      res%line_breaks = res%line_breaks + s%line%n_parted - before
+      res%line_breaks = s%line%n_parted
       res%parted_segments = pack([(j, j = 1, s%line%n)], s%line%parted)
     end associate
     call r%dsolver%reinit(r%dsolver%t, y, err)

@@ -99,7 +99,7 @@ contains
     end do
     ! a strength the trimmed flight's steady tension already reaches: the line
     ! would part before the run starts (event 8 watches for a crossing only)
-    if (sys%has_line .and. sys%breaking_strength > 0.0_dp) then
+    if (sys%breaking_strength > 0.0_dp) then   ! set with a line only
       if (maxval(sys%tension) >= sys%breaking_strength) then
         res%status = "invalid_input"
         call fatal_error(error, "&line: breaking_strength = " // str(sys%breaking_strength) // " N is not " // &

@@ -106,7 +106,7 @@ module airlaunch_launch_system
     procedure :: to_absolute => launch_to_absolute
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
     procedure :: gust_clearance => launch_gust_clearance
-    procedure :: strength_margin => launch_strength_margin
+    procedure :: line_tensions => launch_line_tensions
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: has_jacobian => launch_has_jacobian
@@ -172,8 +172,7 @@ contains
     integer, intent(out) :: status
     call self%load_bodies(t, y)
     if (self%has_line) then
-      self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
-      self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
+      call place_tie_down(self)
       call self%line%forces(self%x, self%v, self%f, self%tension, status)
       if (status /= 0) then
         self%failure = "line tension is not finite at t = " // str(t) // " s"
@@ -255,33 +254,42 @@ contains
       return
     end if
     if (self%gust_watch) g(launch_gust_root) = self%gust_clearance()
-    if (self%breaking_strength > 0.0_dp .and. self%has_line) then
-      g(launch_break_root) = self%strength_margin(t, status)
-      if (status /= rhs_ok) return
+    if (self%breaking_strength > 0.0_dp) then   ! set with a line only
+      ! the tensions: prepare's in Case 2, else of the state just loaded
+      if (self%sep%phase /= phase_rotation) then
+        call self%line_tensions(t, status)
+        if (status /= rhs_ok) return
+      end if
+      g(launch_break_root) = self%breaking_strength - maxval(self%tension)
     end if
     if (self%sep%phase /= phase_free) return
     if (self%find_pitch_max) g(launch_pitch_root) = self%euler_pitch_rate()
     g(launch_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine launch_roots
 
-  !> The breaking strength less the largest segment tension [N] (bodies and
-  !> nodes loaded: to_absolute; the tie-down node is set here), with the
-  !> segments' tensions in self%tension.
-  real(dp) function launch_strength_margin(self, t, status) result(margin)
+  !> The line's segment tensions into self%tension, for the bodies and nodes
+  !> loaded (load_bodies): what prepare's line forces give, without the loads.
+  subroutine launch_line_tensions(self, t, status)
     class(launch_system), intent(inout) :: self
     real(dp), intent(in) :: t
     integer, intent(out) :: status
-    self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
-    self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
+    call place_tie_down(self)
     call self%line%tensions(self%x, self%v, self%tension, status)
-    margin = self%breaking_strength - maxval(self%tension)
     if (status /= 0) then
       self%failure = "line tension is not finite at t = " // str(t) // " s"
       status = rhs_fatal
     else
       status = rhs_ok
     end if
-  end function launch_strength_margin
+  end subroutine launch_line_tensions
+
+  !> The line's node 0 at the rocket's tie-down point (rocket loaded).
+  subroutine place_tie_down(self)
+    class(launch_system), intent(inout) :: self
+    self%x(:, 0) = self%sep%bodies(1)%point_position(self%tie_down)
+    self%v(:, 0) = self%sep%bodies(1)%point_velocity(self%tie_down)
+  end subroutine place_tie_down
+
 
   !> How far the scene's last point (the aircraft's and the rocket's centres
   !> of mass, the line's nodes) is past the gust's back edge [m]: negative while
