@@ -20,8 +20,24 @@
 !> yawing moment about +y is -qSb Cn.  Cm_alphadot is folded into Cm_q
 !> (quasi-steady: alpha_dot ~ q in the short-period motion), since alpha_dot
 !> is not a state.
+!>
+!> Gust penetration: the derivatives hold for air that is the same over the
+!> whole aircraft (the wing's and the CG's).  When a gust's air velocity at the
+!> empennage differs, the caller passes the body-frame air-relative velocity
+!> there, v_tail (without the rotation's part, which Cm_q and Cn_r already
+!> hold).  The horizontal tail then adds the lift
+!>   dL = qbar S CL_alpha_tail (alpha_tail - alpha)
+!> normal to the velocity in the plane of symmetry, and the fin the side force
+!>   dY = qbar S CY_beta_fin (beta_tail - beta)
+!> along body z, both at the empennage point `tail_point` (their moments
+!> r_tail x dF).  CL_alpha_tail and CY_beta_fin are the tail's and the fin's
+!> slopes on the wing area (without downwash); their defaults are the ones
+!> that give the 747-class Cm_q = -21 and Cn_r = -0.30 as the tail's damping,
+!> Cm_q = -2 CL_alpha_tail (l_t/c)^2 and Cn_r = 2 CY_beta_fin (l_t/b)^2 with
+!> the arm l_t = 24 m of the default empennage point (docs/model.md "Gusts").
 module airlaunch_aircraft_aero
   use airlaunch_kinds, only: dp, deg2rad
+  use airlaunch_rotation, only: cross
   implicit none
   private
   public :: aircraft_aero, aircraft_aero_eval, aircraft_aero_out
@@ -55,6 +71,9 @@ module airlaunch_aircraft_aero
     real(dp) :: k_theta = 2.0_dp          !< hold gain [rad elevator / rad pitch error]
     real(dp) :: k_q = 0.5_dp              !< hold gain [rad elevator / (rad/s) pitch rate]
     real(dp) :: theta_ref = 0.0_dp        !< held pitch attitude [rad] (set by trim)
+    real(dp) :: cl_alpha_tail = 0.656_dp  !< horizontal tail's lift slope on S [1/rad] (gust penetration)
+    real(dp) :: cy_beta_fin = -0.677_dp   !< fin's side-force slope on S [1/rad] (gust penetration)
+    real(dp) :: tail_point(3) = [-24.0_dp, 6.0_dp, 0.0_dp]   !< empennage, body frame [m] (set by the scene)
   end type aircraft_aero
 
   !> What the model computed (for output and tests).
@@ -71,11 +90,13 @@ contains
 
   !> Forces and moments for body-frame air-relative velocity v_b, body rates
   !> w_b, air density rho and pitch attitude theta (used by the hold only).
-  pure function aircraft_aero_eval(p, rho, v_b, w_b, theta) result(o)
+  !> With v_tail, the empennage's own air (gust penetration, module header).
+  pure function aircraft_aero_eval(p, rho, v_b, w_b, theta, v_tail) result(o)
     type(aircraft_aero), intent(in) :: p
     real(dp), intent(in) :: rho, v_b(3), w_b(3), theta
+    real(dp), intent(in), optional :: v_tail(3)   !< air-relative velocity at the empennage, body [m/s]
     type(aircraft_aero_out) :: o
-    real(dp) :: v, qbar, qhat, phat, rhat, ca, sa, cy, croll, cn
+    real(dp) :: v, qbar, qhat, phat, rhat, ca, sa, cy, croll, cn, vt, d_alpha, d_beta, df(3)
     v = norm2(v_b)
     if (v <= 0.0_dp) then
       o%force = [p%thrust, 0.0_dp, 0.0_dp]
@@ -104,5 +125,15 @@ contains
     o%force = qbar*p%wing_area*(o%cl*[sa, ca, 0.0_dp] - o%cd*v_b/v + [0.0_dp, 0.0_dp, cy])
     o%force(1) = o%force(1) + p%thrust
     o%moment = qbar*p%wing_area*[p%span*croll, -p%span*cn, p%chord*o%cm]
+    if (present(v_tail)) then
+      vt = norm2(v_tail)
+      if (vt > 0.0_dp) then
+        d_alpha = atan2(-v_tail(2), v_tail(1)) - o%alpha
+        d_beta = asin(max(-1.0_dp, min(1.0_dp, v_tail(3)/vt))) - o%beta
+        df = qbar*p%wing_area*(p%cl_alpha_tail*d_alpha*[sa, ca, 0.0_dp] + [0.0_dp, 0.0_dp, p%cy_beta_fin*d_beta])
+        o%force = o%force + df
+        o%moment = o%moment + cross(p%tail_point, df)
+      end if
+    end if
   end function aircraft_aero_eval
 end module airlaunch_aircraft_aero

@@ -22,9 +22,23 @@
 !> normal force at 90 deg, Hoerner, Fluid-Dynamic Drag, 1965: C_N = 1.28 on the
 !> projected fin area), opposite to the local cross-flow velocity.
 !>
+!>
+!> In a gust the caller may pass the gust field with the body's pose: each
+!> station then reads the gust at its own place (gust penetration), as a
+!> frozen gust meets a moving body.  v_b stays the CG's air-relative velocity;
+!> a station at body x adds the change of the gust between the CG and itself,
+!> -(C^T)(w(r + x c_1) - w(r)).  The cross-flow strips read it at their
+!> centres, the fins at their centre of pressure, the potential term at its
+!> centre (or, while that is still in the bay, at the front of the exposed
+!> part), the axial force at the CG.  Without the gust every station reads the
+!> CG's: a gust whose velocity changes linearly along the body is then the same
+!> as a pitch or yaw rate of the body in still air (the strips' and the fins'
+!> local velocities are identical), which test_rocket_aero checks.
+!>
 !> Body frame: x along the axis towards the nose, origin at the CG.
 module airlaunch_rocket_aero
   use airlaunch_kinds, only: dp, pi
+  use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
   public :: rocket_aero, rocket_aero_eval
@@ -50,12 +64,18 @@ contains
   !> CG velocity v_b and body rates w_b.  Strips with body x > x_shield are
   !> shielded (x measured from the CG, towards the nose); pass a large value
   !> for a fully exposed rocket.
-  pure subroutine rocket_aero_eval(p, rho, v_b, w_b, x_shield, force, moment)
+  !> With `gust`, `r_cg` and `c` present the stations read the gust where they
+  !> are (module header); v_b is the CG's air-relative velocity either way.
+  pure subroutine rocket_aero_eval(p, rho, v_b, w_b, x_shield, force, moment, gust, r_cg, c)
     type(rocket_aero), intent(in) :: p
     real(dp), intent(in) :: rho, v_b(3), w_b(3), x_shield
     real(dp), intent(out) :: force(3), moment(3)
+    type(gust_field), intent(in), optional :: gust   !< the gust, read at each station
+    real(dp), intent(in), optional :: r_cg(3)        !< the CG, earth frame [m] (with gust)
+    real(dp), intent(in), optional :: c(3, 3)        !< body-to-earth rotation (with gust)
     real(dp) :: s_ref, dx, x, v_loc(3), vp(3), vpn, f(3), v, alpha, exposed, x_nose, x_tail
-    real(dp) :: x_lo, x_hi
+    real(dp) :: x_lo, x_hi, w_cg(3)
+    logical :: penetrating
     integer :: i
     force = 0; moment = 0
     s_ref = pi*p%diameter**2/4
@@ -63,6 +83,9 @@ contains
     x_tail = p%cg_from_nose - p%length
     exposed = max(0.0_dp, min(1.0_dp, (x_shield - x_tail)/p%length))
     if (exposed <= 0.0_dp) return
+    penetrating = present(gust) .and. present(r_cg) .and. present(c)
+    if (penetrating) penetrating = gust%active
+    if (penetrating) w_cg = gust_velocity(gust, r_cg)
     v = norm2(v_b)
     ! axial force, scaled by the exposed fraction
     force(1) = -0.5_dp*rho*abs(v_b(1))*v_b(1)*s_ref*p%c_axial*exposed
@@ -73,7 +96,7 @@ contains
       x_hi = min(x_lo + dx, x_shield)
       if (x_hi <= x_lo) cycle
       x = 0.5_dp*(x_lo + x_hi)
-      v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]   ! v + w x (x, 0, 0)
+      v_loc = station_velocity(x) + [0.0_dp, w_b(3)*x, -w_b(2)*x]   ! v + w x (x, 0, 0)
       vp = [0.0_dp, v_loc(2), v_loc(3)]
       vpn = norm2(vp)
       f = -0.5_dp*rho*p%eta*p%c_dn*p%diameter*(x_hi - x_lo)*vpn*vp
@@ -84,20 +107,25 @@ contains
     ! cross-flow velocity of the body; scaled by the exposed fraction.  Only
     ! this term needs a cross-flow at the CG (vpn > 0 implies v > 0); the fins
     ! below use their local velocity and act on a pitching body too.
-    vp = [0.0_dp, v_b(2), v_b(3)]
+    x = x_nose - p%cp_pot_from_nose
+    v_loc = v_b
+    if (penetrating) then
+      v_loc = station_velocity(min(x, x_shield))
+      v = norm2(v_loc)
+    end if
+    vp = [0.0_dp, v_loc(2), v_loc(3)]
     vpn = norm2(vp)
     if (vpn > 0.0_dp) then
       ! atan2 keeps full relative precision at small angles (acos(v_x/v) does not)
-      alpha = atan2(vpn, v_b(1))
+      alpha = atan2(vpn, v_loc(1))
       f = -0.5_dp*rho*v*v*s_ref*sin(2*alpha)*cos(alpha/2)*exposed*vp/vpn
       force = force + f
-      x = x_nose - p%cp_pot_from_nose
       moment = moment + [0.0_dp, -x*f(3), x*f(2)]
     end if
     if (p%cn_alpha_fin > 0.0_dp) then
       x = x_nose - p%x_fin_from_nose
       if (x <= x_shield) then
-        v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]
+        v_loc = station_velocity(x) + [0.0_dp, w_b(3)*x, -w_b(2)*x]
         vp = [0.0_dp, v_loc(2), v_loc(3)]
         vpn = norm2(vp)
         if (vpn > 0.0_dp) then
@@ -108,5 +136,20 @@ contains
         end if
       end if
     end if
+  contains
+    !> The air-relative velocity at body x without the rotation's part: the
+    !> CG's, plus the change of the gust between the CG and x when penetrating.
+    pure function station_velocity(xs) result(u)
+      real(dp), intent(in) :: xs
+      real(dp) :: u(3), dw(3)
+      integer :: j
+      u = v_b
+      if (.not. penetrating) return
+      ! C^T dw by its columns (matmul of the optional c allocates a temporary)
+      dw = gust_velocity(gust, r_cg + xs*c(:, 1)) - w_cg
+      do j = 1, 3
+        u(j) = u(j) - dot_product(c(:, j), dw)
+      end do
+    end function station_velocity
   end subroutine rocket_aero_eval
 end module airlaunch_rocket_aero

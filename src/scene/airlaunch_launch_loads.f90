@@ -2,9 +2,11 @@
 !> separation system (src/multibody): aircraft aerodynamics and thrust (with
 !> the elevator hold), rocket aerodynamics with the bay shielding, and the
 !> line's end force at the rocket's tie-down point (direct coupling: the line
-!> nodes are integrated with the bodies, DESIGN §4 (b)).  Both bodies' air
-!> velocity is the discrete gust's (airlaunch_gust) at their centre of mass:
-!> the aerodynamics take v - w_gust(r).
+!> nodes are integrated with the bodies, DESIGN §4 (b)).  Both bodies'
+!> aerodynamics take the air-relative velocity v - w_gust(r) of the discrete
+!> gust (airlaunch_gust) at their centre of mass and, with `penetration`, read
+!> the gust's change along them too: the rocket at each strip, fin and nose
+!> station, the aircraft at its empennage (docs/model.md "Gusts").
 module airlaunch_launch_loads
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
@@ -30,6 +32,7 @@ module airlaunch_launch_loads
     logical :: aircraft_aero_on = .true.            !< false for a prescribed aircraft
     logical :: line_on = .true.                     !< false: the scene has no line
     type(gust_field) :: gust                        !< the &gust (inactive by default)
+    logical :: penetration = .false.                !< the bodies read the gust along them, not at the CG only
     ! --- set by the scene before each evaluation
     integer :: phase = 0                            !< current Case
     real(dp) :: line_force(3) = 0.0_dp              !< line end force on the rocket, earth [N]
@@ -60,8 +63,15 @@ contains
         e = dcm_to_euler(b0%c)
         v_air = air_relative_velocity(self%gust, b0%r, b0%v)
         v_body = matmul(transpose(b0%c), v_air)
-        self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, v_body, &
-          b0%w, e(2))
+        if (self%penetration .and. self%gust%active) then
+          ! the empennage's air, without the rotation's part (Cm_q, Cn_r hold it)
+          v_air = air_relative_velocity(self%gust, b0%point_position(self%aircraft%tail_point), b0%v)
+          self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, v_body, &
+            b0%w, e(2), v_tail=matmul(transpose(b0%c), v_air))
+        else
+          self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, v_body, &
+            b0%w, e(2))
+        end if
         force(:, 0) = force(:, 0) + matmul(b0%c, self%aircraft_out%force)
         moment(:, 0) = moment(:, 0) + self%aircraft_out%moment
       end if
@@ -79,7 +89,12 @@ contains
       end if
       v_air = air_relative_velocity(self%gust, b1%r, b1%v)
       v_body = matmul(transpose(b1%c), v_air)
-      call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m)
+      if (self%penetration) then
+        call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m, &
+          gust=self%gust, r_cg=b1%r, c=b1%c)
+      else
+        call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m)
+      end if
       force(:, 1) = force(:, 1) + matmul(b1%c, f)
       moment(:, 1) = moment(:, 1) + m
       if (self%line_on) call add_point_force(b1, self%tie_down, self%line_force, force(:, 1), moment(:, 1))

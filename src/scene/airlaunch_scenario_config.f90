@@ -132,6 +132,9 @@ module airlaunch_scenario_config
     real(dp) :: lateral = 0.0_dp             !< peak lateral gust velocity [m/s] (earth z)
     real(dp) :: gradient_length = 107.0_dp   !< H [m] (CS-25.341: 9 ... 107 m)
     real(dp) :: hit_time = 1.0_dp            !< the aircraft's CG at the gust's front [s]
+    !> each station of the bodies reads the gust where it is (the rocket's
+    !> strips, fins and nose, the aircraft's empennage); false: at the CG
+    logical :: penetration = .true.
   end type gust_config
 
   !> Everything the air-launch scene reads.
@@ -240,14 +243,16 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, k_induced
-    real(dp) :: cm0, cm_alpha, cm_q, cm_de, k_theta, k_q, delta_e_max_deg
+    real(dp) :: cm0, cm_alpha, cm_q, cm_de, k_theta, k_q, delta_e_max_deg, cl_alpha_tail, cy_beta_fin
     character(len=16) :: dynamics, control
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
     namelist /aircraft/ mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, &
-      k_induced, cm0, cm_alpha, cm_q, cm_de, dynamics, control, k_theta, k_q, delta_e_max_deg
-    type(nml_var), parameter :: vars(21) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
+      k_induced, cm0, cm_alpha, cm_q, cm_de, dynamics, control, k_theta, k_q, delta_e_max_deg, &
+      cl_alpha_tail, cy_beta_fin
+    type(nml_var), parameter :: vars(23) = [nml_var("cl_alpha_tail", "real"), nml_var("cy_beta_fin", "real"), &
+      nml_var("mass", "real"), nml_var("ixx", "real"), &
       nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("wing_area", "real"), nml_var("span", "real"), &
       nml_var("chord", "real"), nml_var("cl0", "real"), nml_var("cl_alpha", "real"), nml_var("cl_de", "real"), &
       nml_var("cd0", "real"), nml_var("k_induced", "real"), nml_var("cm0", "real"), &
@@ -260,6 +265,7 @@ contains
       cl_de = a%cl_de; cd0 = a%cd0; k_induced = a%k_induced; cm0 = a%cm0; cm_alpha = a%cm_alpha
       cm_q = a%cm_q; cm_de = a%cm_de; dynamics = c%dynamics; control = c%control
       k_theta = a%k_theta; k_q = a%k_q; delta_e_max_deg = a%delta_e_max*rad2deg
+      cl_alpha_tail = a%cl_alpha_tail; cy_beta_fin = a%cy_beta_fin
     end associate
     call open_group(f, "aircraft", vars, u, present, error)
     if (allocated(error)) return
@@ -289,12 +295,17 @@ contains
     call require_nonnegative(f, "aircraft", "k_theta", k_theta, "rad/rad", error)
     call require_nonnegative(f, "aircraft", "k_q", k_q, "rad s/rad", error)
     call require_range(f, "aircraft", "delta_e_max_deg", delta_e_max_deg, 1.0_dp, 45.0_dp, "deg", error)
+    ! the empennage's share of the lift and side-force slopes (gust penetration)
+    call require_range(f, "aircraft", "cl_alpha_tail", cl_alpha_tail, 0.0_dp, cl_alpha, &
+      "1/rad: the tail's share of cl_alpha", error)
+    call require_range(f, "aircraft", "cy_beta_fin", cy_beta_fin, -10.0_dp, 0.0_dp, "1/rad", error)
     if (allocated(error)) return
     c%mass = mass; c%inertia = [ixx, iyy, izz]; c%dynamics = dynamics; c%control = control
     c%aero%wing_area = wing_area; c%aero%span = span; c%aero%chord = chord; c%aero%cl0 = cl0
     c%aero%cl_alpha = cl_alpha; c%aero%cl_de = cl_de; c%aero%cd0 = cd0; c%aero%k_induced = k_induced
     c%aero%cm0 = cm0; c%aero%cm_alpha = cm_alpha; c%aero%cm_q = cm_q; c%aero%cm_de = cm_de
     c%aero%k_theta = k_theta; c%aero%k_q = k_q; c%aero%delta_e_max = delta_e_max_deg*deg2rad
+    c%aero%cl_alpha_tail = cl_alpha_tail; c%aero%cy_beta_fin = cy_beta_fin
     c%aero%attitude_hold = control == "attitude_hold"
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=aircraft)
@@ -512,13 +523,15 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: vertical, lateral, gradient_length, hit_time
+    logical :: penetration
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
-    namelist /gust/ vertical, lateral, gradient_length, hit_time
-    type(nml_var), parameter :: vars(4) = [nml_var("vertical", "real"), nml_var("lateral", "real"), &
-      nml_var("gradient_length", "real"), nml_var("hit_time", "real")]
+    namelist /gust/ vertical, lateral, gradient_length, hit_time, penetration
+    type(nml_var), parameter :: vars(5) = [nml_var("vertical", "real"), nml_var("lateral", "real"), &
+      nml_var("gradient_length", "real"), nml_var("hit_time", "real"), nml_var("penetration", "logical")]
     vertical = c%vertical; lateral = c%lateral; gradient_length = c%gradient_length; hit_time = c%hit_time
+    penetration = c%penetration
     call open_group(f, "gust", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -531,12 +544,12 @@ contains
     end if
     call require_range(f, "gust", "vertical", vertical, -gust_speed_max, gust_speed_max, "m/s", error)
     call require_range(f, "gust", "lateral", lateral, -gust_speed_max, gust_speed_max, "m/s", error)
-    ! below 1 m the gust is shorter than any body, whose air velocity is read
-    ! at one point (its centre of mass)
+    ! below 1 m the gust is shorter than the strips and the chords at which
+    ! the bodies read it
     call require_range(f, "gust", "gradient_length", gradient_length, 1.0_dp, 1.0e5_dp, "m", error)
     call require_nonnegative(f, "gust", "hit_time", hit_time, "s", error)
     if (allocated(error)) return
-    c = gust_config(vertical, lateral, gradient_length, hit_time)
+    c = gust_config(vertical, lateral, gradient_length, hit_time, penetration)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=gust)
     call echo_namelist_unit(u, echo)
