@@ -198,11 +198,25 @@ def test_a_lateral_gust_from_either_side_gives_mirror_images(airlaunch_exe, tmp_
     ("vertical = 5.0, hit_time = -1.0", "&gust: hit_time = -1.0 is not allowed"),
     ("vertical = 5.0, hit_time = 15.0", "&gust: hit_time = 15.0 is not allowed (the aircraft would never meet the gust"),
     ("speed = 5.0", "&gust: unknown variable 'speed'"),
+    ("vertical = 5.0, penetration = 3", "&gust: variable 'penetration' = 3 is not .true. or .false."),
 ])
 def test_bad_gust_input_is_one_line(airlaunch_exe, tmp_path, gust, fragment):
     out = tmp_path / "bad.nc"
     nml = nml_variant(tmp_path, "bad", edits=((r"^\s*output\s*=.*$", f"  output = '{out}'"),))
     nml.write_text(nml.read_text() + f"&gust {gust} /\n")
+    assert_input_error(run_airlaunch(airlaunch_exe, nml), fragment, out)
+
+
+@pytest.mark.parametrize("setting, fragment", [
+    ("cl_alpha_tail = 6.0",
+     "&aircraft: cl_alpha_tail = 6.0 is not allowed (must be in [0.0, 5.7] 1/rad: the tail's share of cl_alpha)"),
+    ("cl_alpha_tail = -0.1", "&aircraft: cl_alpha_tail = -0.1 is not allowed"),
+    ("cy_beta_fin = 0.5", "&aircraft: cy_beta_fin = 0.5 is not allowed (must be in [-10.0, 0.0] 1/rad)"),
+])
+def test_bad_empennage_slopes_are_one_line(airlaunch_exe, tmp_path, setting, fragment):
+    out = tmp_path / "bad.nc"
+    nml = nml_variant(tmp_path, "bad", edits=((r"^\s*output\s*=.*$", f"  output = '{out}'"),
+                                              (r"^&aircraft$", f"&aircraft\n  {setting}")))
     assert_input_error(run_airlaunch(airlaunch_exe, nml), fragment, out)
 
 
