@@ -22,7 +22,6 @@
 !> normal force at 90 deg, Hoerner, Fluid-Dynamic Drag, 1965: C_N = 1.28 on the
 !> projected fin area), opposite to the local cross-flow velocity.
 !>
-!>
 !> In a gust the caller may pass the gust field with the body's pose: each
 !> station then reads the gust at its own place (gust penetration), as a
 !> frozen gust meets a moving body.  v_b stays the CG's air-relative velocity;
@@ -31,9 +30,9 @@
 !> centres, the fins at their centre of pressure, the potential term at its
 !> centre (or, while that is still in the bay, at the front of the exposed
 !> part), the axial force at the CG.  Without the gust every station reads the
-!> CG's: a gust whose velocity changes linearly along the body is then the same
-!> as a pitch or yaw rate of the body in still air (the strips' and the fins'
-!> local velocities are identical), which test_rocket_aero checks.
+!> CG's.  A gust whose velocity changes linearly along the body gives the
+!> strips and the fins the local air of a pitch or yaw rate of the body in
+!> uniform air (Etkin's equivalence; tests/unit/test_gust.f90 checks it).
 !>
 !> Body frame: x along the axis towards the nose, origin at the CG.
 module airlaunch_rocket_aero
@@ -104,9 +103,11 @@ contains
       moment = moment + [0.0_dp, -x*f(3), x*f(2)]    ! (x,0,0) x f
     end do
     ! potential (slender-body) normal force near the nose, opposite to the
-    ! cross-flow velocity of the body; scaled by the exposed fraction.  Only
-    ! this term needs a cross-flow at the CG (vpn > 0 implies v > 0); the fins
-    ! below use their local velocity and act on a pitching body too.
+    ! cross-flow velocity of the body; scaled by the exposed fraction.  It
+    ! takes no part of the rotation (vpn > 0 implies v > 0); the fins below
+    ! use their local velocity and act on a pitching body too.  Penetrating a
+    ! gust, it reads the air at its centre, or at the exposed part's front
+    ! while its centre is still in the bay.
     x = x_nose - p%cp_pot_from_nose
     v_loc = v_b
     if (penetrating) then

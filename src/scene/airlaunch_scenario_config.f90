@@ -251,14 +251,14 @@ contains
     namelist /aircraft/ mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, &
       k_induced, cm0, cm_alpha, cm_q, cm_de, dynamics, control, k_theta, k_q, delta_e_max_deg, &
       cl_alpha_tail, cy_beta_fin
-    type(nml_var), parameter :: vars(23) = [nml_var("cl_alpha_tail", "real"), nml_var("cy_beta_fin", "real"), &
-      nml_var("mass", "real"), nml_var("ixx", "real"), &
+    type(nml_var), parameter :: vars(23) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
       nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("wing_area", "real"), nml_var("span", "real"), &
       nml_var("chord", "real"), nml_var("cl0", "real"), nml_var("cl_alpha", "real"), nml_var("cl_de", "real"), &
       nml_var("cd0", "real"), nml_var("k_induced", "real"), nml_var("cm0", "real"), &
       nml_var("cm_alpha", "real"), nml_var("cm_q", "real"), nml_var("cm_de", "real"), &
       nml_var("dynamics", "string", 16), nml_var("control", "string", 16), nml_var("k_theta", "real"), &
-      nml_var("k_q", "real"), nml_var("delta_e_max_deg", "real")]
+      nml_var("k_q", "real"), nml_var("delta_e_max_deg", "real"), &
+      nml_var("cl_alpha_tail", "real"), nml_var("cy_beta_fin", "real")]
     associate(a => c%aero)
       mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
       wing_area = a%wing_area; span = a%span; chord = a%chord; cl0 = a%cl0; cl_alpha = a%cl_alpha
