@@ -95,7 +95,8 @@ contains
       x_hi = min(x_lo + dx, x_shield)
       if (x_hi <= x_lo) cycle
       x = 0.5_dp*(x_lo + x_hi)
-      v_loc = station_velocity(x) + [0.0_dp, w_b(3)*x, -w_b(2)*x]   ! v + w x (x, 0, 0)
+      v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]   ! v + w x (x, 0, 0)
+      if (penetrating) v_loc = v_loc - gust_change(x)
       vp = [0.0_dp, v_loc(2), v_loc(3)]
       vpn = norm2(vp)
       f = -0.5_dp*rho*p%eta*p%c_dn*p%diameter*(x_hi - x_lo)*vpn*vp
@@ -111,7 +112,7 @@ contains
     x = x_nose - p%cp_pot_from_nose
     v_loc = v_b
     if (penetrating) then
-      v_loc = station_velocity(min(x, x_shield))
+      v_loc = v_loc - gust_change(min(x, x_shield))
       v = norm2(v_loc)
     end if
     vp = [0.0_dp, v_loc(2), v_loc(3)]
@@ -126,7 +127,8 @@ contains
     if (p%cn_alpha_fin > 0.0_dp) then
       x = x_nose - p%x_fin_from_nose
       if (x <= x_shield) then
-        v_loc = station_velocity(x) + [0.0_dp, w_b(3)*x, -w_b(2)*x]
+        v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]
+        if (penetrating) v_loc = v_loc - gust_change(x)
         vp = [0.0_dp, v_loc(2), v_loc(3)]
         vpn = norm2(vp)
         if (vpn > 0.0_dp) then
@@ -138,19 +140,17 @@ contains
       end if
     end if
   contains
-    !> The air-relative velocity at body x without the rotation's part: the
-    !> CG's, plus the change of the gust between the CG and x when penetrating.
-    pure function station_velocity(xs) result(u)
+    !> The change of the gust between the CG and body x, body frame (only
+    !> when penetrating: gust, r_cg and c present).
+    pure function gust_change(xs) result(u)
       real(dp), intent(in) :: xs
       real(dp) :: u(3), dw(3)
       integer :: j
-      u = v_b
-      if (.not. penetrating) return
       ! C^T dw by its columns (matmul of the optional c allocates a temporary)
       dw = gust_velocity(gust, r_cg + xs*c(:, 1)) - w_cg
       do j = 1, 3
-        u(j) = u(j) - dot_product(c(:, j), dw)
+        u(j) = dot_product(c(:, j), dw)
       end do
-    end function station_velocity
+    end function gust_change
   end subroutine rocket_aero_eval
 end module airlaunch_rocket_aero

@@ -200,9 +200,10 @@ contains
       gust = make_gust([0.0_dp, cfg%gust%vertical, cfg%gust%lateral], cfg%gust%gradient_length, &
         b0%r(1) + v0*cfg%gust%hit_time)
       loads%gust = gust
-      loads%penetration = cfg%gust%penetration
+      ! in still air nothing reads a gust: no stations to visit
+      loads%penetration = cfg%gust%penetration .and. gust%active
       loads%aircraft%tail_point = [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp]
-      if (cfg%gust%penetration) then
+      if (loads%penetration) then
         sys%aircraft_gust_point = loads%aircraft%tail_point
         sys%rocket_gust_points(1, :) = [cfg%rocket%aero%cg_from_nose, &
           cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length]
