@@ -491,7 +491,7 @@ contains
     type(error_type), allocatable, intent(inout) :: err
     real(dp), allocatable :: y(:)
     integer :: status, j, first
-    y = r%dsolver%y
+    allocate(y, source=r%dsolver%y)
     associate(s => r%dsys)
       if (k > 0) then
         first = k

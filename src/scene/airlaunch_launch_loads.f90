@@ -40,6 +40,7 @@ module airlaunch_launch_loads
     type(aircraft_aero_out) :: aircraft_out
   contains
     procedure :: add_loads => launch_add_loads
+    procedure :: rearmost_gust_point => launch_rearmost_gust_point
   end type launch_loads
 
 contains
@@ -101,4 +102,21 @@ contains
     end associate
     if (.false.) x_shield = t
   end subroutine launch_add_loads
+
+  !> The smallest earth x of the points at which the bodies read the gust
+  !> [m]: their centres of mass and, penetrating, the aircraft's empennage and
+  !> the rocket's nose and tail.
+  pure real(dp) function launch_rearmost_gust_point(self, bodies) result(x_min)
+    class(launch_loads), intent(in) :: self
+    type(rigid_body), intent(in) :: bodies(0:)
+    real(dp) :: p(3)
+    x_min = min(bodies(0)%r(1), bodies(1)%r(1))
+    if (.not. self%penetration) return
+    p = bodies(0)%point_position(self%aircraft%tail_point)
+    x_min = min(x_min, p(1))
+    p = bodies(1)%point_position([self%rocket%cg_from_nose, 0.0_dp, 0.0_dp])
+    x_min = min(x_min, p(1))
+    p = bodies(1)%point_position([self%rocket%cg_from_nose - self%rocket%length, 0.0_dp, 0.0_dp])
+    x_min = min(x_min, p(1))
+  end function launch_rearmost_gust_point
 end module airlaunch_launch_loads

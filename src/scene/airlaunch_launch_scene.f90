@@ -203,11 +203,6 @@ contains
       ! in still air nothing reads a gust: no stations to visit
       loads%penetration = cfg%gust%penetration .and. gust%active
       loads%aircraft%tail_point = [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp]
-      if (loads%penetration) then
-        sys%aircraft_gust_point = loads%aircraft%tail_point
-        sys%rocket_gust_points(1, :) = [cfg%rocket%aero%cg_from_nose, &
-          cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length]
-      end if
       sys%gust_watch = gust%active
       sys%gust_back = gust%x_front + 2*gust%gradient
       if (gust%active) sys%gust_max_step = 0.25_dp*2*gust%gradient/v0

@@ -80,11 +80,6 @@ module airlaunch_launch_system
     !> to pass the gust's back edge at x = gust_back
     logical :: gust_watch = .false.
     real(dp) :: gust_back = 0.0_dp          !< x_front + 2H [m]
-    !> the bodies' points that read the gust besides their CGs (gust
-    !> penetration; zero: the CG): the aircraft's empennage, the rocket's nose
-    !> and tail, each in its body's frame [m]
-    real(dp) :: aircraft_gust_point(3) = 0.0_dp
-    real(dp) :: rocket_gust_points(3, 2) = 0.0_dp
     !> largest step of the scene's integrators while a gust is ahead [s] (0:
     !> no gust, unlimited): a quarter of its passage 2H/V0 (launch_coupled)
     real(dp) :: gust_max_step = 0.0_dp
@@ -296,23 +291,18 @@ contains
   end subroutine place_tie_down
 
 
-  !> How far the scene's last point (the aircraft's and the rocket's centres
-  !> of mass and gust points, the line's nodes) is past the gust's back edge
-  !> [m]: negative while any of them may still read the gust (bodies and nodes
-  !> loaded: load_bodies).
+  !> How far the scene's last point (the points at which the bodies read the
+  !> gust, launch_loads%rearmost_gust_point, and the line's nodes) is past the
+  !> gust's back edge [m]: negative while any of them may still read the gust
+  !> (bodies and nodes loaded: load_bodies).
   real(dp) function launch_gust_clearance(self) result(d)
     class(launch_system), intent(in) :: self
-    real(dp) :: p(3)
     integer :: k
-    d = min(self%yabs(1), self%yabs(14))
-    associate(b => self%sep%bodies)
-      p = b(0)%point_position(self%aircraft_gust_point)
-      d = min(d, p(1))
-      do k = 1, 2
-        p = b(1)%point_position(self%rocket_gust_points(:, k))
-        d = min(d, p(1))
-      end do
-    end associate
+    d = huge(1.0_dp)
+    select type (s => self%sep%sources(self%iloads)%source)
+    type is (launch_loads)
+      d = s%rearmost_gust_point(self%sep%bodies)
+    end select
     if (self%has_line) then
       do k = 1, self%line%n
         d = min(d, self%x(1, k))
