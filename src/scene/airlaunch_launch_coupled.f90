@@ -433,7 +433,7 @@ contains
         cycle
       end if
       if (which(launch_break_root) /= 0) then
-        ! the largest tension reached the breaking strength: its segment parts
+        ! a segment's tension reached its strength: it parts
         call part_line(r, 0, res, err)
         if (allocated(err)) return
       end if
@@ -481,7 +481,8 @@ contains
 
   !> The line parts at the direct solver's time: at segment k (the scheduled
   !> cut), or, for k = 0 (a breaking-strength event), at the segment of the
-  !> largest tension and at any other that has reached the strength with it.
+  !> smallest margin to its strength (launch_system%weakest_segment) and at
+  !> any other that has reached its strength with it.
   !> From now on those segments carry nothing (line_model%part), and CVODE
   !> restarts there, its right-hand side having jumped.
   subroutine part_line(r, k, res, err)
@@ -490,6 +491,7 @@ contains
     type(launch_result), intent(inout) :: res
     type(error_type), allocatable, intent(inout) :: err
     real(dp), allocatable :: y(:)
+    real(dp) :: margin
     integer :: status, j, first
     allocate(y, source=r%dsolver%y)
     associate(s => r%dsys)
@@ -504,10 +506,10 @@ contains
           call fatal_error(err, phase_name(s%sep%phase) // ": " // s%failure)
           return
         end if
-        first = maxloc(s%tension, 1)
+        call s%weakest_segment(margin, first)
         call s%line%part(first)
         do j = 1, s%line%n
-          if (s%tension(j) >= s%breaking_strength) call s%line%part(j)
+          if (s%tension(j) >= s%strength(j)) call s%line%part(j)
         end do
       end if
       if (res%line_breaks == 0) then

@@ -13,7 +13,7 @@ module airlaunch_launch_scene
   use airlaunch_run_config, only: run_config
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
-  use airlaunch_scenario_config, only: scenario_config
+  use airlaunch_scenario_config, only: scenario_config, line_config
   use airlaunch_trim, only: trim_problem, trim_result, trim_case0
   use airlaunch_rigid_body, only: rigid_body, new_rigid_body
   use airlaunch_force_source, only: gravity_source
@@ -98,15 +98,10 @@ contains
       f_tie = f_new
     end do
     ! a strength the trimmed flight's steady tension already reaches: the line
-    ! would part before the run starts (event 8 watches for a crossing only)
-    if (sys%breaking_strength > 0.0_dp) then   ! set with a line only
-      if (maxval(sys%tension) >= sys%breaking_strength) then
-        res%status = "invalid_input"
-        call fatal_error(error, "&line: breaking_strength = " // str(sys%breaking_strength) // " N is not " // &
-          "allowed: the trimmed flight's steady line tension is already " // str(maxval(sys%tension)) // &
-          " N (segment " // str(maxloc(sys%tension, 1)) // ") at t = 0 s (give a strength above it, or 0 " // &
-          "for a line that never breaks)")
-      end if
+    ! would part before the run starts (the event watches for a crossing only)
+    if (allocated(sys%strength)) then   ! a line that can break
+      call check_steady_tension(sys, cfg%line, error)
+      if (allocated(error)) res%status = "invalid_input"
     end if
   contains
     !> One pass: the trim with the line's force f_line (earth frame) at the
@@ -209,7 +204,8 @@ contains
       if (sys%has_line) then
         sys%line%gust = gust
         sys%chute%gust = gust
-        sys%breaking_strength = cfg%line%breaking_strength
+        if (cfg%line%breaking_strength > 0.0_dp .or. cfg%line%weak_link_strength > 0.0_dp) &
+          sys%strength = segment_strengths(cfg%line)
         sys%break_time = cfg%line%break_time
         sys%break_segment = cfg%line%break_segment
       end if
@@ -245,6 +241,36 @@ contains
       m(1, 1) = d(1); m(2, 2) = d(2); m(3, 3) = d(3)
     end function diag
   end subroutine setup_launch
+
+  !> Each segment's strength [N]: &line breaking_strength, the weak link's at
+  !> weak_link_segment; huge(1.0_dp) where a segment never parts.
+  pure function segment_strengths(line) result(strength)
+    type(line_config), intent(in) :: line
+    real(dp) :: strength(line%n_seg)
+    strength = huge(1.0_dp)
+    if (line%breaking_strength > 0.0_dp) strength = line%breaking_strength
+    if (line%weak_link_strength > 0.0_dp) strength(line%weak_link_segment) = line%weak_link_strength
+  end function segment_strengths
+
+  !> A segment whose strength the trimmed flight's steady tension (sys%tension,
+  !> the settled line's) already reaches would part before the run starts: an
+  !> input error naming the variable that set that strength.
+  subroutine check_steady_tension(sys, line, error)
+    type(launch_system), intent(in) :: sys
+    type(line_config), intent(in) :: line
+    type(error_type), allocatable, intent(inout) :: error
+    real(dp) :: margin
+    integer :: k
+    character(len=:), allocatable :: what
+    call sys%weakest_segment(margin, k)
+    if (margin > 0.0_dp) return
+    what = "breaking_strength = " // str(line%breaking_strength)
+    if (line%weak_link_strength > 0.0_dp .and. k == line%weak_link_segment) &
+      what = "weak_link_strength = " // str(line%weak_link_strength)
+    call fatal_error(error, "&line: " // what // " N is not allowed: the trimmed flight's steady line " // &
+      "tension is already " // str(sys%tension(k)) // " N (segment " // str(k) // ") at t = 0 s (give a " // &
+      "strength above it, or 0 for a line that never breaks)")
+  end subroutine check_steady_tension
 
   !> The line's nodes in y: trailing straight aft from the tie-down point,
   !> stretched by the steady pull, then settled to their static equilibrium.

@@ -23,8 +23,9 @@
 !> first maximum of the rocket's Euler pitch (Euler pitch rate
 !> theta' = sin(gamma) w_y + cos(gamma) w_z crossing zero downwards); the
 !> clearance's minima, the gust's passing, and the line reaching its breaking
-!> strength (the largest segment tension, a continuous function of the state,
-!> crossing it: the segment carrying it parts, line_model%part).
+!> strength (the smallest margin of a segment's tension to its strength - the
+!> line's, or the weak link's at its segment - a continuous function of the
+!> state, crossing zero: the segment that has it parts, line_model%part).
 module airlaunch_launch_system
   use airlaunch_kinds, only: dp, g0
   use airlaunch_error, only: error_type
@@ -83,9 +84,11 @@ module airlaunch_launch_system
     !> largest step of the scene's integrators while a gust is ahead [s] (0:
     !> no gust, unlimited): a quarter of its passage 2H/V0 (launch_coupled)
     real(dp) :: gust_max_step = 0.0_dp
-    !> a segment of the line breaks when its tension reaches this [N] (event
-    !> 8: the largest tension of the segments still whole); 0: none ever does
-    real(dp) :: breaking_strength = 0.0_dp
+    !> segment j of the line parts when its tension reaches strength(j) [N]
+    !> (event launch_break_root: the smallest margin, break_margin); set by
+    !> the scene from &line breaking_strength and the weak link only when the
+    !> line can break, huge(1.0_dp) for a segment that never does
+    real(dp), allocatable :: strength(:)
     !> the line is cut at segment break_segment at this time [s] (a scheduled
     !> stop of the direct solver, launch_coupled); < 0: never, or done
     real(dp) :: break_time = -1.0_dp
@@ -107,6 +110,7 @@ module airlaunch_launch_system
     procedure :: euler_pitch_rate => launch_euler_pitch_rate
     procedure :: gust_clearance => launch_gust_clearance
     procedure :: line_tensions => launch_line_tensions
+    procedure :: weakest_segment => launch_weakest_segment
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: has_jacobian => launch_has_jacobian
@@ -237,6 +241,7 @@ contains
     real(dp), intent(in) :: y(:)
     real(dp), intent(out) :: g(:)
     integer, intent(out) :: status
+    integer :: k
     g = 1.0_dp
     if (self%sep%phase == phase_rotation) then
       ! the edge's normal force (event 4) needs the whole evaluation, with the
@@ -254,18 +259,37 @@ contains
       return
     end if
     if (self%gust_watch) g(launch_gust_root) = self%gust_clearance()
-    if (self%breaking_strength > 0.0_dp) then   ! set with a line only
+    if (allocated(self%strength)) then   ! a line that can break
       ! the tensions: prepare's in Case 2, else of the state just loaded
       if (self%sep%phase /= phase_rotation) then
         call self%line_tensions(t, status)
         if (status /= rhs_ok) return
       end if
-      g(launch_break_root) = self%breaking_strength - maxval(self%tension)
+      call self%weakest_segment(g(launch_break_root), k)
     end if
     if (self%sep%phase /= phase_free) return
     if (self%find_pitch_max) g(launch_pitch_root) = self%euler_pitch_rate()
     g(launch_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine launch_roots
+
+  !> The line's smallest margin to breaking, strength(j) - tension(j), over
+  !> its segments, and the segment k that has it (a parted segment carries no
+  !> tension: its margin is its whole strength); for the tensions last
+  !> computed. A continuous function of the state: the break's event.
+  pure subroutine launch_weakest_segment(self, margin, k)
+    class(launch_system), intent(in) :: self
+    real(dp), intent(out) :: margin
+    integer, intent(out) :: k
+    integer :: j
+    k = 1
+    margin = self%strength(1) - self%tension(1)
+    do j = 2, size(self%strength)
+      if (self%strength(j) - self%tension(j) < margin) then
+        k = j
+        margin = self%strength(j) - self%tension(j)
+      end if
+    end do
+  end subroutine launch_weakest_segment
 
   !> The line's segment tensions into self%tension, for the bodies and nodes
   !> loaded (load_bodies): what prepare's line forces give, without the loads.

@@ -29,14 +29,15 @@ module airlaunch_scenario_config
   real(dp), parameter :: gust_speed_max = 100.0_dp
 
   !> Variables of &line (air-launch scene).
-  type(nml_var), parameter :: line_vars(23) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
+  type(nml_var), parameter :: line_vars(25) = [nml_var("enabled", "logical"), nml_var("length", "real"), &
     nml_var("n_seg", "integer"), nml_var("ea", "real"), nml_var("mass_per_length", "real"), &
     nml_var("damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
     nml_var("cd_tangential", "real"), nml_var("coupling", "string", 16), nml_var("outer_dt", "real"), &
     nml_var("inner_rtol", "real"), nml_var("far_end", "string", 16), nml_var("coupling_by_phase", "string", 16), &
     nml_var("auto_min_strain", "real"), nml_var("auto_max_strain_change", "real"), nml_var("auto_dwell", "real"), &
     nml_var("auto_min_steps", "real"), nml_var("inner_scheme", "string", 16), nml_var("inner_dt", "real"), &
-    nml_var("breaking_strength", "real"), nml_var("break_time", "real"), nml_var("break_segment", "integer")]
+    nml_var("breaking_strength", "real"), nml_var("break_time", "real"), nml_var("break_segment", "integer"), &
+    nml_var("weak_link_strength", "real"), nml_var("weak_link_segment", "integer")]
 
   !> The couplings `&line coupling` may name (DESIGN §4 (a), (b)), and the two
   !> ways of choosing between them during a run.
@@ -122,6 +123,11 @@ module airlaunch_scenario_config
     real(dp) :: breaking_strength = 0.0_dp
     real(dp) :: break_time = -1.0_dp        !< the line is cut at break_segment at this time [s] (-1: never)
     integer :: break_segment = 1            !< the segment break_time cuts (1: at the rocket's tie-down)
+    !> a weak link: segment weak_link_segment parts when its tension reaches
+    !> this [N], below the line's strength (0: no weak link)
+    real(dp) :: weak_link_strength = 0.0_dp
+    !> the weak link's segment (read as unset_int: n_seg, at the parachute)
+    integer :: weak_link_segment = unset_int
   end type line_config
 
   !> A discrete 1 - cosine gust (airlaunch_gust) the flight meets: its peak
@@ -562,15 +568,16 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
-    real(dp) :: inner_dt, breaking_strength, break_time
-    integer :: n_seg, u, ios, break_segment
+    real(dp) :: inner_dt, breaking_strength, break_time, weak_link_strength
+    integer :: n_seg, u, ios, break_segment, weak_link_segment
     character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: present
     character(len=256) :: msg
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
       coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, auto_min_strain, auto_max_strain_change, &
-      auto_dwell, auto_min_steps, inner_scheme, inner_dt, breaking_strength, break_time, break_segment
+      auto_dwell, auto_min_steps, inner_scheme, inner_dt, breaking_strength, break_time, break_segment, &
+      weak_link_strength, weak_link_segment
     enabled = .true.
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -581,6 +588,7 @@ contains
     auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
     inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
     breaking_strength = c%breaking_strength; break_time = c%break_time; break_segment = c%break_segment
+    weak_link_strength = c%weak_link_strength; weak_link_segment = c%weak_link_segment
     call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -615,6 +623,7 @@ contains
     call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps, &
       error)
     call check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, error)
+    call check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, error)
     if (.not. allocated(error) .and. coupling /= "direct" .and. far_end == "chain" .and. n_seg < 2) &
       call fatal_error(error, f%path // ": &line: n_seg = " // str(n_seg) // " is not allowed with " // &
         "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
@@ -631,6 +640,8 @@ contains
     c%breaking_strength = breaking_strength
     c%break_time = break_time
     c%break_segment = break_segment
+    c%weak_link_strength = weak_link_strength
+    c%weak_link_segment = weak_link_segment
     call echo_line(c, echo)
   end subroutine read_line
 
@@ -664,6 +675,39 @@ contains
     end if
   end subroutine check_break
 
+  !> The line's weak link: a segment (default n_seg, at the parachute) that
+  !> parts at a strength below the line's. weak_link_segment is resolved here
+  !> (unset: n_seg); given without a weak link it is refused, as break_segment
+  !> is without break_time. The direct coupling only, as check_break's.
+  subroutine check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: coupling
+    integer, intent(in) :: n_seg
+    real(dp), intent(in) :: breaking_strength, weak_link_strength
+    integer, intent(inout) :: weak_link_segment
+    type(error_type), allocatable, intent(inout) :: error
+    if (allocated(error)) return
+    call require_nonnegative(f, "line", "weak_link_strength", weak_link_strength, "N; 0: no weak link", error)
+    if (allocated(error)) return
+    if (weak_link_segment == unset_int) weak_link_segment = n_seg
+    if (weak_link_segment < 1 .or. weak_link_segment > n_seg) then
+      call fatal_error(error, f%path // ": &line: weak_link_segment = " // str(weak_link_segment) // " is not " // &
+        "allowed (must be an integer in [1, n_seg = " // str(n_seg) // "]: 1 at the rocket's tie-down, n_seg at " // &
+        "the parachute)")
+    else if (weak_link_segment /= n_seg .and. weak_link_strength == 0.0_dp) then
+      call fatal_error(error, f%path // ": &line: weak_link_segment = " // str(weak_link_segment) // " is not " // &
+        "allowed without weak_link_strength (it is the weak link's segment: set weak_link_strength or remove it)")
+    else if (weak_link_strength > 0.0_dp .and. breaking_strength > 0.0_dp .and. &
+             weak_link_strength >= breaking_strength) then
+      call fatal_error(error, f%path // ": &line: weak_link_strength = " // str(weak_link_strength) // " N is " // &
+        "not allowed (must be below breaking_strength = " // str(breaking_strength) // " N: a weak link is " // &
+        "the line's weakest segment)")
+    else if (weak_link_strength > 0.0_dp .and. coupling /= "direct") then
+      call fatal_error(error, f%path // ": &line: a weak link (weak_link_strength) is not allowed with " // &
+        "coupling = '" // trim(coupling) // "' (only the direct coupling's line can part: set coupling = 'direct')")
+    end if
+  end subroutine check_weak_link
+
   !> The resolved &line group: the variables of the chosen coupling mode only
   !> (coupling_by_phase with 'per_phase', the auto_* thresholds with 'auto'),
   !> so that the echo reads back without a contradiction.
@@ -672,13 +716,13 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
-    real(dp) :: inner_dt, breaking_strength, break_time
-    integer :: n_seg, u, break_segment
+    real(dp) :: inner_dt, breaking_strength, break_time, weak_link_strength
+    integer :: n_seg, u, break_segment, weak_link_segment
     character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
       coupling, outer_dt, inner_rtol, far_end, inner_scheme, inner_dt, breaking_strength, break_time, &
-      break_segment
+      break_segment, weak_link_strength, weak_link_segment
     enabled = c%enabled
     length = c%length; n_seg = c%n_seg; ea = c%ea; mass_per_length = c%mass_per_length
     damping = c%damping; diameter = c%diameter; cd_normal = c%cd_normal
@@ -689,6 +733,7 @@ contains
     auto_dwell = c%auto_dwell; auto_min_steps = c%auto_min_steps
     inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
     breaking_strength = c%breaking_strength; break_time = c%break_time; break_segment = c%break_segment
+    weak_link_strength = c%weak_link_strength; weak_link_segment = c%weak_link_segment
     open(newunit=u, status="scratch", action="readwrite")
     select case (coupling)
     case ("per_phase")
@@ -703,14 +748,15 @@ contains
     subroutine write_per_phase(unit)
       integer, intent(in) :: unit
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
-        coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, breaking_strength, break_time, break_segment
+        coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, breaking_strength, break_time, break_segment, &
+        weak_link_strength, weak_link_segment
       write(unit, nml=line)
     end subroutine write_per_phase
     subroutine write_auto(unit)
       integer, intent(in) :: unit
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
         coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell, &
-        auto_min_steps, breaking_strength, break_time, break_segment
+        auto_min_steps, breaking_strength, break_time, break_segment, weak_link_strength, weak_link_segment
       write(unit, nml=line)
     end subroutine write_auto
   end subroutine echo_line
