@@ -327,6 +327,7 @@ def test_example_sweep_over_the_line_failure(airlaunch_exe, tmp_path):
             row = {k: float(s[k].values[i]) for k in whole}
             assert float(s["line_break_time_s"].values[i]) == float(s["line%break_time"].values[i])
             assert int(s["line_breaks"].values[i]) == 1
+            assert int(s["line_break_segment"].values[i]) == int(s["line%break_segment"].values[i])
             if s["line%break_time"].values[i] == 11.0:
                 for k in ("separation_time_s", "min_clearance_m"):
                     assert row[k] == pytest.approx(whole[k], rel=1e-6, abs=0), k
