@@ -85,7 +85,7 @@ module airlaunch_launch_system
     !> no gust, unlimited): a quarter of its passage 2H/V0 (launch_coupled)
     real(dp) :: gust_max_step = 0.0_dp
     !> segment j of the line parts when its tension reaches strength(j) [N]
-    !> (event launch_break_root: the smallest margin, break_margin); set by
+    !> (event launch_break_root: the smallest margin, weakest_segment); set by
     !> the scene from &line breaking_strength and the weak link only when the
     !> line can break, huge(1.0_dp) for a segment that never does
     real(dp), allocatable :: strength(:)
