@@ -669,16 +669,25 @@ contains
       call fatal_error(error, f%path // ": &line: break_segment = " // str(break_segment) // " is not allowed " // &
         "without break_time (it is the segment the scheduled break cuts: set break_time or remove it)")
     else if ((breaking_strength > 0.0_dp .or. break_time > 0.0_dp) .and. coupling /= "direct") then
-      call fatal_error(error, f%path // ": &line: a line break (breaking_strength or break_time) is not " // &
-        "allowed with coupling = '" // trim(coupling) // "' (only the direct coupling's line can part: " // &
-        "set coupling = 'direct')")
+      call refuse_break_coupling(f, "a line break (breaking_strength or break_time)", coupling, error)
     end if
   end subroutine check_break
+
+  !> A way for the line to part (`what`) with a coupling other than the
+  !> direct one: the rigidized line is one rod of the chain, which cannot part
+  !> (and 'per_phase' and 'auto' may hand the line to it).
+  subroutine refuse_break_coupling(f, what, coupling, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: what, coupling
+    type(error_type), allocatable, intent(inout) :: error
+    call fatal_error(error, f%path // ": &line: " // what // " is not allowed with coupling = '" // &
+      trim(coupling) // "' (only the direct coupling's line can part: set coupling = 'direct')")
+  end subroutine refuse_break_coupling
 
   !> The line's weak link: a segment (default n_seg, at the parachute) that
   !> parts at a strength below the line's. weak_link_segment is resolved here
   !> (unset: n_seg); given without a weak link it is refused, as break_segment
-  !> is without break_time. The direct coupling only, as check_break's.
+  !> is without break_time. The direct coupling only (refuse_break_coupling).
   subroutine check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, error)
     type(nml_file), intent(in) :: f
     character(len=*), intent(in) :: coupling
@@ -703,8 +712,7 @@ contains
         "not allowed (must be below breaking_strength = " // str(breaking_strength) // " N: a weak link is " // &
         "the line's weakest segment)")
     else if (weak_link_strength > 0.0_dp .and. coupling /= "direct") then
-      call fatal_error(error, f%path // ": &line: a weak link (weak_link_strength) is not allowed with " // &
-        "coupling = '" // trim(coupling) // "' (only the direct coupling's line can part: set coupling = 'direct')")
+      call refuse_break_coupling(f, "a weak link (weak_link_strength)", coupling, error)
     end if
   end subroutine check_weak_link
 

@@ -92,7 +92,7 @@ def test_break_where_and_when_the_strength_is_first_reached(airlaunch_exe, shock
     (1e-6 relative; measured 5e-13), and so is every whole segment's recorded
     tension.  This needs the other segments to part when they reach it too:
     the tension already rising along the line does not wait for the unloading
-    wave from the break (42 ms to cross the line).  A first version that
+    wave from the break (L/c = 37.9 ms to cross the line).  A first version that
     parted one segment only let segment 1 reach 71 kN 23 ms after the break
     (with the paper's damping); here 9 of the 15 segments part, the undamped
     line's waves sloshing the maximum from end to end."""
