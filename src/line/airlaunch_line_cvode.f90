@@ -43,7 +43,7 @@ module airlaunch_line_cvode
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
   use airlaunch_step_maxima, only: maxima_observer
-  use airlaunch_line_model, only: line_model, line_energy, node_state_name
+  use airlaunch_line_model, only: line_model, line_energy, node_state_name, weakest_segment
   use airlaunch_line_mass, only: line_mass_matrix
   use airlaunch_line_ends, only: line_end, end_point_mass
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, scheme_peak_tension, &
@@ -88,8 +88,14 @@ module airlaunch_line_cvode
     type(line_mass_matrix) :: mass             !< the mass matrix over the state nodes
     type(line_force_jacobian) :: jac_blocks    !< work: the force Jacobian of the last evaluation
     integer(i8) :: n_forces = 0                !< force evaluations
+    !> segment j parts at tension strength(j) [N] (unallocated: the line never
+    !> parts); the event function is the smallest margin (weakest_segment)
+    real(dp), allocatable :: strength(:)
+    real(dp), allocatable :: root_tension(:)   !< work: the event function's tensions (N)
   contains
     procedure :: rhs => system_rhs
+    procedure :: nroots => system_nroots
+    procedure :: roots => system_roots
     procedure :: setup => system_setup
     procedure :: n_state => system_n_state
     procedure :: state_name => system_state_name
@@ -128,6 +134,8 @@ module airlaunch_line_cvode
     procedure :: set_body_motion => cvode_set_body_motion
     procedure :: set_stop_time => cvode_set_stop_time
     procedure :: set_fill_time => cvode_set_fill_time
+    procedure :: set_strength => cvode_set_strength
+    procedure :: part => cvode_part
     procedure :: free => cvode_free
   end type line_cvode
 
@@ -280,6 +288,32 @@ contains
     end do
     status = rhs_ok
   end subroutine system_jacobian
+
+  !> One event function if the line can part (system%strength), else none.
+  integer function system_nroots(self)
+    class(line_system), intent(in) :: self   !< system
+    system_nroots = merge(1, 0, allocated(self%strength))
+  end function system_nroots
+
+  !> The event: the line's smallest margin to breaking (weakest_segment), in
+  !> its own tension array (the right-hand side's is the Jacobian's).
+  subroutine system_roots(self, t, y, g, status)
+    class(line_system), intent(inout) :: self   !< system
+    real(dp), intent(in) :: t                   !< time [s]
+    real(dp), intent(in) :: y(:)                !< state
+    real(dp), intent(out) :: g(:)               !< g(1): the smallest margin [N]
+    integer, intent(out) :: status              !< rhs_ok or rhs_fatal
+    integer :: k, st
+    call self%unpack(t, y)
+    call self%model%tensions(self%x, self%v, self%root_tension, st)
+    if (st /= 0) then
+      self%failure = "a line tension is not finite (NaN or overflow): the line state diverged"
+      status = rhs_fatal
+      return
+    end if
+    call weakest_segment(self%strength, self%root_tension, g(1), k)
+    status = rhs_ok
+  end subroutine system_roots
 
   !> The force Jacobian's blocks (with the point masses' drag) at (t, y), and the
   !> slack/taut pattern they hold for.  CVODE forms a Jacobian right after a
@@ -480,9 +514,9 @@ contains
       return
     end if
     if (associated(self%peak)) then
-      call self%solver%advance(t_out, error, observer=self%observer)
+      call self%solver%advance(t_out, error, event=self%strength_reached, observer=self%observer)
     else
-      call self%solver%advance(t_out, error)
+      call self%solver%advance(t_out, error, event=self%strength_reached)
     end if
     self%t = self%solver%t
     if (allocated(error)) error%message = "line (cvode): " // error%message
@@ -584,6 +618,42 @@ contains
     y = self%solver%y
     call self%solver%reinit(self%t, y, error)
   end subroutine cvode_set_fill_time
+
+  !> Segment j parts at tension strength(j): CVODE watches the smallest
+  !> margin as its event (system_roots) and advance stops there
+  !> (strength_reached).
+  subroutine cvode_set_strength(self, strength, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    real(dp), intent(in) :: strength(:)                    !< per segment [N]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    if (size(strength) /= self%sys%model%n) then
+      call fatal_error(error, "line: " // str(size(strength)) // " segment strengths given for a line of " // &
+        str(self%sys%model%n) // " segments")
+      return
+    end if
+    self%sys%strength = strength
+    self%sys%root_tension = strength   ! (work: the shape)
+    if (self%sys%n_state() == 0) return
+    call self%solver%set_roots(self%sys%nroots(), error)
+  end subroutine cvode_set_strength
+
+  !> Segment k parts now: CVODE restarts here, the forces having jumped.
+  subroutine cvode_part(self, k, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    integer, intent(in) :: k                               !< segment 1..N
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    real(dp), allocatable :: y(:)
+    if (k < 1 .or. k > self%sys%model%n) then
+      call fatal_error(error, "line: segment " // str(k) // " cannot part: the line has segments 1.." // &
+        str(self%sys%model%n))
+      return
+    end if
+    call self%sys%model%part(k)
+    self%strength_reached = .false.
+    if (self%sys%n_state() == 0) return
+    y = self%solver%y
+    call self%solver%reinit(self%t, y, error)
+  end subroutine cvode_part
 
   !> Release CVODE and the system.
   subroutine cvode_free(self)

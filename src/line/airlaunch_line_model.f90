@@ -89,6 +89,7 @@ module airlaunch_line_model
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
+  public :: weakest_segment, segment_strengths
   public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
     far_end_not_converged
 
@@ -551,6 +552,41 @@ contains
     self%parted(k) = .true.
     self%n_parted = self%n_parted + 1
   end subroutine model_part
+
+  !> Each segment's strength [N]: breaking_strength (0: the line never
+  !> breaks), the weak link's weak_link_strength at weak_link_segment (0: no
+  !> weak link); huge(1.0_dp) where a segment never parts.
+  pure function segment_strengths(n_seg, breaking_strength, weak_link_strength, weak_link_segment) result(strength)
+    integer, intent(in) :: n_seg               !< segments
+    real(dp), intent(in) :: breaking_strength  !< the line's [N]
+    real(dp), intent(in) :: weak_link_strength !< the weak link's [N]
+    integer, intent(in) :: weak_link_segment   !< the weak link's segment
+    real(dp) :: strength(n_seg)
+    strength = huge(1.0_dp)
+    if (breaking_strength > 0.0_dp) strength = breaking_strength
+    if (weak_link_strength > 0.0_dp) strength(weak_link_segment) = weak_link_strength
+  end function segment_strengths
+
+  !> A line's smallest margin to breaking, strength(j) - tension(j), over its
+  !> segments, and the segment k that has it (a parted segment carries no
+  !> tension: its margin is its whole strength).  A continuous function of
+  !> the state: the break's event function (a loop, no temporary array: it
+  !> runs in the integrators' root functions).
+  pure subroutine weakest_segment(strength, tension, margin, k)
+    real(dp), intent(in) :: strength(:)   !< segment strengths [N]
+    real(dp), intent(in) :: tension(:)    !< segment tensions [N]
+    real(dp), intent(out) :: margin       !< the smallest margin [N]
+    integer, intent(out) :: k             !< its segment
+    integer :: j
+    k = 1
+    margin = strength(1) - tension(1)
+    do j = 2, size(strength)
+      if (strength(j) - tension(j) < margin) then
+        k = j
+        margin = strength(j) - tension(j)
+      end if
+    end do
+  end subroutine weakest_segment
 
   !> Kinetic, elastic and gravitational energy of the line's nodes.
   function model_energy(self, x, v) result(e)

@@ -62,8 +62,13 @@ module airlaunch_line_scheme
     !> (1): the largest segment tension over every step of the scheme (on the
     !> heap: an observer of the integrator points to it)
     type(peak_tracker), pointer :: peak(:) => null()
+    !> the last advance stopped where a segment's tension reached its strength
+    !> (set_strength): the owner parts it (part) and goes on
+    logical :: strength_reached = .false.
   contains
     procedure :: peak_tension => scheme_peak_tension
+    procedure :: set_strength => scheme_set_strength
+    procedure :: part => scheme_part
     procedure :: start_peak => scheme_start_peak
     procedure :: release_peak => scheme_release_peak
     procedure(advance_interface), deferred :: advance
@@ -129,6 +134,31 @@ module airlaunch_line_scheme
   end interface
 
 contains
+
+  !> Segment j parts when its tension reaches strength(j) [N]: the integrator
+  !> watches the smallest margin (airlaunch_line_model's weakest_segment) as an
+  !> event and stops where it reaches 0 (strength_reached).  A scheme without
+  !> event location cannot (the default: an error).
+  subroutine scheme_set_strength(self, strength, error)
+    class(line_scheme), intent(inout) :: self              !< scheme
+    real(dp), intent(in) :: strength(:)                    !< per segment [N]
+    type(error_type), allocatable, intent(inout) :: error  !< set: not supported
+    call fatal_error(error, "line: a breaking strength needs a scheme that locates events (cvode); " // &
+      "this scheme has none (" // str(size(strength)) // " segment strengths given)")
+    if (.false.) self%t = self%t
+  end subroutine scheme_set_strength
+
+  !> Segment k parts now (line_model%part): it carries nothing from here on,
+  !> and the integrator restarts here, the forces having jumped.  The default:
+  !> an error (a scheme that cannot restart on a changed line).
+  subroutine scheme_part(self, k, error)
+    class(line_scheme), intent(inout) :: self              !< scheme
+    integer, intent(in) :: k                               !< segment 1..N
+    type(error_type), allocatable, intent(inout) :: error  !< set: not supported
+    call fatal_error(error, "line: parting segment " // str(k) // " needs the cvode scheme; this " // &
+      "scheme cannot part its line")
+    if (.false.) self%t = self%t
+  end subroutine scheme_part
 
   !> The largest segment tension of the computed solution so far [N] and its
   !> time t_peak [s]: the first time the tension came within the tracker's

@@ -19,7 +19,7 @@ module airlaunch_launch_scene
   use airlaunch_force_source, only: gravity_source
   use airlaunch_cut_joint, only: cut_joint_geometry, cut_joint_options, phase_name, phase_free, &
     phase_preparation
-  use airlaunch_line_model, only: line_params
+  use airlaunch_line_model, only: line_params, segment_strengths
   use airlaunch_launch_loads, only: launch_loads
   use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, &
     launch_gust_root, launch_break_root
@@ -205,7 +205,8 @@ contains
         sys%line%gust = gust
         sys%chute%gust = gust
         if (cfg%line%breaking_strength > 0.0_dp .or. cfg%line%weak_link_strength > 0.0_dp) &
-          sys%strength = segment_strengths(cfg%line)
+          sys%strength = segment_strengths(cfg%line%n_seg, cfg%line%breaking_strength, &
+            cfg%line%weak_link_strength, cfg%line%weak_link_segment)
         sys%break_time = cfg%line%break_time
         sys%break_segment = cfg%line%break_segment
       end if
@@ -241,16 +242,6 @@ contains
       m(1, 1) = d(1); m(2, 2) = d(2); m(3, 3) = d(3)
     end function diag
   end subroutine setup_launch
-
-  !> Each segment's strength [N]: &line breaking_strength, the weak link's at
-  !> weak_link_segment; huge(1.0_dp) where a segment never parts.
-  pure function segment_strengths(line) result(strength)
-    type(line_config), intent(in) :: line
-    real(dp) :: strength(line%n_seg)
-    strength = huge(1.0_dp)
-    if (line%breaking_strength > 0.0_dp) strength = line%breaking_strength
-    if (line%weak_link_strength > 0.0_dp) strength(line%weak_link_segment) = line%weak_link_strength
-  end function segment_strengths
 
   !> A segment whose strength the trimmed flight's steady tension (sys%tension,
   !> the settled line's) already reaches would part before the run starts: an

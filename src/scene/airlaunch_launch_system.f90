@@ -35,7 +35,7 @@ module airlaunch_launch_system
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal, band_view
   use airlaunch_separation, only: separation_system, separation_nroots
   use airlaunch_cut_joint, only: phase_free, phase_rotation
-  use airlaunch_line_model, only: line_model, node_state_name
+  use airlaunch_line_model, only: line_model, node_state_name, weakest_segment
   use airlaunch_rigid_body, only: body_state_name
   use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_launch_loads, only: launch_loads
@@ -272,23 +272,13 @@ contains
     g(launch_clearance_root) = clearance_rate(self%clr, self%sep%bodies(0), self%sep%bodies(1))
   end subroutine launch_roots
 
-  !> The line's smallest margin to breaking, strength(j) - tension(j), over
-  !> its segments, and the segment k that has it (a parted segment carries no
-  !> tension: its margin is its whole strength); for the tensions last
-  !> computed. A continuous function of the state: the break's event.
+  !> The line's smallest margin to breaking and its segment k
+  !> (airlaunch_line_model's weakest_segment) for the tensions last computed.
   pure subroutine launch_weakest_segment(self, margin, k)
     class(launch_system), intent(in) :: self
     real(dp), intent(out) :: margin
     integer, intent(out) :: k
-    integer :: j
-    k = 1
-    margin = self%strength(1) - self%tension(1)
-    do j = 2, size(self%strength)
-      if (self%strength(j) - self%tension(j) < margin) then
-        k = j
-        margin = self%strength(j) - self%tension(j)
-      end if
-    end do
+    call weakest_segment(self%strength, self%tension, margin, k)
   end subroutine launch_weakest_segment
 
   !> The line's segment tensions into self%tension, for the bodies and nodes

@@ -22,7 +22,7 @@ module airlaunch_line_scene
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_parachute, only: parachute
-  use airlaunch_scenario_config, only: read_parachute
+  use airlaunch_scenario_config, only: read_parachute, check_break, check_weak_link
   use airlaunch_line
   implicit none
   private
@@ -40,7 +40,19 @@ module airlaunch_line_scene
     real(dp) :: output_interval = 0.01_dp           !< output cadence [s]
     logical :: record_nodes = .true.                !< keep all node positions
     logical :: record_tensions = .false.            !< keep all segment tensions
+    !> the line parts (docs/line.md, "A line that breaks"): segment j when its
+    !> tension reaches its strength (breaking_strength, 0: never; the weak
+    !> link's weak_link_strength at weak_link_segment, 0: none), and segment
+    !> break_segment at break_time (-1: no scheduled cut)
+    real(dp) :: breaking_strength = 0.0_dp          !< [N]
+    real(dp) :: weak_link_strength = 0.0_dp         !< [N]
+    integer :: weak_link_segment = 1                !< (the reader resolves it: n_seg by default)
+    real(dp) :: break_time = -1.0_dp                !< [s]
+    integer :: break_segment = 1
   end type line_scene_config
+
+  !> Where the line scene's first and last segments are (messages).
+  character(len=*), parameter :: scene_line_ends = "1 at end_a, n_seg at end_b"
 
   !> Largest initial end separation, as strain of the unstretched line: the
   !> model assumes small axial strain (assumption 3 of §2.1).
@@ -74,6 +86,12 @@ module airlaunch_line_scene
     logical :: deploy_pending = .false.
     !> air speed relative to the canopy when it deployed [m/s] (-1: not yet, or no canopy)
     real(dp) :: deploy_speed = -1.0_dp
+    real(dp) :: fill_end = -1.0_dp                   !< the canopy's filling ends [s] (-1: no filling ahead)
+    real(dp), allocatable :: strength(:)             !< segment strengths [N] (unallocated: never parts)
+    logical :: break_pending = .false.               !< the scheduled cut (break_time) is ahead
+    real(dp) :: line_break_time = -1.0_dp            !< the line first parted [s] (-1: it did not)
+    integer :: line_break_segment = 0                !< there, this segment (0: whole)
+    integer :: line_breaks = 0                       !< segments parted in all
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -177,10 +195,10 @@ contains
     call new_line_scheme(self%scheme, self%model, self%cfg%end_a, self%cfg%end_b, self%x, self%v, 0.0_dp, &
       opts, error)
     if (allocated(error)) return
-    if (self%deploy_pending) then
-      call self%scheme%set_stop_time(deployment_time(self%cfg), error)
-      if (allocated(error)) return
-    end if
+    call prepare_break(self, error)
+    if (allocated(error)) return
+    call set_next_stop(self, error)
+    if (allocated(error)) return
 
     n_max = ceiling(cfg%t_end/cfg%output_interval - 1.0e-9_dp) + 1
     allocate(self%time(n_max), self%tip(3, n_max), self%tip_velocity(3, n_max), &
@@ -234,16 +252,14 @@ contains
     call put_end(self%cfg, en)
   end subroutine set_deployment
 
-  !> Integrate to the pending deployment, set the canopy's filling time from
-  !> its air speed there and restart the scheme.
+  !> The canopy deploys now (the scheme is at its deployment time): its
+  !> filling time from its air speed here; the scheme restarts.
   subroutine deploy(self, error)
     type(line_scene), intent(inout) :: self                !< scene (a deployment pending)
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     type(line_end) :: en
     integer :: which
     which = canopy_index(self%cfg)
-    call self%scheme%advance(deployment_time(self%cfg), error)
-    if (allocated(error)) return
     call self%scheme%get_state(self%x, self%v)
     call set_deployment(self, self%scheme%t, self%v(:, merge(0, self%model%n, which == 1)), error)
     if (allocated(error)) return
@@ -251,10 +267,112 @@ contains
     call self%scheme%set_fill_time(which, en%canopy%fill_time, error)
     if (allocated(error)) return
     ! the filling's end: the entrained air's momentum force stops with a jump
-    if (self%scheme%t + en%canopy%fill_time < self%cfg%t_end) &
-      call self%scheme%set_stop_time(self%scheme%t + en%canopy%fill_time, error)
+    ! (set_next_stop stops the scheme there)
+    if (self%scheme%t + en%canopy%fill_time < self%cfg%t_end) self%fill_end = self%scheme%t + en%canopy%fill_time
     self%deploy_pending = .false.
   end subroutine deploy
+
+  !> The line's strengths (a line that can break) into the scheme, which
+  !> watches their margin; an initial shape whose tension already reaches a
+  !> strength is an input error naming the variable that set it.  A scheduled
+  !> cut is pending.
+  subroutine prepare_break(self, error)
+    type(line_scene), intent(inout) :: self                !< scene (scheme built)
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    real(dp) :: margin
+    integer :: k, st
+    character(len=:), allocatable :: what
+    associate(c => self%cfg)
+      self%break_pending = c%break_time > 0.0_dp
+      if (.not. (c%breaking_strength > 0.0_dp .or. c%weak_link_strength > 0.0_dp)) return
+      self%strength = segment_strengths(self%model%n, c%breaking_strength, c%weak_link_strength, &
+        c%weak_link_segment)
+      call self%model%tensions(self%x, self%v, self%tension, st)
+      call weakest_segment(self%strength, self%tension, margin, k)
+      if (margin <= 0.0_dp) then
+        what = "breaking_strength = " // str(c%breaking_strength)
+        if (c%weak_link_strength > 0.0_dp .and. k == c%weak_link_segment) &
+          what = "weak_link_strength = " // str(c%weak_link_strength)
+        call fatal_error(error, "&line: " // what // " N is not allowed: the initial shape's tension is " // &
+          "already " // str(self%tension(k)) // " N (segment " // str(k) // ") at t = 0 s (give a strength " // &
+          "above it, or 0 for a line that never breaks)")
+        return
+      end if
+      call self%scheme%set_strength(self%strength, error)
+    end associate
+  end subroutine prepare_break
+
+  !> Stop the scheme at the next change of the system known in advance: the
+  !> canopy's deployment, the end of its filling, the scheduled cut.
+  subroutine set_next_stop(self, error)
+    type(line_scene), intent(inout) :: self                !< scene
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    real(dp) :: t, next
+    t = self%scheme%t
+    next = huge(1.0_dp)
+    if (self%deploy_pending) next = min(next, deployment_time(self%cfg))
+    if (self%fill_end > t) next = min(next, self%fill_end)
+    if (self%break_pending) next = min(next, self%cfg%break_time)
+    if (next > t .and. next < huge(1.0_dp)) call self%scheme%set_stop_time(next, error)
+  end subroutine set_next_stop
+
+  !> Advance the scheme to t_target, handling on the way the canopy's
+  !> deployment, a segment reaching its strength and the scheduled cut.
+  subroutine advance_to(self, t_target, error)
+    type(line_scene), intent(inout) :: self                !< scene
+    real(dp), intent(in) :: t_target                       !< [s]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    real(dp) :: t_next
+    do while (self%scheme%t < t_target)
+      t_next = t_target
+      if (self%deploy_pending) t_next = min(t_next, deployment_time(self%cfg))
+      ! (the scheme returns early at a stop time or where a strength is reached)
+      call self%scheme%advance(t_next, error)
+      if (allocated(error)) return
+      if (self%scheme%strength_reached) then
+        call part_at_strength(self, error)
+      else if (self%break_pending .and. self%scheme%t >= self%cfg%break_time) then
+        self%break_pending = .false.
+        call part_segment(self, self%cfg%break_segment, error)
+      end if
+      if (allocated(error)) return
+      if (self%deploy_pending .and. self%scheme%t >= deployment_time(self%cfg)) call deploy(self, error)
+      if (.not. allocated(error)) call set_next_stop(self, error)
+      if (allocated(error)) return
+    end do
+  end subroutine advance_to
+
+  !> A segment's tension reached its strength: the one with the smallest
+  !> margin parts, and with it any other at its own strength.
+  subroutine part_at_strength(self, error)
+    type(line_scene), intent(inout) :: self                !< scene (the scheme at the event)
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    real(dp) :: margin
+    integer :: j, first, st
+    call self%scheme%get_state(self%x, self%v)
+    call self%model%tensions(self%x, self%v, self%tension, st)
+    call weakest_segment(self%strength, self%tension, margin, first)
+    call part_segment(self, first, error)
+    do j = 1, self%model%n
+      if (allocated(error)) return
+      if (self%tension(j) >= self%strength(j)) call part_segment(self, j, error)
+    end do
+  end subroutine part_at_strength
+
+  !> Segment k parts at the scheme's time (the scene's line and the scheme's).
+  subroutine part_segment(self, k, error)
+    type(line_scene), intent(inout) :: self                !< scene
+    integer, intent(in) :: k                               !< segment 1..N
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    if (self%model%parted(k)) return
+    call self%model%part(k)
+    call self%scheme%part(k, error)
+    if (self%line_breaks == 0) then
+      self%line_break_time = self%scheme%t
+      self%line_break_segment = k
+    end if
+    self%line_breaks = self%model%n_parted
+  end subroutine part_segment
 
   !> The canopy's deployment time [s].
   pure real(dp) function deployment_time(cfg) result(t)
@@ -300,14 +418,7 @@ contains
     do i = 2, n_max
       if (allocated(error)) exit
       t_out = min((i - 1)*self%cfg%output_interval, self%cfg%t_end)
-      if (self%deploy_pending) then
-        if (deployment_time(self%cfg) <= t_out) call deploy(self, error)
-        if (allocated(error)) exit
-      end if
-      ! (CVODE returns at a stop time before t_out: the end of a canopy's filling)
-      do while (self%scheme%t < t_out .and. .not. allocated(error))
-        call self%scheme%advance(t_out, error)
-      end do
+      call advance_to(self, t_out, error)
       if (allocated(error)) exit
       call record(self, error)
     end do
@@ -379,6 +490,12 @@ contains
     if (allocated(self%nodes)) deallocate(self%nodes)
     if (allocated(self%tensions)) deallocate(self%tensions)
     if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension)
+    if (allocated(self%strength)) deallocate(self%strength)
+    self%break_pending = .false.
+    self%fill_end = -1.0_dp
+    self%line_break_time = -1.0_dp
+    self%line_break_segment = 0
+    self%line_breaks = 0
     self%n_out = 0
     self%completed = .false.
     self%ready = .false.
@@ -402,8 +519,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
     ! &line
     real(dp) :: length, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, cd_tangential
-    real(dp) :: wind(3), air_density
-    integer :: n_seg
+    real(dp) :: wind(3), air_density, breaking_strength, break_time, weak_link_strength
+    integer :: n_seg, break_segment, weak_link_segment
     logical :: gravity, air
     character(len=8) :: mass
     ! &line_scene
@@ -414,16 +531,19 @@ contains
     integer :: max_iterations
     logical :: record_tensions, peak_tension
     namelist /line/ length, n_seg, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, &
-      cd_tangential, gravity, air, wind, air_density, mass
+      cd_tangential, gravity, air, wind, air_density, mass, breaking_strength, break_time, break_segment, &
+      weak_link_strength, weak_link_segment
     namelist /line_scene/ a_kind, a_position, a_velocity, a_amplitude, a_frequency, a_phase_deg, a_t_start, &
       a_mass, a_drag_area, b_kind, b_position, b_velocity, b_amplitude, b_frequency, b_phase_deg, b_t_start, &
       b_mass, b_drag_area, initial_shape, initial_sag, scheme, dt, force_tol, max_iterations, record_tensions, &
       peak_tension
-    type(nml_var), parameter :: line_vars(14) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
+    type(nml_var), parameter :: line_vars(19) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
       nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
       nml_var("settling_damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
       nml_var("cd_tangential", "real"), nml_var("gravity", "logical"), nml_var("air", "logical"), &
-      nml_var("wind", "real3"), nml_var("air_density", "real"), nml_var("mass", "string", length=8)]
+      nml_var("wind", "real3"), nml_var("air_density", "real"), nml_var("mass", "string", length=8), &
+      nml_var("breaking_strength", "real"), nml_var("break_time", "real"), nml_var("break_segment", "integer"), &
+      nml_var("weak_link_strength", "real"), nml_var("weak_link_segment", "integer")]
     type(nml_var), parameter :: scene_vars(26) = [nml_var("a_kind", "string", 16), &
       nml_var("a_position", "real3"), nml_var("a_velocity", "real3"), &
       nml_var("a_amplitude", "real3"), nml_var("a_frequency", "real"), nml_var("a_phase_deg", "real"), &
@@ -449,6 +569,8 @@ contains
     cd_normal = d%line%cd_normal; cd_tangential = d%line%cd_tangential; gravity = d%line%gravity
     air = d%line%air; wind = d%line%wind; air_density = d%line%air_density
     mass = d%line%mass
+    breaking_strength = d%breaking_strength; break_time = d%break_time; break_segment = d%break_segment
+    weak_link_strength = d%weak_link_strength; weak_link_segment = unset_int
     a_kind = "fixed"; a_position = [0.0_dp, 0.0_dp, 0.0_dp]; a_velocity = 0; a_amplitude = 0
     a_frequency = 0; a_phase_deg = 0; a_t_start = 0; a_mass = 0; a_drag_area = 0
     b_kind = "free"; b_position = [length, 0.0_dp, 0.0_dp]; b_velocity = 0; b_amplitude = 0
@@ -515,7 +637,22 @@ contains
       call require_positive(f, "line_scene", "force_tol", force_tol, "N", error)
       call require_int_range(f, "line_scene", "max_iterations", max_iterations, 1, 1000, error)
     end if
+    call check_break(f, "direct", n_seg, breaking_strength, break_time, break_segment, scene_line_ends, error)
+    call check_weak_link(f, "direct", n_seg, breaking_strength, weak_link_strength, weak_link_segment, &
+      scene_line_ends, error)
     if (allocated(error)) return
+    if ((breaking_strength > 0.0_dp .or. weak_link_strength > 0.0_dp .or. break_time > 0.0_dp) .and. &
+        trim(scheme) == "marching") then
+      call fatal_error(error, f%path // ": &line: a line break (breaking_strength, weak_link_strength or " // &
+        "break_time) is not allowed with scheme = 'marching' (the paper's explicit marching neither locates " // &
+        "the break nor restarts on the parted line: use scheme = 'cvode', the default)")
+      return
+    end if
+    if (break_time >= run%t_end) then
+      call fatal_error(error, f%path // ": &line: break_time = " // str(break_time) // " is not allowed " // &
+        "(the line would never be cut: the run ends at t_end = " // str(run%t_end) // " s)")
+      return
+    end if
 
     cfg%line = line_params(length=length, n_seg=n_seg, ea=ea, mass_per_length=mass_per_length, &
       damping=damping, settling_damping=settling_damping, diameter=diameter, cd_normal=cd_normal, &
@@ -530,6 +667,11 @@ contains
     if (trim(b_kind) == "canopy") cfg%end_b = canopy_end(cfg%end_b, chute)
     cfg%initial_shape = initial_shape
     cfg%initial_sag = initial_sag
+    cfg%breaking_strength = breaking_strength
+    cfg%break_time = break_time
+    cfg%break_segment = break_segment
+    cfg%weak_link_strength = weak_link_strength
+    cfg%weak_link_segment = weak_link_segment
     cfg%integration%scheme = scheme
     cfg%integration%dt = dt
     cfg%integration%force_tol = force_tol
@@ -555,6 +697,10 @@ contains
     ! the geometry and the scheme's stability are checked by building the scene
     call probe_scene(cfg, error)
     if (allocated(error)) then
+      if (index(error%message, "&line: ") == 1) then   ! (prepare_break: a strength)
+        error%message = f%path // ": " // error%message
+        return
+      end if
       if (index(error%message, "line_scene: ") == 1) error%message = error%message(13:)
       error%message = f%path // ": &line_scene: " // error%message
       return
@@ -672,7 +818,7 @@ contains
       str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
       merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records)" // &
-      peak_note(scene) // nl // &
+      peak_note(scene) // nl // break_note(scene) // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg, theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
@@ -692,6 +838,17 @@ contains
     if (scene%peak_tension_time >= 0.0_dp) text = "; peak segment tension " // str(scene%peak_tension) // &
       " N, first reached at t = " // str(scene%peak_tension_time) // " s (over every step)"
   end function peak_note
+
+  !> The summary's line on the line's break ('' for a line that cannot part).
+  function break_note(scene) result(text)
+    type(line_scene), intent(in) :: scene  !< scene (after run)
+    character(len=:), allocatable :: text
+    text = ""
+    if (.not. (allocated(scene%strength) .or. scene%cfg%break_time > 0.0_dp)) return
+    text = "line break: none" // new_line("a")
+    if (scene%line_breaks > 0) text = "line break: segment " // str(scene%line_break_segment) // " parted at t = " // &
+      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all" // new_line("a")
+  end function break_note
 
   !> The summary's line on the initial shape: its largest segment strain and
   !> tension EA eps (the shape 'sag' has the parabola's length, not L's).
@@ -805,6 +962,11 @@ contains
       call w%add_real_att("/", "peak_tension_N", scene%peak_tension, error)
       call w%add_real_att("/", "peak_tension_time_s", scene%peak_tension_time, error)
     end if
+    call w%add_real_att("/", "line_break_time_s", scene%line_break_time, error)
+    call w%add_int_att("/", "line_break_segment", [scene%line_break_segment], error)
+    call w%add_int_att("/", "line_breaks", [scene%line_breaks], error)
+    if (scene%line_breaks > 0) call w%add_int_att("/", "line_parted_segments", &
+      pack([(k, k = 1, n)], scene%model%parted), error)
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)

@@ -17,7 +17,10 @@ module airlaunch_scenario_config
   implicit none
   private
   public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config, gust_config
-  public :: read_scenario_config, scenario_groups, read_parachute
+  public :: read_scenario_config, scenario_groups, read_parachute, check_break, check_weak_link
+
+  !> Where the air-launch line's first and last segments are (messages).
+  character(len=*), parameter :: launch_line_ends = "1 at the rocket's tie-down, n_seg at the parachute"
 
   !> Groups of the air-launch scene.
   character(len=16), parameter :: scenario_groups(8) = [character(len=16) :: "run", "flight", &
@@ -622,8 +625,9 @@ contains
       call check_marching_step(f, inner_dt, ea, mass_per_length, length/n_seg, damping, error)
     call check_auto_settings(f, coupling, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps, &
       error)
-    call check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, error)
-    call check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, error)
+    call check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, launch_line_ends, error)
+    call check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, &
+      launch_line_ends, error)
     if (.not. allocated(error) .and. coupling /= "direct" .and. far_end == "chain" .and. n_seg < 2) &
       call fatal_error(error, f%path // ": &line: n_seg = " // str(n_seg) // " is not allowed with " // &
         "far_end = 'chain' (both end nodes follow the chain: need n_seg >= 2)")
@@ -648,11 +652,13 @@ contains
   !> The line's break (a strength, or a cut at a given time and segment): the
   !> direct coupling only - the rigidized line is one rod of the chain, which
   !> cannot part (and 'per_phase' and 'auto' may hand the line to it).
-  subroutine check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, error)
+  !> `ends`: where segment 1 and segment n_seg are, for the messages.
+  subroutine check_break(f, coupling, n_seg, breaking_strength, break_time, break_segment, ends, error)
     type(nml_file), intent(in) :: f
     character(len=*), intent(in) :: coupling
     integer, intent(in) :: n_seg, break_segment
     real(dp), intent(in) :: breaking_strength, break_time
+    character(len=*), intent(in) :: ends
     type(error_type), allocatable, intent(inout) :: error
     call require_nonnegative(f, "line", "breaking_strength", breaking_strength, "N; 0: the line never breaks", &
       error)
@@ -663,8 +669,7 @@ contains
         "(must be > 0 s, or -1 for no scheduled break)")
     else if (break_segment < 1 .or. break_segment > n_seg) then
       call fatal_error(error, f%path // ": &line: break_segment = " // str(break_segment) // " is not allowed " // &
-        "(must be an integer in [1, n_seg = " // str(n_seg) // "]: 1 at the rocket's tie-down, n_seg at the " // &
-        "parachute)")
+        "(must be an integer in [1, n_seg = " // str(n_seg) // "]: " // ends // ")")
     else if (break_segment /= 1 .and. break_time == -1.0_dp) then
       call fatal_error(error, f%path // ": &line: break_segment = " // str(break_segment) // " is not allowed " // &
         "without break_time (it is the segment the scheduled break cuts: set break_time or remove it)")
@@ -688,12 +693,14 @@ contains
   !> parts at a strength below the line's. weak_link_segment is resolved here
   !> (unset: n_seg); given without a weak link it is refused, as break_segment
   !> is without break_time. The direct coupling only (refuse_break_coupling).
-  subroutine check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, error)
+  subroutine check_weak_link(f, coupling, n_seg, breaking_strength, weak_link_strength, weak_link_segment, ends, &
+      error)
     type(nml_file), intent(in) :: f
     character(len=*), intent(in) :: coupling
     integer, intent(in) :: n_seg
     real(dp), intent(in) :: breaking_strength, weak_link_strength
     integer, intent(inout) :: weak_link_segment
+    character(len=*), intent(in) :: ends
     type(error_type), allocatable, intent(inout) :: error
     if (allocated(error)) return
     call require_nonnegative(f, "line", "weak_link_strength", weak_link_strength, "N; 0: no weak link", error)
@@ -701,8 +708,7 @@ contains
     if (weak_link_segment == unset_int) weak_link_segment = n_seg
     if (weak_link_segment < 1 .or. weak_link_segment > n_seg) then
       call fatal_error(error, f%path // ": &line: weak_link_segment = " // str(weak_link_segment) // " is not " // &
-        "allowed (must be an integer in [1, n_seg = " // str(n_seg) // "]: 1 at the rocket's tie-down, n_seg at " // &
-        "the parachute)")
+        "allowed (must be an integer in [1, n_seg = " // str(n_seg) // "]: " // ends // ")")
     else if (weak_link_segment /= n_seg .and. weak_link_strength == 0.0_dp) then
       call fatal_error(error, f%path // ": &line: weak_link_segment = " // str(weak_link_segment) // " is not " // &
         "allowed without weak_link_strength (it is the weak link's segment: set weak_link_strength or remove it)")
