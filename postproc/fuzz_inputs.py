@@ -35,7 +35,7 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXE = pathlib.Path(os.environ.get("AIRLAUNCH_EXE", ROOT / "build" / "release" / "bin" / "airlaunch"))
 FILES = ["airlaunch_paper", "airlaunch_gravity_drop", "drop_demo", "line_pendulum", "line_catenary",
-         "line_parachute", "line_fishhook", "line_opening", "line_airdrop"]
+         "line_parachute", "line_fishhook", "line_opening", "line_airdrop", "line_snapback"]
 VALUES = ["0.0", "-1.0", "1.0e30", "1e-30", "nan", "-inf", "1.0, 2.0", "'abc'", ".true.", ",", "2*"]
 #: values a namelist read skips (keeping the default): each must be an input error
 NULL_VALUES = (",", "2*")

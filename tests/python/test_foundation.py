@@ -256,7 +256,8 @@ def test_resolved_input_records_the_settings_used(airlaunch_exe, tmp_path):
 
 
 @pytest.mark.parametrize("name", ["airlaunch_paper", "line_pendulum", "line_parachute", "line_fishhook",
-                                  "line_opening", "line_airdrop", "drop_demo", "airlaunch_gravity_drop"])
+                                  "line_opening", "line_airdrop", "line_snapback", "drop_demo",
+                                  "airlaunch_gravity_drop"])
 def test_check_prints_the_resolved_input_without_running(airlaunch_exe, tmp_path, name):
     """`--check` validates the input and prints it resolved (defaults included),
     exit 0, without running: no output file is written and an old one is left

@@ -12,7 +12,7 @@ from conftest import ROOT, assert_input_error, nml_variant, run_airlaunch
 
 
 @pytest.mark.parametrize("name", ["line_pendulum", "line_catenary", "line_parachute", "line_fishhook",
-                                  "line_opening", "line_airdrop"])
+                                  "line_opening", "line_airdrop", "line_snapback"])
 def test_line_examples_run(airlaunch_exe, tmp_path, name):
     out = tmp_path / f"{name}.nc"
     res = run_airlaunch(airlaunch_exe, ROOT / "input" / f"{name}.nml", "--output", out)
