@@ -13,7 +13,7 @@ module airlaunch_launch_scene
   use airlaunch_run_config, only: run_config
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
-  use airlaunch_scenario_config, only: scenario_config, line_config
+  use airlaunch_scenario_config, only: scenario_config, line_config, refuse_reached_strength
   use airlaunch_trim, only: trim_problem, trim_result, trim_case0
   use airlaunch_rigid_body, only: rigid_body, new_rigid_body
   use airlaunch_force_source, only: gravity_source
@@ -252,15 +252,10 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: margin
     integer :: k
-    character(len=:), allocatable :: what
     call sys%weakest_segment(margin, k)
     if (margin > 0.0_dp) return
-    what = "breaking_strength = " // str(line%breaking_strength)
-    if (line%weak_link_strength > 0.0_dp .and. k == line%weak_link_segment) &
-      what = "weak_link_strength = " // str(line%weak_link_strength)
-    call fatal_error(error, "&line: " // what // " N is not allowed: the trimmed flight's steady line " // &
-      "tension is already " // str(sys%tension(k)) // " N (segment " // str(k) // ") at t = 0 s (give a " // &
-      "strength above it, or 0 for a line that never breaks)")
+    call refuse_reached_strength(line%breaking_strength, line%weak_link_strength, line%weak_link_segment, k, &
+      sys%tension(k), "the trimmed flight's steady line tension", error)
   end subroutine check_steady_tension
 
   !> The line's nodes in y: trailing straight aft from the tie-down point,

@@ -22,7 +22,7 @@ module airlaunch_line_scene
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_parachute, only: parachute
-  use airlaunch_scenario_config, only: read_parachute, check_break, check_weak_link
+  use airlaunch_scenario_config, only: read_parachute, check_break, check_weak_link, refuse_reached_strength
   use airlaunch_line
   implicit none
   private
@@ -281,7 +281,6 @@ contains
     type(error_type), allocatable, intent(inout) :: error  !< set on bad input
     real(dp) :: margin
     integer :: k, st
-    character(len=:), allocatable :: what
     associate(c => self%cfg)
       self%break_pending = c%break_time > 0.0_dp
       if (.not. (c%breaking_strength > 0.0_dp .or. c%weak_link_strength > 0.0_dp)) return
@@ -290,12 +289,8 @@ contains
       call self%model%tensions(self%x, self%v, self%tension, st)
       call weakest_segment(self%strength, self%tension, margin, k)
       if (margin <= 0.0_dp) then
-        what = "breaking_strength = " // str(c%breaking_strength)
-        if (c%weak_link_strength > 0.0_dp .and. k == c%weak_link_segment) &
-          what = "weak_link_strength = " // str(c%weak_link_strength)
-        call fatal_error(error, "&line: " // what // " N is not allowed: the initial shape's tension is " // &
-          "already " // str(self%tension(k)) // " N (segment " // str(k) // ") at t = 0 s (give a strength " // &
-          "above it, or 0 for a line that never breaks)")
+        call refuse_reached_strength(c%breaking_strength, c%weak_link_strength, c%weak_link_segment, k, &
+          self%tension(k), "the initial shape's tension", error)
         return
       end if
       call self%scheme%set_strength(self%strength, error)

@@ -17,7 +17,8 @@ module airlaunch_scenario_config
   implicit none
   private
   public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config, gust_config
-  public :: read_scenario_config, scenario_groups, read_parachute, check_break, check_weak_link
+  public :: read_scenario_config, scenario_groups, read_parachute, check_break, check_weak_link, &
+    refuse_reached_strength
 
   !> Where the air-launch line's first and last segments are (messages).
   character(len=*), parameter :: launch_line_ends = "1 at the rocket's tie-down, n_seg at the parachute"
@@ -688,6 +689,22 @@ contains
     call fatal_error(error, f%path // ": &line: " // what // " is not allowed with coupling = '" // &
       trim(coupling) // "' (only the direct coupling's line can part: set coupling = 'direct')")
   end subroutine refuse_break_coupling
+
+  !> The input error of a strength that segment k's tension at t = 0 already
+  !> reaches (`held`: what holds that tension), naming the variable that set it.
+  subroutine refuse_reached_strength(breaking_strength, weak_link_strength, weak_link_segment, k, tension, held, &
+      error)
+    real(dp), intent(in) :: breaking_strength, weak_link_strength, tension
+    integer, intent(in) :: weak_link_segment, k
+    character(len=*), intent(in) :: held
+    type(error_type), allocatable, intent(inout) :: error
+    character(len=:), allocatable :: what
+    what = "breaking_strength = " // str(breaking_strength)
+    if (weak_link_strength > 0.0_dp .and. k == weak_link_segment) &
+      what = "weak_link_strength = " // str(weak_link_strength)
+    call fatal_error(error, "&line: " // what // " N is not allowed: " // held // " is already " // str(tension) // &
+      " N (segment " // str(k) // ") at t = 0 s (give a strength above it, or 0 for a line that never breaks)")
+  end subroutine refuse_reached_strength
 
   !> The line's weak link: a segment (default n_seg, at the parachute) that
   !> parts at a strength below the line's. weak_link_segment is resolved here
