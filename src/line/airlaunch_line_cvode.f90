@@ -637,7 +637,8 @@ contains
     call self%solver%set_roots(self%sys%nroots(), error)
   end subroutine cvode_set_strength
 
-  !> Segment k parts now: CVODE restarts here, the forces having jumped.
+  !> Segment k parts now: CVODE restarts here, the forces having jumped
+  !> (nothing if it has parted already).
   subroutine cvode_part(self, k, error)
     class(line_cvode), intent(inout) :: self               !< scheme
     integer, intent(in) :: k                               !< segment 1..N
@@ -648,8 +649,9 @@ contains
         str(self%sys%model%n))
       return
     end if
-    call self%sys%model%part(k)
     self%strength_reached = .false.
+    if (self%sys%model%parted(k)) return
+    call self%sys%model%part(k)
     if (self%sys%n_state() == 0) return
     y = self%solver%y
     call self%solver%reinit(self%t, y, error)

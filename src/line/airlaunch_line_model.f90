@@ -138,6 +138,7 @@ module airlaunch_line_model
     procedure :: total_mass => model_total_mass
     procedure :: end_tangent => model_end_tangent
     procedure :: part => model_part
+    procedure :: part_reached => model_part_reached
   end type line_model
 
   !> Mechanical energy of the line [J] (end bodies not included).
@@ -587,6 +588,23 @@ contains
       end if
     end do
   end subroutine weakest_segment
+
+  !> The line parts where its tensions reached their strengths: the segment
+  !> of the smallest margin (weakest_segment: the break event's root) and
+  !> with it every other at or above its own strength; `first` is the former.
+  subroutine model_part_reached(self, strength, tension, first)
+    class(line_model), intent(inout) :: self   !< line
+    real(dp), intent(in) :: strength(:)        !< segment strengths [N]
+    real(dp), intent(in) :: tension(:)         !< segment tensions at the event [N]
+    integer, intent(out) :: first              !< the segment of the smallest margin
+    real(dp) :: margin
+    integer :: j
+    call weakest_segment(strength, tension, margin, first)
+    call self%part(first)
+    do j = 1, self%n
+      if (tension(j) >= strength(j)) call self%part(j)
+    end do
+  end subroutine model_part_reached
 
   !> Kinetic, elastic and gravitational energy of the line's nodes.
   function model_energy(self, x, v) result(e)

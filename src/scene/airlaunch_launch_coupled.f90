@@ -481,8 +481,8 @@ contains
 
   !> The line parts at the direct solver's time: at segment k (the scheduled
   !> cut), or, for k = 0 (a breaking-strength event), at the segment of the
-  !> smallest margin to its strength (launch_system%weakest_segment) and at
-  !> any other that has reached its strength with it.
+  !> smallest margin to its strength and at any other that has reached its
+  !> strength with it (line_model%part_reached).
   !> From now on those segments carry nothing (line_model%part), and CVODE
   !> restarts there, its right-hand side having jumped.
   subroutine part_line(r, k, res, err)
@@ -491,7 +491,6 @@ contains
     type(launch_result), intent(inout) :: res
     type(error_type), allocatable, intent(inout) :: err
     real(dp), allocatable :: y(:)
-    real(dp) :: margin
     integer :: status, j, first
     allocate(y, source=r%dsolver%y)
     associate(s => r%dsys)
@@ -506,11 +505,7 @@ contains
           call fatal_error(err, phase_name(s%sep%phase) // ": " // s%failure)
           return
         end if
-        call s%weakest_segment(margin, first)
-        call s%line%part(first)
-        do j = 1, s%line%n
-          if (s%tension(j) >= s%strength(j)) call s%line%part(j)
-        end do
+        call s%line%part_reached(s%strength, s%tension, first)
       end if
       if (res%line_breaks == 0) then
         res%line_break_time = r%dsolver%t

@@ -22,7 +22,8 @@ module airlaunch_line_scene
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_parachute, only: parachute
-  use airlaunch_scenario_config, only: read_parachute, check_break, check_weak_link, refuse_reached_strength
+  use airlaunch_scenario_config, only: read_parachute, check_break, check_weak_link, refuse_reached_strength, &
+    check_break_before_end
   use airlaunch_line
   implicit none
   private
@@ -328,7 +329,8 @@ contains
         call part_at_strength(self, error)
       else if (self%break_pending .and. self%scheme%t >= self%cfg%break_time) then
         self%break_pending = .false.
-        call part_segment(self, self%cfg%break_segment, error)
+        call self%model%part(self%cfg%break_segment)
+        call take_parts(self, self%cfg%break_segment, error)
       end if
       if (allocated(error)) return
       if (self%deploy_pending .and. self%scheme%t >= deployment_time(self%cfg)) call deploy(self, error)
@@ -338,36 +340,35 @@ contains
   end subroutine advance_to
 
   !> A segment's tension reached its strength: the one with the smallest
-  !> margin parts, and with it any other at its own strength.
+  !> margin parts, and with it any other at its own strength
+  !> (line_model%part_reached).
   subroutine part_at_strength(self, error)
     type(line_scene), intent(inout) :: self                !< scene (the scheme at the event)
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    real(dp) :: margin
-    integer :: j, first, st
+    integer :: first, st
     call self%scheme%get_state(self%x, self%v)
     call self%model%tensions(self%x, self%v, self%tension, st)
-    call weakest_segment(self%strength, self%tension, margin, first)
-    call part_segment(self, first, error)
-    do j = 1, self%model%n
-      if (allocated(error)) return
-      if (self%tension(j) >= self%strength(j)) call part_segment(self, j, error)
-    end do
+    call self%model%part_reached(self%strength, self%tension, first)
+    call take_parts(self, first, error)
   end subroutine part_at_strength
 
-  !> Segment k parts at the scheme's time (the scene's line and the scheme's).
-  subroutine part_segment(self, k, error)
+  !> The scene's line has parted (first: the segment that parted first now):
+  !> the scheme's line parts alike, and the break is recorded.
+  subroutine take_parts(self, first, error)
     type(line_scene), intent(inout) :: self                !< scene
-    integer, intent(in) :: k                               !< segment 1..N
+    integer, intent(in) :: first                           !< segment 1..N
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    if (self%model%parted(k)) return
-    call self%model%part(k)
-    call self%scheme%part(k, error)
+    integer :: j
+    do j = 1, self%model%n
+      if (self%model%parted(j)) call self%scheme%part(j, error)
+      if (allocated(error)) return
+    end do
     if (self%line_breaks == 0) then
       self%line_break_time = self%scheme%t
-      self%line_break_segment = k
+      self%line_break_segment = first
     end if
     self%line_breaks = self%model%n_parted
-  end subroutine part_segment
+  end subroutine take_parts
 
   !> The canopy's deployment time [s].
   pure real(dp) function deployment_time(cfg) result(t)
@@ -643,11 +644,8 @@ contains
         "the break nor restarts on the parted line: use scheme = 'cvode', the default)")
       return
     end if
-    if (break_time >= run%t_end) then
-      call fatal_error(error, f%path // ": &line: break_time = " // str(break_time) // " is not allowed " // &
-        "(the line would never be cut: the run ends at t_end = " // str(run%t_end) // " s)")
-      return
-    end if
+    call check_break_before_end(f, break_time, run%t_end, error)
+    if (allocated(error)) return
 
     cfg%line = line_params(length=length, n_seg=n_seg, ea=ea, mass_per_length=mass_per_length, &
       damping=damping, settling_damping=settling_damping, diameter=diameter, cd_normal=cd_normal, &

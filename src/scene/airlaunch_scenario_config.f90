@@ -18,7 +18,7 @@ module airlaunch_scenario_config
   private
   public :: scenario_config, flight_config, aircraft_config, bay_config, rocket_config, line_config, gust_config
   public :: read_scenario_config, scenario_groups, read_parachute, check_break, check_weak_link, &
-    refuse_reached_strength
+    refuse_reached_strength, check_break_before_end
 
   !> Where the air-launch line's first and last segments are (messages).
   character(len=*), parameter :: launch_line_ends = "1 at the rocket's tie-down, n_seg at the parachute"
@@ -190,9 +190,8 @@ contains
     else if ((cfg%gust%vertical /= 0.0_dp .or. cfg%gust%lateral /= 0.0_dp) .and. cfg%gust%hit_time >= t_end) then
       call fatal_error(error, f%path // ": &gust: hit_time = " // str(cfg%gust%hit_time) // &
         " is not allowed (the aircraft would never meet the gust: the run ends at t_end = " // str(t_end) // " s)")
-    else if (cfg%line%enabled .and. cfg%line%break_time >= t_end) then
-      call fatal_error(error, f%path // ": &line: break_time = " // str(cfg%line%break_time) // &
-        " is not allowed (the line would never be cut: the run ends at t_end = " // str(t_end) // " s)")
+    else if (cfg%line%enabled) then
+      call check_break_before_end(f, cfg%line%break_time, t_end, error)
     end if
   end subroutine read_scenario_config
 
@@ -689,6 +688,16 @@ contains
     call fatal_error(error, f%path // ": &line: " // what // " is not allowed with coupling = '" // &
       trim(coupling) // "' (only the direct coupling's line can part: set coupling = 'direct')")
   end subroutine refuse_break_coupling
+
+  !> A scheduled cut (&line break_time) at or after the run's end would
+  !> never be made: an input error.
+  subroutine check_break_before_end(f, break_time, t_end, error)
+    type(nml_file), intent(in) :: f
+    real(dp), intent(in) :: break_time, t_end
+    type(error_type), allocatable, intent(inout) :: error
+    if (break_time >= t_end) call fatal_error(error, f%path // ": &line: break_time = " // str(break_time) // &
+      " is not allowed (the line would never be cut: the run ends at t_end = " // str(t_end) // " s)")
+  end subroutine check_break_before_end
 
   !> The input error of a strength that segment k's tension at t = 0 already
   !> reaches (`held`: what holds that tension), naming the variable that set it.

@@ -95,10 +95,12 @@ contains
     do m = 1, nq
       if (self%watches(m) .and. self%trk(m)%n == 0) starts = .true.
     end do
-    ! the first stretch of a sequence (after a (re)start) is BDF's first-order
-    ! step, whose interpolant's derivative is only a secant: its samples of an
-    ! `estimated` quantity are evaluated in full instead (the rigidized
-    ! coupling's snatch: estimates 3e-4 low there hid a peak 1e-5 high)
+    ! an `estimated` quantity is evaluated in full where the interpolant's
+    ! derivative cannot bracket its maxima: a first-order stretch (a constant
+    ! derivative) and the first stretch of a sequence, the first step after a
+    ! (re)start, taken at order 1 (CVODE reports the next order for its
+    ! interpolant, but the derivative is still about a secant there: in the
+    ! rigidized coupling's snatch, estimates 3e-4 low hid a peak 1e-5 high)
     est = poly%order >= 2 .and. .not. starts
     if (starts) then
       ! a new sequence starts with the stretch's start
