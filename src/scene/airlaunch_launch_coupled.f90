@@ -507,6 +507,8 @@ contains
         end if
         call s%line%part_reached(s%strength, s%tension, first)
       end if
+      ! a break is a change of the scene: stop_when_final watches 1 s past it
+      r%last_record_of_extremum = max(r%last_record_of_extremum, r%dsolver%t)
       if (res%line_breaks == 0) then
         res%line_break_time = r%dsolver%t
         res%line_break_segment = first
@@ -872,7 +874,10 @@ contains
   !> &run stop_when_final: the milestones cannot change any more (the rocket
   !> is free, its first pitch maximum found, and 1 s has passed since both,
   !> during which no extremum moved).  A later snatch of the line is not
-  !> waited for.
+  !> waited for, but a line that can still part (a scheduled cut to come, or
+  !> an intact segment with a strength: launch_system%may_still_part) keeps
+  !> the run going, so that its break is recorded, and a break counts as a
+  !> change (part_line): the run goes on for 1 s after it.
   logical function stop_now(r, run, res, phase, t)
     type(coupled_run), intent(in) :: r
     type(run_config), intent(in) :: run
@@ -882,6 +887,7 @@ contains
     stop_now = .false.
     if (.not. run%stop_when_final) return
     if (phase /= phase_free .or. res%pitch_max_time < 0.0_dp) return
+    if (r%dsys%may_still_part()) return
     if (t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
     stop_now = t >= max(r%last_record_of_extremum, maxval(r%trk%t_best)) + 1.0_dp
   end function stop_now

@@ -111,6 +111,7 @@ module airlaunch_launch_system
     procedure :: gust_clearance => launch_gust_clearance
     procedure :: line_tensions => launch_line_tensions
     procedure :: weakest_segment => launch_weakest_segment
+    procedure :: may_still_part => launch_may_still_part
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: has_jacobian => launch_has_jacobian
@@ -280,6 +281,29 @@ contains
     integer, intent(out) :: k
     call weakest_segment(self%strength, self%tension, margin, k)
   end subroutine launch_weakest_segment
+
+  !> The line can still part later in the run: its scheduled cut (&line
+  !> break_time) is still to come, or a segment that has not parted has a
+  !> strength (&line breaking_strength, the weak link's).  A run that stops
+  !> once its milestones are final (&run stop_when_final) must not stop then.
+  pure logical function launch_may_still_part(self) result(may)
+    class(launch_system), intent(in) :: self
+    integer :: j
+    may = .false.
+    if (.not. self%has_line) return
+    if (self%break_time > 0.0_dp) then
+      may = .true.
+      return
+    end if
+    if (.not. allocated(self%strength)) return
+    do j = 1, size(self%strength)
+      if (self%line%parted(j)) cycle
+      if (self%strength(j) < huge(1.0_dp)) then
+        may = .true.
+        return
+      end if
+    end do
+  end function launch_may_still_part
 
   !> The line's segment tensions into self%tension, for the bodies and nodes
   !> loaded (load_bodies): what prepare's line forces give, without the loads.

@@ -335,3 +335,32 @@ def test_example_sweep_over_the_line_failure(airlaunch_exe, tmp_path):
                 assert row["pitch_max_time_s"] == pytest.approx(whole["pitch_max_time_s"], abs=1e-3)
             else:
                 assert row["pitch_max_deg"] < 75.0
+
+
+@pytest.mark.parametrize("line", [["  break_time = 13.0"], ["  breaking_strength = 2.0e5"]],
+                         ids=["cut-after-the-milestones", "strength-never-reached"])
+def test_stop_when_final_waits_for_a_line_that_can_part(airlaunch_exe, tmp_path, line):
+    """&run stop_when_final ends the paper run at ~11.5 s, once the pitch
+    maximum (10.47 s) and every extremum have stood for 1 s.  A line that can
+    still part must keep the run going: a cut scheduled at 13 s is recorded at
+    13 s and the run watches 1 s past it (before this rule the run stopped
+    first and reported no break), and a strength the run never reaches
+    (200 kN against the 79 kN peak) lets it run to t_end.  Reference: the same input without stop_when_final, which
+    runs to t_end by construction; every break attribute and milestone equal."""
+    full = nml_variant(tmp_path, "full", line=line)
+    early = nml_variant(tmp_path, "early", line=line,
+                        edits=[(r"^  rtol = (\S+)", "  stop_when_final = .true.\n  rtol = \\1")])
+    ref, _ = _run(airlaunch_exe, full, tmp_path / "full.nc")
+    ds, stdout = _run(airlaunch_exe, early, tmp_path / "early.nc")
+    # not stopped at ~11.5 s: at t_end, or 1 s after the cut (a break is a change the run watches past)
+    assert ds["time"].values[-1] >= (14.0 if "break_time" in line[0] else 15.0) - 1e-9
+    for key in ("line_break_time_s", "line_break_segment", "line_breaks", "separation_time_s",
+                "pitch_max_time_s", "pitch_max_deg", "min_clearance_m", "peak_line_tension_N"):
+        assert ds.attrs[key] == ref.attrs[key], key
+    if "break_time" in line[0]:
+        assert ds.attrs["line_break_time_s"] == 13.0 and ds.attrs["line_breaks"] == 1
+        assert "line break: none" not in stdout
+    else:
+        assert ds.attrs["line_breaks"] == 0
+    ds.close()
+    ref.close()
