@@ -126,6 +126,9 @@ module airlaunch_line_cvode
     type(cvode_solver) :: solver                  !< the integrator
     type(cvode_options) :: opts                   !< its options
     type(tension_observer) :: observer            !< the peak tension over the steps
+    !> a line with no state (one segment between kinematic ends) has no
+    !> CVODE: advance stops at this time itself (set_stop_time) [s]
+    real(dp) :: stateless_stop = -huge(1.0_dp)
   contains
     procedure :: peak_tension => cvode_peak_tension
     procedure :: advance => cvode_advance
@@ -510,7 +513,12 @@ contains
     real(dp), intent(in) :: t_out                          !< output time [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
     if (self%sys%n_state() == 0) then
-      self%t = t_out
+      ! (no CVODE to stop: the stop time set last, if it lies ahead, ends the step)
+      if (self%stateless_stop > self%t .and. self%stateless_stop < t_out) then
+        self%t = self%stateless_stop
+      else
+        self%t = t_out
+      end if
       return
     end if
     if (associated(self%peak)) then
@@ -600,7 +608,10 @@ contains
     class(line_cvode), intent(inout) :: self               !< scheme
     real(dp), intent(in) :: t_stop                         !< stop time [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    if (self%sys%n_state() == 0) return
+    if (self%sys%n_state() == 0) then
+      self%stateless_stop = t_stop
+      return
+    end if
     call self%solver%set_stop_time(t_stop, error)
   end subroutine cvode_set_stop_time
 

@@ -273,6 +273,12 @@ contains
     self%deploy_pending = .false.
   end subroutine deploy
 
+  !> An end whose motion is given, not integrated ('fixed' or 'prescribed').
+  pure logical function is_kinematic(kind)
+    character(len=*), intent(in) :: kind   !< &line_scene a_kind or b_kind
+    is_kinematic = trim(kind) == "fixed" .or. trim(kind) == "prescribed"
+  end function is_kinematic
+
   !> The line's strengths (a line that can break) into the scheme, which
   !> watches their margin; an initial shape whose tension already reaches a
   !> strength is an input error naming the variable that set it.  A scheduled
@@ -646,6 +652,16 @@ contains
     end if
     call check_break_before_end(f, break_time, run%t_end, error)
     if (allocated(error)) return
+    if ((breaking_strength > 0.0_dp .or. weak_link_strength > 0.0_dp) .and. n_seg == 1 .and. &
+        is_kinematic(a_kind) .and. is_kinematic(b_kind)) then
+      ! no node of the line is integrated: nothing would watch the strength
+      call fatal_error(error, f%path // ": &line: " // trim(merge("breaking_strength ", "weak_link_strength", &
+        breaking_strength > 0.0_dp)) // " = " // str(max(breaking_strength, weak_link_strength)) // &
+        " N is not allowed on a line of n_seg = 1 between two kinematic ends (a_kind = '" // trim(a_kind) // &
+        "', b_kind = '" // trim(b_kind) // "'): no node of it is integrated, so no event watches its " // &
+        "tension; use n_seg >= 2 (break_time cuts it at a given time)")
+      return
+    end if
 
     cfg%line = line_params(length=length, n_seg=n_seg, ea=ea, mass_per_length=mass_per_length, &
       damping=damping, settling_damping=settling_damping, diameter=diameter, cd_normal=cd_normal, &

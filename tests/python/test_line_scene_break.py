@@ -256,3 +256,29 @@ def test_bad_break_input(airlaunch_exe, tmp_path, line, scene, fragment):
     nml, out = line_nml(tmp_path, "bad", 20, line=line, scene=scene)
     res = run_airlaunch(airlaunch_exe, nml)
     assert_input_error(res, fragment, out)
+
+
+def test_strength_refused_on_a_line_with_no_node_to_integrate(airlaunch_exe, tmp_path):
+    """One segment between two fixed ends has no state: no integrator, so no
+    event could watch its tension (before, the strength was silently never
+    reached).  A one-line input error instead."""
+    nml, out = line_nml(tmp_path, "one", 1, line=["breaking_strength = 30.0e3"], scene=SNAP_SCENE)
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert_input_error(res, "&line: breaking_strength = 30000.0 N is not allowed on a line of n_seg = 1 between "
+                       "two kinematic ends (a_kind = 'fixed', b_kind = 'fixed')", out)
+
+
+def test_scheduled_cut_of_a_line_with_no_node_to_integrate(airlaunch_exe, tmp_path):
+    """The same one-segment line (1 % stretched: T = EA 0.01 = 20 kN by
+    Hooke's law) cut at 12.3 ms, between the 5 ms outputs: the cut is made at
+    its time (before, at the next output, 15 ms), the tension is 20 kN before
+    it and zero after."""
+    nml, out = line_nml(tmp_path, "cut1", 1, line=["break_time = 0.0123"], scene=SNAP_SCENE,
+                        t_end=0.03, output_dt=0.005)
+    ds, stdout = run(airlaunch_exe, nml, out)
+    assert ds.attrs["line_break_time_s"] == 0.0123 and ds.attrs["line_breaks"] == 1
+    t = ds["time"].values
+    tension = ds["line_tension"].values[:, 0]
+    assert tension[t < 0.0123] == pytest.approx(EA * 0.01, rel=1e-12)
+    assert (tension[t > 0.0123] == 0.0).all()
+    ds.close()
