@@ -100,6 +100,14 @@ def cmd_envelope(args) -> int:
     if inputs.split() != names:
         raise DefinitionError(f"{summary_path}: the summary's inputs ({inputs}) are "
                               f"not those of {defn.path} ({' '.join(names)})")
+    scene = summary.attrs.get("scene")
+    for c in criteria:
+        missing = [m for m in c.metrics if m not in summary.variables]
+        if missing and isinstance(scene, str):
+            # a criterion of another scene (the airlaunch scene's clearance on a line-scene sweep)
+            raise DefinitionError(f"{criteria_path}: &criteria: {', '.join(sorted(c.limits))} is not allowed for "
+                                  f"a sweep of scene '{scene}': its summary has no {', '.join(missing)} "
+                                  f"(leave the criterion out; docs/sweep.md lists each scene's summary variables)")
     needed = ["status"] + names + sorted({m for c in criteria for m in c.metrics})
     for var in needed:
         if var not in summary.variables:

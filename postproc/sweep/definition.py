@@ -19,14 +19,16 @@ import f90nml
 
 DESIGNS = ("lhs", "sobol", "grid")
 DISTRIBUTIONS = ("uniform", "normal", "truncnorm", "list")
+#: the airlaunch scene's four, then the line scene's own (airlaunch-sweep checks
+#: that worst_by is one of the base scene's summary variables)
 WORST_BY = ("min_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg",
-            "max_load_factor_excursion")
+            "max_load_factor_excursion", "max_end_tension_a_N", "max_end_tension_b_N", "final_tip_speed_m_s")
 
 SWEEP_VARS = ("name", "base", "output_dir", "design", "n_cases", "seed", "t_end", "keep_failed",
               "keep_worst", "worst_by", "keep_ids", "criteria", "progress_interval")
 #: variables the sweep sets for every case (airlaunch_sweep_definition.f90, owned_by_sweep)
 OWNED_BY_SWEEP = ("run%scene", "run%output", "run%trajectory")
-OWNED_NOTE = ("the sweep sets it for every case (the scene is the base's airlaunch scene; the output and "
+OWNED_NOTE = ("the sweep sets it for every case (the scene is the base's scene; the output and "
               "whether there is one are the sweep's: summary mode, keep_failed, keep_worst)")
 
 INPUT_VARS = ("name", "distribution", "lower", "upper", "mean", "std", "values", "levels", "units",

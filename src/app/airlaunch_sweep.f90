@@ -97,7 +97,7 @@ program airlaunch_sweep
     call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
     if (allocated(error)) call die(error%message)
     call report_tally(size(pending), MPI_Wtime() - t_run)
-    keep = trajectory_ids(s%def, rows)
+    keep = trajectory_ids(s%def, s%base%metrics, rows)
     keep = pack(keep, [(.not. file_exists(s%def%trajectory_path(keep(k))), k = 1, size(keep))])
   end if
 
@@ -240,7 +240,7 @@ contains
       status = merge(exit_input, exit_runtime, differs)   ! another sweep's journal, or a file error
       return
     end if
-    call read_journals(s%def%journal_dir(), s%table%n_cases, old, done, duplicates, bad, error)
+    call read_journals(s%def%journal_dir(), s%table%n_cases, s%base%metrics%size(), old, done, duplicates, bad, error)
     if (allocated(error)) then
       status = exit_runtime
       return
@@ -270,7 +270,7 @@ contains
   subroutine collect_rows()
     logical, allocatable :: done(:)
     integer :: duplicates, bad
-    call read_journals(s%def%journal_dir(), s%table%n_cases, rows, done, duplicates, bad, error)
+    call read_journals(s%def%journal_dir(), s%table%n_cases, s%base%metrics%size(), rows, done, duplicates, bad, error)
     if (allocated(error)) call die(error%message)
     if (.not. all(done)) call die(s%def%journal_dir() // ": " // str(count(.not. done)) // &
       " cases have no row after the run (a journal write was lost)")

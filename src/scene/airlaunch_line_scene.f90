@@ -27,7 +27,7 @@ module airlaunch_line_scene
   use airlaunch_line
   implicit none
   private
-  public :: line_scene_config, line_scene, read_line_scene_config, run_line_scene
+  public :: line_scene_config, line_scene, read_line_scene_config, run_line_scene, line_result
 
   !> Inputs of the line scene (namelist groups &line and &line_scene).
   type :: line_scene_config
@@ -58,6 +58,25 @@ module airlaunch_line_scene
   !> Largest initial end separation, as strain of the unstretched line: the
   !> model assumes small axial strain (assumption 3 of §2.1).
   real(dp), parameter :: max_initial_strain = 0.5_dp
+
+  !> What a run of the line scene found (its milestones, for a sweep's
+  !> summary row): times are -1 and tensions or speeds negative where not
+  !> defined (no peak tracked, no break, no canopy, no record).
+  type :: line_result
+    real(dp) :: peak_tension = -1.0_dp         !< largest segment tension over every step [N]
+    real(dp) :: peak_tension_time = -1.0_dp    !< its first time [s]
+    real(dp) :: max_end_tension(2) = -1.0_dp   !< largest T_1 (end a) and T_N (end b) over the records [N]
+    real(dp) :: line_break_time = -1.0_dp      !< the line first parted [s]
+    integer :: line_break_segment = 0          !< there, this segment (0: whole)
+    integer :: line_breaks = 0                 !< segments parted in all
+    real(dp) :: deploy_speed = -1.0_dp         !< air speed at the canopy's deployment [m/s]
+    real(dp) :: final_tip_speed = -1.0_dp      !< speed of node N (end b) at the last record [m/s]
+    real(dp) :: end_time = 0.0_dp              !< time the integration reached [s]
+    type(line_scheme_stats) :: stats           !< integrator work
+    logical :: completed = .false.             !< reached t_end
+    !> the output file could not be written (the message; unallocated: it was, or none asked for)
+    character(len=:), allocatable :: output_error
+  end type line_result
 
   !> One standalone line simulation and its records.
   type :: line_scene
@@ -802,12 +821,13 @@ contains
   !> Run the scene and write its output file (if &run trajectory); `summary`
   !> receives the milestones for the program to print.  On a numerical
   !> failure the output so far is written with status = "failed".
-  subroutine run_line_scene(run, cfg, echo, summary, error)
+  subroutine run_line_scene(run, cfg, echo, summary, error, result)
     type(run_config), intent(in) :: run                   !< &run settings
     type(line_scene_config), intent(in) :: cfg            !< the scene
     character(len=*), intent(in) :: echo                  !< resolved input
     character(len=:), allocatable, intent(out) :: summary !< milestones, one per line
     type(error_type), allocatable, intent(inout) :: error !< set on failure
+    type(line_result), intent(out), optional :: result    !< the milestones as numbers (a sweep's row)
     type(line_scene) :: scene
     type(error_type), allocatable :: run_error
     integer :: m, i_max(2)
@@ -817,7 +837,9 @@ contains
     if (allocated(error)) return
     call scene%run(run_error)
     m = scene%n_out
+    if (present(result)) result = result_of(scene)
     if (run%trajectory) call write_output(scene, run%output, echo, run_error, error)
+    if (present(result) .and. allocated(error)) result%output_error = error%message
     i_max = maxloc(scene%end_tension(:, 1:m))
     summary = "line: " // str(cfg%line%length) // " m, " // str(cfg%line%n_seg) // " segments, scheme " // &
       trim(cfg%integration%scheme) // ", " // trim(cfg%line%mass) // " mass" // nl // &
@@ -837,6 +859,29 @@ contains
     end if
     call scene%free()
   end subroutine run_line_scene
+
+  !> The scene's milestones as numbers (line_result).
+  function result_of(scene) result(r)
+    type(line_scene), intent(in) :: scene  !< scene (after run)
+    type(line_result) :: r
+    integer :: m
+    m = scene%n_out
+    if (scene%peak_tension_time >= 0.0_dp) then
+      r%peak_tension = scene%peak_tension
+      r%peak_tension_time = scene%peak_tension_time
+    end if
+    if (m > 0) then
+      r%max_end_tension = maxval(scene%end_tension(:, 1:m), dim=2)
+      r%final_tip_speed = norm2(scene%tip_velocity(:, m))
+    end if
+    r%line_break_time = scene%line_break_time
+    r%line_break_segment = scene%line_break_segment
+    r%line_breaks = scene%line_breaks
+    r%deploy_speed = scene%deploy_speed
+    r%end_time = scene%t_reached
+    r%stats = scene%stats
+    r%completed = scene%completed
+  end function result_of
 
   !> The summary's note on the peak tension over every step ('' without it:
   !> &line_scene peak_tension = .false.).

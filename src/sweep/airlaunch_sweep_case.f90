@@ -18,9 +18,11 @@ module airlaunch_sweep_case
   use airlaunch_run_config, only: run_config, read_run_config
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
+  use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene, line_result
   use airlaunch_sweep_definition, only: sweep_definition, sweep_input
   use airlaunch_sweep_files, only: read_text_file, write_text_file
-  use airlaunch_sweep_row, only: sweep_row, row_from_result, invalid_row
+  use airlaunch_sweep_row, only: sweep_row, row_from_result, row_from_line_result, invalid_row, metric_set, &
+    metrics_of
   implicit none
   private
   public :: base_scenario, known_variable, load_base_scenario, check_varied_inputs, case_namelist
@@ -41,7 +43,18 @@ module airlaunch_sweep_case
     type(known_variable), allocatable :: known(:)  !< variables a case may set
     type(nml_assignment), allocatable :: assigned(:)  !< the assignments written in `text`
     real(dp) :: t_end = 0.0_dp                  !< its &run t_end [s]
+    character(len=16) :: scene = "airlaunch"    !< its &run scene: 'airlaunch' or 'line'
+    type(metric_set) :: metrics                 !< the summary variables of that scene
   end type base_scenario
+
+  !> A case's inputs as read: &run and the scene's own (the airlaunch scene's
+  !> or the line scene's, as &run scene says).
+  type :: scene_input
+    type(run_config) :: run
+    type(scenario_config) :: cfg                !< scene = 'airlaunch'
+    type(line_scene_config) :: line_cfg         !< scene = 'line'
+    character(len=:), allocatable :: echo       !< the resolved input
+  end type scene_input
 
 contains
 
@@ -51,27 +64,19 @@ contains
     type(base_scenario), intent(out) :: base              !< the scenario
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
     type(nml_file) :: f
-    type(run_config) :: run
-    type(scenario_config) :: cfg
+    type(scene_input) :: in
 
     base%path = path
     call f%load(path, error)
-    if (.not. allocated(error)) call read_run_config(f, run, base%echo, error)
+    if (.not. allocated(error)) call read_scene(f, in, error)
     if (allocated(error)) then
       error%message = "base scenario " // error%message
       return
     end if
-    if (trim(run%scene) /= "airlaunch") then
-      call fatal_error(error, "base scenario " // path // ": &run: scene = '" // trim(run%scene) // &
-        "' cannot be swept (only 'airlaunch')")
-      return
-    end if
-    call read_scenario_config(f, cfg, base%echo, error)
-    if (allocated(error)) then
-      error%message = "base scenario " // error%message
-      return
-    end if
-    base%t_end = run%t_end
+    base%echo = in%echo
+    base%t_end = in%run%t_end
+    base%scene = in%run%scene
+    base%metrics = metrics_of(base%scene)
     base%assigned = f%items
     call read_text_file(path, base%text, error)
     if (allocated(error)) return
@@ -187,14 +192,11 @@ contains
     character(len=*), intent(in) :: scratch               !< scratch file
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
     type(nml_file) :: f
-    type(run_config) :: run
-    type(scenario_config) :: cfg
-    character(len=:), allocatable :: echo
+    type(scene_input) :: in
     call write_text_file(scratch, sweep_namelist(def, base, -1, [real(dp) ::], .false.), error)
     if (allocated(error)) return
     call f%load(scratch, error)
-    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
-    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    if (.not. allocated(error)) call read_scene(f, in, error, base%scene)
     if (allocated(error)) error%message = replace(error%message, scratch, def%path // &
       " (base scenario with the sweep's t_end and &fixed values)")
   end subroutine check_common_settings
@@ -332,28 +334,39 @@ contains
     character(len=*), intent(in) :: trajectory  !< trajectory file ("" for summary mode)
     type(sweep_row), intent(out) :: row         !< the result
     type(error_type), allocatable, intent(inout) :: file_error  !< set if the scratch file cannot be written
-    type(run_config) :: run
-    type(scenario_config) :: cfg
+    type(scene_input) :: in
     type(launch_result) :: res
+    type(line_result) :: line_res
     type(error_type), allocatable :: error
-    character(len=:), allocatable :: echo
+    character(len=:), allocatable :: summary
     integer(int64) :: c0, c1, rate
 
     call system_clock(c0, rate)
-    call load_case(def, base, id, values, scratch, run, cfg, echo, error, file_error)
+    call load_case(def, base, id, values, scratch, in, error, file_error)
     if (allocated(file_error)) return
     if (allocated(error)) then
       call system_clock(c1)
-      row = invalid_row(id, replace(error%message, scratch, "case " // str(id)), real(c1 - c0, dp)/rate)
+      row = invalid_row(id, replace(error%message, scratch, "case " // str(id)), real(c1 - c0, dp)/rate, &
+        base%metrics)
       return
     end if
-    run%trajectory = len(trajectory) > 0
-    if (run%trajectory) run%output = trajectory
-    call run_launch(run, cfg, echo, res, error)
+    in%run%trajectory = len(trajectory) > 0
+    if (in%run%trajectory) in%run%output = trajectory
+    if (base%scene == "line") then
+      call run_line_scene(in%run, in%line_cfg, in%echo, summary, error, line_res)
+      call system_clock(c1)
+      if (allocated(error)) then
+        row = row_from_line_result(id, line_res, .true., error%message, real(c1 - c0, dp)/rate)
+      else
+        row = row_from_line_result(id, line_res, .false., "", real(c1 - c0, dp)/rate)
+      end if
+      return
+    end if
+    call run_launch(in%run, in%cfg, in%echo, res, error)
     call system_clock(c1)
     if (allocated(error) .and. res%status == "invalid_input") then
       ! a case the aircraft cannot fly (its trim): rejected input, not a failed run
-      row = invalid_row(id, "case " // str(id) // ": " // error%message, real(c1 - c0, dp)/rate)
+      row = invalid_row(id, "case " // str(id) // ": " // error%message, real(c1 - c0, dp)/rate, base%metrics)
     else if (allocated(error)) then
       row = row_from_result(id, res, .true., error%message, real(c1 - c0, dp)/rate)
     else
@@ -375,22 +388,31 @@ contains
     character(len=*), intent(in) :: trajectory  !< trajectory file
     logical, intent(out) :: written             !< the trajectory file exists
     type(error_type), allocatable, intent(inout) :: file_error  !< set on a file error
-    type(run_config) :: run
-    type(scenario_config) :: cfg
+    type(scene_input) :: in
     type(launch_result) :: res
+    type(line_result) :: line_res
     type(error_type), allocatable :: error
-    character(len=:), allocatable :: echo
+    character(len=:), allocatable :: summary
     logical :: exists
     written = .false.
-    call load_case(def, base, id, values, scratch, run, cfg, echo, error, file_error)
+    call load_case(def, base, id, values, scratch, in, error, file_error)
     if (allocated(file_error)) return
     if (allocated(error)) return   ! an invalid case: no trajectory (the summary holds its message)
-    run%trajectory = .true.
-    run%output = trajectory
-    call run_launch(run, cfg, echo, res, error)
-    if (allocated(res%output_error)) then
-      call fatal_error(file_error, "case " // str(id) // ": cannot write its trajectory: " // res%output_error)
-      return
+    in%run%trajectory = .true.
+    in%run%output = trajectory
+    if (base%scene == "line") then
+      call run_line_scene(in%run, in%line_cfg, in%echo, summary, error, line_res)
+      if (allocated(line_res%output_error)) then
+        call fatal_error(file_error, "case " // str(id) // ": cannot write its trajectory: " // &
+          line_res%output_error)
+        return
+      end if
+    else
+      call run_launch(in%run, in%cfg, in%echo, res, error)
+      if (allocated(res%output_error)) then
+        call fatal_error(file_error, "case " // str(id) // ": cannot write its trajectory: " // res%output_error)
+        return
+      end if
     end if
     inquire(file=trajectory, exist=exists)
     written = exists
@@ -398,15 +420,13 @@ contains
 
   !> Write case `id`'s namelist to `scratch` and read it: a write failure is
   !> `file_error` (not a result of the case), bad input `error`.
-  subroutine load_case(def, base, id, values, scratch, run, cfg, echo, error, file_error)
+  subroutine load_case(def, base, id, values, scratch, in, error, file_error)
     type(sweep_definition), intent(in) :: def   !< the sweep
     type(base_scenario), intent(in) :: base     !< its base scenario
     integer, intent(in) :: id                   !< case id
     real(dp), intent(in) :: values(:)           !< the case's values
     character(len=*), intent(in) :: scratch     !< per-rank scratch file for the namelist
-    type(run_config), intent(out) :: run        !< its &run
-    type(scenario_config), intent(out) :: cfg   !< its scenario
-    character(len=:), allocatable, intent(out) :: echo          !< resolved input
+    type(scene_input), intent(out) :: in        !< its inputs
     type(error_type), allocatable, intent(inout) :: error       !< set on bad input
     type(error_type), allocatable, intent(inout) :: file_error  !< set if the scratch file cannot be written
     type(nml_file) :: f
@@ -416,9 +436,42 @@ contains
       return
     end if
     call f%load(scratch, error)
-    if (.not. allocated(error)) call read_run_config(f, run, echo, error)
-    if (.not. allocated(error)) call read_scenario_config(f, cfg, echo, error)
+    if (.not. allocated(error)) call read_scene(f, in, error, base%scene)
   end subroutine load_case
+
+  !> Read a scenario: &run, then the groups of its scene (the airlaunch
+  !> scene's, or the line scene's with the line scheme's own rtol, atol and
+  !> largest order where &run does not set them, as `airlaunch` runs it).
+  !> `scene`: the scene the sweep's base runs (a case may not change it).
+  subroutine read_scene(f, in, error, scene)
+    type(nml_file), intent(inout) :: f                    !< scanned input
+    type(scene_input), intent(out) :: in                  !< what it says
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    character(len=*), intent(in), optional :: scene       !< the base's scene
+    call read_run_config(f, in%run, in%echo, error)
+    if (allocated(error)) return
+    if (present(scene)) then
+      if (trim(in%run%scene) /= trim(scene)) then
+        call fatal_error(error, f%path // ": &run: scene = '" // trim(in%run%scene) // "' is not allowed (the " // &
+          "base scenario's scene is '" // trim(scene) // "')")
+        return
+      end if
+    end if
+    select case (trim(in%run%scene))
+    case ("airlaunch")
+      call read_scenario_config(f, in%cfg, in%echo, error)
+    case ("line")
+      call f%check_groups([character(len=16) :: "run", "line", "line_scene", "parachute"], error)
+      if (.not. allocated(error)) call read_line_scene_config(f, in%run, in%line_cfg, in%echo, error)
+      if (allocated(error)) return
+      in%run%rtol = in%line_cfg%integration%rtol
+      in%run%atol = in%line_cfg%integration%atol
+      in%run%max_order = in%line_cfg%integration%max_order
+    case default
+      call fatal_error(error, f%path // ": &run: scene = '" // trim(in%run%scene) // "' cannot be swept " // &
+        "(allowed: 'airlaunch', 'line')")
+    end select
+  end subroutine read_scene
 
   !> Insert line(k) before the end of group groups(k) in `text` (appending
   !> the group if the text lacks it).  Comments and strings are respected.

@@ -22,14 +22,17 @@ module airlaunch_sweep_definition
   !> cases takes about 5 s to make)
   integer, parameter :: max_cases = 10000000
   character(len=*), parameter :: owned_note = "the sweep sets it for every case (the scene is the base's " // &
-    "airlaunch scene; the output and whether there is one are the sweep's: summary mode, keep_failed, keep_worst)"
+    "scene; the output and whether there is one are the sweep's: summary mode, keep_failed, keep_worst)"
   character(len=8), parameter :: design_names(3) = [character(len=8) :: "lhs", "sobol", "grid"]
   character(len=16), parameter :: distribution_names(4) = [character(len=16) :: "uniform", "normal", &
     "truncnorm", "list"]
   !> Summary variables that can rank the worst cases (keep_worst), with the
   !> direction in which they get worse.
-  character(len=40), parameter :: worst_by_names(4) = [character(len=40) :: "min_clearance_m", &
-    "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion"]
+  !> (the airlaunch scene's four, then the line scene's own: load_sweep checks
+  !> that it is one of the base scene's)
+  character(len=40), parameter :: worst_by_names(7) = [character(len=40) :: "min_clearance_m", &
+    "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
+    "max_end_tension_a_N", "max_end_tension_b_N", "final_tip_speed_m_s"]
 
   !> One varied input.
   type :: sweep_input

@@ -107,9 +107,10 @@ contains
   !> `duplicates`, a torn or corrupt line in `bad` - unless its case id can
   !> still be read whole and that case has a valid row (a line torn by a kill
   !> whose case ran again later: no longer news).
-  subroutine read_journals(dir, n_cases, rows, done, duplicates, bad, error)
+  subroutine read_journals(dir, n_cases, n_metrics, rows, done, duplicates, bad, error)
     character(len=*), intent(in) :: dir                   !< journal directory
     integer, intent(in) :: n_cases                        !< number of cases
+    integer, intent(in) :: n_metrics                      !< summary variables of the sweep's scene
     type(sweep_row), allocatable, intent(out) :: rows(:)  !< rows by id + 1
     logical, allocatable, intent(out) :: done(:)          !< finished, by id + 1
     integer, intent(out) :: duplicates                    !< extra rows of finished ids
@@ -136,7 +137,7 @@ contains
         call read_line(unit, line, ios)
         if (ios /= 0) exit
         if (len_trim(line) == 0) cycle
-        call parse_row(line, row, ok)
+        call parse_row(line, n_metrics, row, ok)
         if (ok) ok = row%id < n_cases
         if (.not. ok) then
           torn_id = torn_line_id(line)

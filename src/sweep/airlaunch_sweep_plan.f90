@@ -3,15 +3,15 @@
 !> which cases keep a trajectory.
 module airlaunch_sweep_plan
   use airlaunch_kinds, only: dp
-  use airlaunch_error, only: error_type
+  use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version
-  use airlaunch_sweep_definition, only: sweep_definition, read_sweep_definition
+  use airlaunch_sweep_definition, only: sweep_definition, read_sweep_definition, worst_by_names
   use airlaunch_sweep_table, only: case_table, read_case_table
   use airlaunch_sweep_case, only: base_scenario, load_base_scenario, check_varied_inputs, check_common_settings
   use airlaunch_sweep_files, only: make_dir
   use airlaunch_sweep_journal, only: fnv1a
-  use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid, metric_index
+  use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid, metric_set
   implicit none
   private
   public :: sweep_setup, load_sweep, fingerprint_text, trajectory_ids, make_output_dir
@@ -39,6 +39,8 @@ contains
     call load_base_scenario(setup%def%base, setup%base, error)
     if (allocated(error)) return
     call check_varied_inputs(setup%def, setup%base, error)
+    if (allocated(error)) return
+    call check_worst_by(setup%def, setup%base, error)
     if (allocated(error)) return
     call make_output_dir(setup%def, setup%def%work_dir(), error)
     if (allocated(error)) return
@@ -81,8 +83,9 @@ contains
   !> keep_worst worst by worst_by among the ok ones, and keep_ids; sorted,
   !> each once.  An invalid_input case is never one: its input cannot run,
   !> so it can have no trajectory.
-  function trajectory_ids(def, rows) result(ids)
+  function trajectory_ids(def, metrics, rows) result(ids)
     type(sweep_definition), intent(in) :: def   !< the sweep
+    type(metric_set), intent(in) :: metrics     !< its scene's summary variables (worst_by is one: load_sweep)
     type(sweep_row), intent(in) :: rows(:)      !< all rows, by id
     integer, allocatable :: ids(:)
     logical :: keep(size(rows))
@@ -94,7 +97,7 @@ contains
       keep(def%keep_ids(k) + 1) = .true.
     end do
     if (def%keep_worst > 0) then
-      m = metric_index(def%worst_by)
+      m = metrics%index(def%worst_by)
       ! smaller clearance is worse; larger loads and excursions are worse
       sgn = merge(1.0_dp, -1.0_dp, def%worst_by == "min_clearance_m")
       do k = 1, size(rows)
@@ -112,6 +115,25 @@ contains
     keep = keep .and. rows%status /= status_invalid
     ids = pack([(k - 1, k = 1, size(rows))], keep)
   end function trajectory_ids
+
+  !> keep_worst ranks the cases by worst_by: a summary variable of the base's
+  !> scene (the airlaunch scene's clearance, say, is not one of the line
+  !> scene's).
+  subroutine check_worst_by(def, base, error)
+    type(sweep_definition), intent(in) :: def             !< the sweep
+    type(base_scenario), intent(in) :: base               !< its base scenario
+    type(error_type), allocatable, intent(inout) :: error !< set if it is not
+    character(len=:), allocatable :: allowed
+    integer :: k
+    if (def%keep_worst == 0 .or. base%metrics%index(def%worst_by) > 0) return
+    allowed = ""
+    do k = 1, size(worst_by_names)
+      if (base%metrics%index(trim(worst_by_names(k))) > 0) allowed = allowed // trim(worst_by_names(k)) // ", "
+    end do
+    call fatal_error(error, def%path // ": &sweep: worst_by = '" // def%worst_by // "' is not allowed with a " // &
+      "base scenario of scene '" // trim(base%scene) // "' (with keep_worst > 0 it must be one of its summary " // &
+      "variables: " // allowed(:len(allowed)-2) // ")")
+  end subroutine check_worst_by
 
   !> Make a directory under the definition's output_dir; a failure names
   !> &sweep output_dir (a file in its way, no permission).

@@ -1,6 +1,8 @@
 !> One summary row of a sweep: the case id, its status (ok, failed, invalid
-!> input), the failure message and the metrics of airlaunch_launch_scene's
-!> launch_result, with the row's text form in the journal.
+!> input), the failure message and the metrics of the base scene's result
+!> (airlaunch_launch_scene's launch_result, or airlaunch_line_scene's
+!> line_result: each scene its own set of summary variables, metric_set),
+!> with the row's text form in the journal.
 !>
 !> Journal line: `<adler32> <id> <status> <n> <m_1> ... <m_n> <message>`, the
 !> checksum (8 hex digits) covering everything after it, the reals written
@@ -11,10 +13,11 @@ module airlaunch_sweep_row
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
   use airlaunch_kinds, only: dp
   use airlaunch_launch_scene, only: launch_result
+  use airlaunch_line_scene, only: line_result
   implicit none
   private
-  public :: sweep_row, n_metrics, metric_names, metric_units, metric_long_names, metric_is_integer
-  public :: row_from_result, invalid_row, format_row, parse_row, metric_index, row_nan
+  public :: sweep_row, metric_set, metrics_of
+  public :: row_from_result, row_from_line_result, invalid_row, format_row, parse_row, row_nan
   public :: status_ok, status_failed, status_invalid, status_names, adler32
 
   integer, parameter :: status_ok = 0       !< the case ran to its end time
@@ -23,7 +26,7 @@ module airlaunch_sweep_row
   character(len=16), parameter :: status_names(0:2) = [character(len=16) :: "ok", "failed", "invalid_input"]
 
   integer, parameter :: n_metrics = 30
-  !> Summary variable names (the single run's milestone attribute names).
+  !> Summary variables of the airlaunch scene (the single run's milestone attribute names).
   character(len=40), parameter :: metric_names(n_metrics) = [character(len=40) :: &
     "trim_alpha_deg", "trim_elevator_deg", "trim_thrust_N", &
     "release_time_s", "edge_time_s", "separation_time_s", "early_separation", "edge_pull_time_s", &
@@ -58,30 +61,95 @@ module airlaunch_sweep_row
     .true., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .true., &
     .true., .false., .false., .false., .false., .true., .true., .true., .true., .true., .true., .false.]
 
+  !> Summary variables of the line scene (scene = 'line': docs/line.md §4;
+  !> the names the airlaunch scene shares mean the same).
+  integer, parameter :: n_line_metrics = 15
+  character(len=40), parameter :: line_metric_names(n_line_metrics) = [character(len=40) :: &
+    "peak_line_tension_N", "peak_line_tension_time_s", "max_end_tension_a_N", "max_end_tension_b_N", &
+    "line_break_time_s", "line_breaks", "line_break_segment", "canopy_deploy_air_speed_m_s", &
+    "final_tip_speed_m_s", "end_time_s", "steps", "rhs_evals", "jac_evals", "completed", "wall_time_s"]
+  character(len=12), parameter :: line_metric_units(n_line_metrics) = [character(len=12) :: &
+    "N", "s", "N", "N", "s", "1", "1", "m s-1", "m s-1", "s", "1", "1", "1", "1", "s"]
+  character(len=120), parameter :: line_metric_long_names(n_line_metrics) = [character(len=120) :: &
+    "largest segment tension over every step (NaN: &line_scene peak_tension = .false.)", &
+    "time the peak segment tension was first reached (NaN: not tracked)", &
+    "largest tension of segment 1, at end a, over the records", &
+    "largest tension of segment n_seg, at end b, over the records", &
+    "the line first parted (&line breaking_strength or break_time; NaN: it did not)", &
+    "segments of the line parted (0: none)", &
+    "the segment that parted first (1: at end a, n_seg: at end b; 0: none)", &
+    "air speed of the canopy end when it deployed (NaN: no canopy, or not deployed)", &
+    "speed of node n_seg (end b) at the last record", &
+    "simulated time reached", "time steps", "force evaluations of the whole line", &
+    "Jacobian evaluations (cvode)", "1 if the run reached t_end", "wall time of the case on its rank"]
+  logical, parameter :: line_metric_is_integer(n_line_metrics) = [.false., .false., .false., .false., &
+    .false., .true., .true., .false., .false., .false., .true., .true., .true., .true., .false.]
+
+  !> The summary variables of one scene's sweep (metrics_of).
+  type :: metric_set
+    character(len=16) :: scene = ""
+    character(len=40), allocatable :: names(:)
+    character(len=12), allocatable :: units(:)
+    character(len=120), allocatable :: long_names(:)
+    logical, allocatable :: is_integer(:)
+  contains
+    procedure :: size => set_size
+    procedure :: index => set_index
+  end type metric_set
+
   !> One finished case.
   type :: sweep_row
     integer :: id = -1                               !< case id
     integer :: status = status_ok                    !< status_ok, status_failed, status_invalid
-    real(dp) :: metrics(n_metrics) = 0.0_dp          !< values in the order of metric_names
+    real(dp), allocatable :: metrics(:)              !< values in the order of the scene's metric_set
     character(len=:), allocatable :: message         !< failure message ("" if ok)
   end type sweep_row
 
 contains
 
+  !> The summary variables of a sweep whose base runs `scene` ('airlaunch'
+  !> or 'line'; any other has none).
+  function metrics_of(scene) result(set)
+    character(len=*), intent(in) :: scene   !< &run scene of the base scenario
+    type(metric_set) :: set
+    set%scene = scene
+    select case (trim(scene))
+    case ("airlaunch")
+      set%names = metric_names
+      set%units = metric_units
+      set%long_names = metric_long_names
+      set%is_integer = metric_is_integer
+    case ("line")
+      set%names = line_metric_names
+      set%units = line_metric_units
+      set%long_names = line_metric_long_names
+      set%is_integer = line_metric_is_integer
+    case default
+      allocate(set%names(0), set%units(0), set%long_names(0), set%is_integer(0))
+    end select
+  end function metrics_of
+
+  !> Number of summary variables.
+  pure integer function set_size(self)
+    class(metric_set), intent(in) :: self
+    set_size = size(self%names)
+  end function set_size
+
+  !> Position of a summary variable in the set (0 if it has none of that name).
+  pure integer function set_index(self, name)
+    class(metric_set), intent(in) :: self
+    character(len=*), intent(in) :: name   !< summary variable name
+    integer :: i
+    set_index = 0
+    do i = 1, size(self%names)
+      if (trim(self%names(i)) == name) set_index = i
+    end do
+  end function set_index
+
   !> Quiet NaN: "not reached" / "not defined".
   real(dp) function row_nan()
     row_nan = ieee_value(1.0_dp, ieee_quiet_nan)
   end function row_nan
-
-  !> Position of a metric in metric_names (0 if unknown).
-  integer function metric_index(name)
-    character(len=*), intent(in) :: name   !< summary variable name
-    integer :: i
-    metric_index = 0
-    do i = 1, n_metrics
-      if (trim(metric_names(i)) == name) metric_index = i
-    end do
-  end function metric_index
 
   !> The row of a case that ran (completed or failed).
   function row_from_result(id, res, failed, message, wall) result(row)
@@ -117,17 +185,46 @@ contains
     end function event
   end function row_from_result
 
-  !> The row of a case whose input the scenario reader rejected.
-  function invalid_row(id, message, wall) result(row)
+  !> The row of a line-scene case that ran (completed or failed).
+  function row_from_line_result(id, res, failed, message, wall) result(row)
+    integer, intent(in) :: id                  !< case id
+    type(line_result), intent(in) :: res       !< its milestones
+    logical, intent(in) :: failed              !< the run returned an error
+    character(len=*), intent(in) :: message    !< the error message ("" if none)
+    real(dp), intent(in) :: wall               !< wall time [s]
+    type(sweep_row) :: row
+    real(dp) :: nan
+    nan = row_nan()
+    row%id = id
+    row%status = merge(status_failed, status_ok, failed)
+    row%message = one_line(message)
+    row%metrics = [defined(res%peak_tension), defined(res%peak_tension_time), defined(res%max_end_tension(1)), &
+      defined(res%max_end_tension(2)), defined(res%line_break_time), real(res%line_breaks, dp), &
+      real(res%line_break_segment, dp), defined(res%deploy_speed), defined(res%final_tip_speed), res%end_time, &
+      real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
+      merge(1.0_dp, 0.0_dp, res%completed), wall]
+  contains
+    !> line_result's "not defined" (negative) as NaN.
+    real(dp) function defined(x)
+      real(dp), intent(in) :: x
+      defined = merge(x, nan, x >= 0.0_dp)
+    end function defined
+  end function row_from_line_result
+
+  !> The row of a case whose input the scenario reader rejected: every
+  !> summary variable of `set` NaN but the wall time, its last.
+  function invalid_row(id, message, wall, set) result(row)
     integer, intent(in) :: id                  !< case id
     character(len=*), intent(in) :: message    !< the reader's message
     real(dp), intent(in) :: wall               !< wall time [s]
+    type(metric_set), intent(in) :: set        !< the scene's summary variables
     type(sweep_row) :: row
     row%id = id
     row%status = status_invalid
     row%message = one_line(message)
+    allocate(row%metrics(set%size()))
     row%metrics = row_nan()
-    row%metrics(n_metrics) = wall
+    row%metrics(set%size()) = wall
   end function invalid_row
 
   !> The journal line of a row (no new-line character).
@@ -135,10 +232,12 @@ contains
     type(sweep_row), intent(in) :: row
     character(len=:), allocatable :: line, body
     character(len=32) :: buf
-    integer :: i
-    write(buf, '(i0,1x,i0,1x,i0)') row%id, row%status, n_metrics
+    integer :: i, n
+    n = 0
+    if (allocated(row%metrics)) n = size(row%metrics)
+    write(buf, '(i0,1x,i0,1x,i0)') row%id, row%status, n
     body = trim(buf)
-    do i = 1, n_metrics
+    do i = 1, n
       write(buf, '(es25.16e3)') row%metrics(i)
       body = body // " " // trim(adjustl(buf))
     end do
@@ -149,9 +248,11 @@ contains
     line = trim(buf) // " " // body
   end function format_row
 
-  !> Parse a journal line; `ok` is false for a torn, corrupt or foreign line.
-  subroutine parse_row(line, row, ok)
+  !> Parse a journal line of `n_want` metrics; `ok` is false for a torn,
+  !> corrupt or foreign line.
+  subroutine parse_row(line, n_want, row, ok)
     character(len=*), intent(in) :: line    !< journal line
+    integer, intent(in) :: n_want           !< metrics of the sweep's scene
     type(sweep_row), intent(out) :: row     !< the row (if ok)
     logical, intent(out) :: ok              !< the line is a complete row
     integer :: p, q, i, ios, n
@@ -175,8 +276,9 @@ contains
     p = q + 1
     call next_token(body, p, q)
     read(body(p:q), *, iostat=ios) n
-    if (ios /= 0 .or. n /= n_metrics) return
-    do i = 1, n_metrics
+    if (ios /= 0 .or. n /= n_want) return
+    allocate(row%metrics(n))
+    do i = 1, n
       p = q + 1
       call next_token(body, p, q)
       if (q < p) return

@@ -14,8 +14,7 @@ module airlaunch_sweep_summary
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_table, only: case_table
   use airlaunch_sweep_case, only: base_scenario
-  use airlaunch_sweep_row, only: sweep_row, n_metrics, metric_names, metric_units, metric_long_names, &
-    metric_is_integer, status_ok, status_failed, status_invalid
+  use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   implicit none
   private
   public :: write_summary
@@ -76,17 +75,18 @@ contains
       end do
       call w%add_string_var_1d("failure", "case", messages, "failure message (empty if status = ok)", error)
     end block
-    do k = 1, n_metrics
-      rbuf = [(rows(j)%metrics(k), j = 1, n)]
-      if (metric_is_integer(k)) then
-        ibuf = nint(merge(rbuf, -1.0_dp, rbuf == rbuf))
-        call w%add_int_var_1d(trim(metric_names(k)), ["case"], ibuf, trim(metric_units(k)), &
-          trim(metric_long_names(k)) // " (-1: not run)", error)
-      else
-        call w%add_var_1d(trim(metric_names(k)), ["case"], rbuf, trim(metric_units(k)), &
-          trim(metric_long_names(k)), error)
-      end if
-    end do
+    associate(m => base%metrics)
+      do k = 1, m%size()
+        rbuf = [(rows(j)%metrics(k), j = 1, n)]
+        if (m%is_integer(k)) then
+          ibuf = nint(merge(rbuf, -1.0_dp, rbuf == rbuf))
+          call w%add_int_var_1d(trim(m%names(k)), ["case"], ibuf, trim(m%units(k)), &
+            trim(m%long_names(k)) // " (-1: not run)", error)
+        else
+          call w%add_var_1d(trim(m%names(k)), ["case"], rbuf, trim(m%units(k)), trim(m%long_names(k)), error)
+        end if
+      end do
+    end associate
     call date_and_time(values=v)
     write(stamp, '(i4.4,"-",i2.2,"-",i2.2,"T",i2.2,":",i2.2,":",i2.2)') v(1), v(2), v(3), v(5), v(6), v(7)
     call w%add_text_att("/", "title", "airlaunch sweep summary: " // def%name, error)
@@ -101,6 +101,7 @@ contains
     call w%add_text_att("/", "inputs", input_list(def), error)
     call w%add_text_att("/", "base", def%base, error)
     call w%add_text_att("/", "base_namelist", base%echo, error)
+    call w%add_text_att("/", "scene", trim(base%scene), error)
     call w%add_real_att("/", "t_end_s", merge(def%t_end, base%t_end, def%t_end > 0.0_dp), error)
     call w%add_text_att("/", "table", def%table_path(), error)
     call w%add_text_att("/", "criteria", def%criteria, error)

@@ -22,7 +22,8 @@ program test_sweep_journal
   character(len=:), allocatable :: line, dir
   type(journal_writer) :: jw
   type(error_type), allocatable :: error
-  integer :: i, k, dup, bad, u
+  integer :: i, k, dup, bad, u, n_metrics
+  type(metric_set) :: launch_set, line_set
   real(dp) :: nan
   character(len=:), allocatable :: big, back_text
   interface
@@ -46,6 +47,10 @@ program test_sweep_journal
   call check(fnv1a("foobar") == "85944171F73967E8", "fnv1a64('foobar') = 85944171f73967e8")
 
   call section("a row reads back bit for bit")
+  launch_set = metrics_of("airlaunch")
+  line_set = metrics_of("line")
+  n_metrics = launch_set%size()
+  allocate(row%metrics(n_metrics))
   nan = ieee_value(1.0_dp, ieee_quiet_nan)
   row%id = 4711
   row%status = status_failed
@@ -60,7 +65,7 @@ program test_sweep_journal
   row%metrics(6) = 0.1_dp + 0.2_dp
   row%message = "free flight, t = 12.5 s: altitude -2000.0 m | below the atmosphere model / 100% sure"
   line = format_row(row)
-  call parse_row(line, back, ok)
+  call parse_row(line, n_metrics, back, ok)
   call check(ok, "the line parses")
   call check(back%id == row%id .and. back%status == row%status, "id and status")
   call check(ieee_is_nan(back%metrics(1)), "NaN stays NaN")
@@ -74,13 +79,16 @@ program test_sweep_journal
   call section("a cut or corrupted line is rejected")
   all_rejected = .true.
   do i = 0, len(line) - 1
-    call parse_row(line(1:i), back, ok)
+    call parse_row(line(1:i), n_metrics, back, ok)
     all_rejected = all_rejected .and. .not. ok
   end do
   call check(all_rejected, "all " // trim(itoa(len(line))) // " truncations rejected")
   k = index(line, "E+000")
-  call parse_row(line(:k-2) // achar(iachar(line(k-1:k-1)) + 1) // line(k:), back, ok)
+  call parse_row(line(:k-2) // achar(iachar(line(k-1:k-1)) + 1) // line(k:), n_metrics, back, ok)
   call check(.not. ok, "one digit changed: rejected")
+  call parse_row(line, line_set%size(), back, ok)
+  call check(.not. ok, "a row of the airlaunch scene's " // trim(itoa(n_metrics)) // " metrics is not one of " // &
+    "the line scene's " // trim(itoa(line_set%size())))
 
   call section("journal files: append, torn last line, duplicates")
   dir = "sweep_journal_test"
@@ -111,7 +119,7 @@ program test_sweep_journal
   row%id = 5
   call jw%append(row, error)
   call jw%close()
-  call read_journals(dir, 6, rows, done, dup, bad, error)
+  call read_journals(dir, 6, n_metrics, rows, done, dup, bad, error)
   call check(.not. allocated(error), "journals read")
   call check(all(done .eqv. [.true., .true., .true., .false., .true., .true.]), &
     "cases 0, 1, 2, 4 (after the torn line) and 5 (rank 1) done; case 3 not")
@@ -127,7 +135,7 @@ program test_sweep_journal
   open(newunit=u, file=journal_file(dir, 1), access="stream", form="unformatted", position="append")
   write(u) "0A1B2C3D 3"
   close(u)
-  call read_journals(dir, 6, rows, done, dup, bad, error)
+  call read_journals(dir, 6, n_metrics, rows, done, dup, bad, error)
   call check(all(done), "every case done once case 3 has a row")
   call check(bad == 1, "the torn row of case 3 (which has a row now) not counted; a line cut inside its id is: " &
     // trim(itoa(bad)))

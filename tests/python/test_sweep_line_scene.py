@@ -1,0 +1,124 @@
+"""Sweeps of the standalone line scene (&run scene = 'line' in the base
+scenario; docs/sweep.md, "Sweeping the line scene"): input/sweep_airdrop.nml,
+the heavy airdrop's opening shock, cut down to a few short cases.
+
+What is checked: every summary variable of a case is what a single `airlaunch`
+run of that case's namelist (`airlaunch-sweep --case-namelist ID`) reports in
+its output file - the peak segment tension over every step, the largest end
+tensions over the records, the canopy's deployment speed, the tip's final
+speed, the steps - so the sweep runs the line scene as `airlaunch` does; two
+ranks give the one-rank summary bit for bit; keep_worst keeps the largest peak
+tensions; the envelope judges the peak against the criteria's allowable load;
+and criteria or a worst_by of the airlaunch scene are refused in one line."""
+import subprocess
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from conftest import run_airlaunch
+from test_sweep_support import (AIRLAUNCH_EXE, ENV, ROOT, SWEEP_EXE, assert_same_summary, make_table, run_example_sweep,
+                                run_python, run_sweep)
+
+#: 6 Latin-hypercube cases of 4 s: deployment by 1 s, the peak by ~2.5 s
+EDITS = [("n_cases = 200", "n_cases = 6"), ("t_end = 10.0 ", "t_end = 4.0 ")]
+
+
+@pytest.fixture(scope="module")
+def airdrop_sweep(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("airdrop")
+    summary = run_example_sweep("sweep_airdrop", tmp, EDITS)
+    return tmp, summary
+
+
+def test_rows_are_the_single_runs_of_the_cases(airdrop_sweep):
+    tmp, summary = airdrop_sweep
+    with xr.open_dataset(summary) as s:
+        assert s.attrs["scene"] == "line"
+        assert (s["status"].values == 0).all() and (s["completed"].values == 1).all()
+        for case in (0, 3, 5):
+            nml = tmp / f"case_{case}.nml"
+            res = subprocess.run([str(SWEEP_EXE), str(tmp / "sweep_airdrop.nml"), "--case-namelist", str(case)],
+                                 cwd=tmp, capture_output=True, text=True, env=ENV, timeout=60)
+            assert res.returncode == 0, res.stderr
+            out = tmp / f"case_{case}.nc"
+            nml.write_text(res.stdout)
+            run = run_airlaunch(AIRLAUNCH_EXE, nml, "--output", out)
+            assert run.returncode == 0, run.stderr
+            row = {k: s[k].values[case] for k in s.variables if s[k].dims == ("case",)}
+            with xr.open_dataset(out) as ds:
+                assert row["peak_line_tension_N"] == ds.attrs["peak_tension_N"]
+                assert row["peak_line_tension_time_s"] == ds.attrs["peak_tension_time_s"]
+                ends = ds["line_end_tension"].values
+                assert row["max_end_tension_a_N"] == ends[:, 0].max()
+                assert row["max_end_tension_b_N"] == ends[:, 1].max()
+                assert row["canopy_deploy_air_speed_m_s"] == ds.attrs["canopy_deploy_air_speed_m_s"]
+                # (Fortran's norm2 and numpy's norm may round the last bit apart)
+                assert row["final_tip_speed_m_s"] == pytest.approx(np.linalg.norm(ds["line_tip_velocity"].values[-1]),
+                                                                   rel=1e-15)
+                assert row["end_time_s"] == ds["time"].values[-1] == 4.0
+                assert row["steps"] == ds.attrs["steps"]
+                assert row["line_breaks"] == 0 and np.isnan(row["line_break_time_s"])
+        # the opening shock: the peak of every case is an opening load of several g on the
+        # ~1 t platform (a 580 m^2 canopy at ~67 m/s), and lies after its deployment
+        g = 9.80665
+        peak = s["peak_line_tension_N"].values
+        assert (peak > 3 * g * s["line_scene%a_mass"].values).all()
+        assert (s["peak_line_tension_time_s"].values > s["parachute%deploy_time"].values).all()
+
+
+def test_two_ranks_give_the_one_rank_summary(airdrop_sweep, tmp_path):
+    tmp, summary = airdrop_sweep
+    definition = tmp_path / "sweep_airdrop.nml"
+    definition.write_text((tmp / "sweep_airdrop.nml").read_text())
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stderr
+    # (the same cases from a copy of the definition elsewhere: its path differs)
+    assert_same_summary(summary, tmp_path / "out" / "summary.nc", ignore_attrs=("created", "definition"))
+
+
+def test_keep_worst_keeps_the_largest_peak_tensions(airdrop_sweep):
+    tmp, summary = airdrop_sweep
+    with xr.open_dataset(summary) as s:
+        worst = np.argsort(-s["peak_line_tension_N"].values)[:3]
+    kept = sorted(int(p.stem.split("_")[1]) for p in (tmp / "out" / "trajectories").glob("case_*.nc"))
+    assert kept == sorted(worst.tolist())
+    with xr.open_dataset(tmp / "out" / "trajectories" / f"case_{kept[0]:06d}.nc") as ds:
+        assert ds.attrs["status"] == "completed" and "line_node_position" in ds
+
+
+def test_envelope_of_the_peak_tension(airdrop_sweep):
+    """The line-tension criterion passes a case exactly where its peak is at most
+    line_strength_n / line_safety_factor (input/criteria_airdrop.nml: 100 kN / 2)."""
+    tmp, summary = airdrop_sweep
+    res = run_python(["envelope", tmp / "sweep_airdrop.nml", "--no-figures"], tmp)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(summary) as s, xr.open_dataset(tmp / "out" / "envelope.nc") as env:
+        peak = s["peak_line_tension_N"].values
+        line = env.sel(criterion="line_tension")
+        np.testing.assert_array_equal(line["margin"].values, 50.0e3 - peak)
+        np.testing.assert_array_equal(line["passed"].values, (peak <= 50.0e3).astype(np.int8))
+
+
+def test_criteria_of_the_airlaunch_scene_are_refused(airdrop_sweep):
+    tmp, _ = airdrop_sweep
+    res = run_python(["envelope", tmp / "sweep_airdrop.nml", "--no-figures", "--criteria",
+                      ROOT / "input" / "criteria_paper.nml"], tmp)
+    assert res.returncode == 2
+    assert res.stderr.strip().count("\n") == 0
+    assert "&criteria: min_clearance_m is not allowed for a sweep of scene 'line': its summary has no " \
+           "min_clearance_m" in res.stderr
+
+
+def test_worst_by_of_the_airlaunch_scene_is_refused(airdrop_sweep, tmp_path):
+    tmp, _ = airdrop_sweep
+    definition = tmp_path / "bad.nml"
+    definition.write_text((tmp / "sweep_airdrop.nml").read_text().replace(
+        "worst_by = 'peak_line_tension_N'", "worst_by = 'min_clearance_m'"))
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 2
+    assert res.stderr.strip().count("\n") == 0
+    assert "&sweep: worst_by = 'min_clearance_m' is not allowed with a base scenario of scene 'line' (with " \
+           "keep_worst > 0 it must be one of its summary variables: peak_line_tension_N, max_end_tension_a_N, " \
+           "max_end_tension_b_N, final_tip_speed_m_s)" in res.stderr
