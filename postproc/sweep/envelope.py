@@ -79,7 +79,9 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
     for c in criteria:
         for key, value in c.limits.items():
             ds.attrs[f"limit_{key}"] = value
-    ds.attrs.update({"title": f"airlaunch separation safety envelope: {summary.attrs.get('sweep_name', '')}",
+    scene = str(summary.attrs.get("scene", "airlaunch"))   # (summaries before line-scene sweeps: airlaunch)
+    what = "separation safety envelope" if scene == "airlaunch" else f"{scene} scene safety envelope"
+    ds.attrs.update({"title": f"airlaunch {what}: {summary.attrs.get('sweep_name', '')}", "scene": scene,
                      "inputs": summary.attrs["inputs"], "n_cases": np.int32(n),
                      "n_not_ok": np.int32((~ok).sum()),
                      "probability_note": "fraction of the table's cases that pass: an estimate of the "

@@ -95,7 +95,9 @@ def passfail_figure(env, criterion="all"):
         ax.legend(fontsize=7, loc="best")
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
-    fig.suptitle(f"separation safety envelope ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
+    scene = str(env.attrs.get("scene", "airlaunch"))
+    what = "separation safety envelope" if scene == "airlaunch" else f"{scene} scene safety envelope"
+    fig.suptitle(f"{what} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
     fig.tight_layout()
     return fig
 
