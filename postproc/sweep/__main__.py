@@ -101,9 +101,12 @@ def cmd_envelope(args) -> int:
         raise DefinitionError(f"{summary_path}: the summary's inputs ({inputs}) are "
                               f"not those of {defn.path} ({' '.join(names)})")
     scene = summary.attrs.get("scene")
+    # a summary of another scene than the air-launch (whose summary has every criterion's variable);
+    # an envelope file has a scene too, but not the summary's base_namelist
+    other_scene = isinstance(scene, str) and scene != "airlaunch" and "base_namelist" in summary.attrs
     for c in criteria:
         missing = [m for m in c.metrics if m not in summary.variables]
-        if missing and isinstance(scene, str):
+        if missing and other_scene:
             # a criterion of another scene (the airlaunch scene's clearance on a line-scene sweep)
             raise DefinitionError(f"{criteria_path}: &criteria: {', '.join(sorted(c.limits))} is not allowed for "
                                   f"a sweep of scene '{scene}': its summary has no {', '.join(missing)} "

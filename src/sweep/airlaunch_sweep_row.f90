@@ -161,9 +161,7 @@ contains
     type(sweep_row) :: row
     real(dp) :: nan
     nan = row_nan()
-    row%id = id
-    row%status = merge(status_failed, status_ok, failed)
-    row%message = one_line(message)
+    row = ran_row(id, failed, message)
     row%metrics = [res%trim_alpha_deg, res%trim_elevator_deg, res%trim_thrust_n, &
       event(res%release_time), event(res%edge_time), event(res%separation_time), &
       merge(1.0_dp, 0.0_dp, res%early_separation), event(res%edge_pull_time), &
@@ -179,9 +177,10 @@ contains
       real(res%stats%nonlin_iters, dp), real(res%stats%nonlin_fails, dp), real(res%stats%err_test_fails, dp), &
       wall]
   contains
+    !> An event's time, NaN if it did not happen (time < 0).
     real(dp) function event(t)
       real(dp), intent(in) :: t
-      event = merge(t, nan, t >= 0.0_dp)
+      event = defined(t)
     end function event
   end function row_from_result
 
@@ -193,23 +192,32 @@ contains
     character(len=*), intent(in) :: message    !< the error message ("" if none)
     real(dp), intent(in) :: wall               !< wall time [s]
     type(sweep_row) :: row
-    real(dp) :: nan
-    nan = row_nan()
-    row%id = id
-    row%status = merge(status_failed, status_ok, failed)
-    row%message = one_line(message)
+    row = ran_row(id, failed, message)
     row%metrics = [defined(res%peak_tension), defined(res%peak_tension_time), defined(res%max_end_tension(1)), &
       defined(res%max_end_tension(2)), defined(res%line_break_time), real(res%line_breaks, dp), &
       real(res%line_break_segment, dp), defined(res%deploy_speed), defined(res%final_tip_speed), res%end_time, &
       real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       merge(1.0_dp, 0.0_dp, res%completed), wall]
-  contains
-    !> line_result's "not defined" (negative) as NaN.
-    real(dp) function defined(x)
-      real(dp), intent(in) :: x
-      defined = merge(x, nan, x >= 0.0_dp)
-    end function defined
   end function row_from_line_result
+
+  !> The row of a case that ran: its id, status and message (the metrics are
+  !> the caller's).
+  function ran_row(id, failed, message) result(row)
+    integer, intent(in) :: id                  !< case id
+    logical, intent(in) :: failed              !< the run returned an error
+    character(len=*), intent(in) :: message    !< the error message ("" if none)
+    type(sweep_row) :: row
+    row%id = id
+    row%status = merge(status_failed, status_ok, failed)
+    row%message = one_line(message)
+  end function ran_row
+
+  !> A result's value, NaN where it marks "not defined" by a negative value
+  !> (an event that did not happen: time -1; no canopy: speed -1).
+  real(dp) function defined(x)
+    real(dp), intent(in) :: x
+    defined = merge(x, row_nan(), x >= 0.0_dp)
+  end function defined
 
   !> The row of a case whose input the scenario reader rejected: every
   !> summary variable of `set` NaN but the wall time, its last.
