@@ -122,3 +122,36 @@ def test_worst_by_of_the_airlaunch_scene_is_refused(airdrop_sweep, tmp_path):
     assert "&sweep: worst_by = 'min_clearance_m' is not allowed with a base scenario of scene 'line' (with " \
            "keep_worst > 0 it must be one of its summary variables: peak_line_tension_N, max_end_tension_a_N, " \
            "max_end_tension_b_N, final_tip_speed_m_s)" in res.stderr
+
+
+def test_invalid_and_failed_cases_of_a_line_sweep(tmp_path):
+    """input/line_snapback.nml (a 1 % stretched line, 20 kN) swept over its
+    strength and damping: a strength the initial tension already reaches is
+    the case's invalid input (the line scene's own one-line message, status
+    2, no metrics); an absurd damping of 1e30 N s fails numerically (status 1,
+    the message naming the time; keep_failed keeps its trajectory); the sound
+    case runs (status 0) and its scheduled cut is recorded."""
+    definition = tmp_path / "snap.nml"
+    definition.write_text(f"""&sweep
+  name = 'snap'
+  base = '{ROOT / "input" / "line_snapback.nml"}'
+  output_dir = 'out'
+  design = 'grid'
+  keep_failed = .true.
+/
+&input name = 'line%breaking_strength', distribution = 'list', values = 1.0e4, 3.0e4, units = 'N' /
+&input name = 'line%damping', distribution = 'list', values = 300.0, 1.0e30, units = 'N s' /
+""")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        assert s["status"].values.tolist() == [2, 2, 0, 1]
+        for case in (0, 1):
+            assert str(s["failure"].values[case]).startswith(
+                f"case {case}: &line: breaking_strength = 10000.0 N is not allowed: the initial shape's tension "
+                "is already 2")
+            assert np.isnan(s["peak_line_tension_N"].values[case]) and s["completed"].values[case] == -1
+        assert s["line_break_time_s"].values[2] == 0.005 and s["completed"].values[2] == 1
+        assert "integration failed at t = " in str(s["failure"].values[3]) and s["completed"].values[3] == 0
+    assert sorted(p.name for p in (tmp_path / "out" / "trajectories").glob("*.nc")) == ["case_000003.nc"]
