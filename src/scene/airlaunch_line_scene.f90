@@ -71,6 +71,7 @@ module airlaunch_line_scene
     integer :: line_breaks = 0                 !< segments parted in all
     real(dp) :: deploy_speed = -1.0_dp         !< air speed at the canopy's deployment [m/s]
     real(dp) :: final_tip_speed = -1.0_dp      !< speed of node N (end b) at the last record [m/s]
+    real(dp) :: recoil_speed = -1.0_dp         !< largest node speed change since the first break (records) [m/s]
     real(dp) :: end_time = 0.0_dp              !< time the integration reached [s]
     type(line_scheme_stats) :: stats           !< integrator work
     logical :: completed = .false.             !< reached t_end
@@ -112,6 +113,10 @@ module airlaunch_line_scene
     real(dp) :: line_break_time = -1.0_dp            !< the line first parted [s] (-1: it did not)
     integer :: line_break_segment = 0                !< there, this segment (0: whole)
     integer :: line_breaks = 0                       !< segments parted in all
+    !> the recoil after the first break: the largest speed change of a node since
+    !> that instant, |v_k(t) - v_k(t_break)|, over the records [m/s] (-1: no break)
+    real(dp) :: recoil_speed = -1.0_dp
+    real(dp), allocatable :: v_break(:, :)           !< node velocities at the first break (3, 0:N) [m/s]
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -391,6 +396,10 @@ contains
     if (self%line_breaks == 0) then
       self%line_break_time = self%scheme%t
       self%line_break_segment = first
+      ! (the state does not jump at a break: the velocities the recoil starts from)
+      call self%scheme%get_state(self%x, self%v)
+      self%v_break = self%v
+      self%recoil_speed = 0.0_dp
     end if
     self%line_breaks = self%model%n_parted
   end subroutine take_parts
@@ -479,6 +488,11 @@ contains
     self%time(m) = t
     self%tip(:, m) = self%x(:, n)
     self%tip_velocity(:, m) = self%v(:, n)
+    if (allocated(self%v_break)) then
+      do k = 0, n
+        self%recoil_speed = max(self%recoil_speed, norm2(self%v(:, k) - self%v_break(:, k)))
+      end do
+    end if
     self%end_tension(:, m) = [self%tension(1), self%tension(n)]
     self%end_force(:, 1, m) = self%f(:, 0)
     self%end_force(:, 2, m) = self%f(:, n)
@@ -517,6 +531,8 @@ contains
     self%line_break_time = -1.0_dp
     self%line_break_segment = 0
     self%line_breaks = 0
+    self%recoil_speed = -1.0_dp
+    if (allocated(self%v_break)) deallocate(self%v_break)
     self%n_out = 0
     self%completed = .false.
     self%ready = .false.
@@ -877,6 +893,7 @@ contains
     r%line_break_time = scene%line_break_time
     r%line_break_segment = scene%line_break_segment
     r%line_breaks = scene%line_breaks
+    r%recoil_speed = scene%recoil_speed
     r%deploy_speed = scene%deploy_speed
     r%end_time = scene%t_reached
     r%stats = scene%stats
@@ -901,7 +918,8 @@ contains
     if (.not. (allocated(scene%strength) .or. scene%cfg%break_time > 0.0_dp)) return
     text = "line break: none" // new_line("a")
     if (scene%line_breaks > 0) text = "line break: segment " // str(scene%line_break_segment) // " parted at t = " // &
-      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all" // new_line("a")
+      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all; recoil: a node's " // &
+      "speed changed by up to " // str(scene%recoil_speed) // " m/s since (records)" // new_line("a")
   end function break_note
 
   !> The summary's line on the initial shape: its largest segment strain and
@@ -1019,6 +1037,7 @@ contains
     call w%add_real_att("/", "line_break_time_s", scene%line_break_time, error)
     call w%add_int_att("/", "line_break_segment", [scene%line_break_segment], error)
     call w%add_int_att("/", "line_breaks", [scene%line_breaks], error)
+    call w%add_real_att("/", "line_recoil_speed_m_s", scene%recoil_speed, error)
     if (scene%line_breaks > 0) call w%add_int_att("/", "line_parted_segments", &
       pack([(k, k = 1, n)], scene%model%parted), error)
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)

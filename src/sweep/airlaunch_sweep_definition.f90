@@ -30,9 +30,9 @@ module airlaunch_sweep_definition
   !> direction in which they get worse.
   !> (the airlaunch scene's four, then the line scene's own: load_sweep checks
   !> that it is one of the base scene's)
-  character(len=40), parameter :: worst_by_names(7) = [character(len=40) :: "min_clearance_m", &
+  character(len=40), parameter :: worst_by_names(8) = [character(len=40) :: "min_clearance_m", &
     "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
-    "max_end_tension_a_N", "max_end_tension_b_N", "final_tip_speed_m_s"]
+    "max_end_tension_a_N", "max_end_tension_b_N", "line_recoil_speed_m_s", "final_tip_speed_m_s"]
 
   !> One varied input.
   type :: sweep_input

@@ -59,6 +59,7 @@ def test_rows_are_the_single_runs_of_the_cases(airdrop_sweep):
                 assert row["end_time_s"] == ds["time"].values[-1] == 4.0
                 assert row["steps"] == ds.attrs["steps"]
                 assert row["line_breaks"] == 0 and np.isnan(row["line_break_time_s"])
+                assert np.isnan(row["line_recoil_speed_m_s"]) and ds.attrs["line_recoil_speed_m_s"] == -1.0
         # the opening shock: the peak of every case is an opening load of several g on the
         # ~1 t platform (a 580 m^2 canopy at ~67 m/s), and lies after its deployment
         g = 9.80665
@@ -121,7 +122,7 @@ def test_worst_by_of_the_airlaunch_scene_is_refused(airdrop_sweep, tmp_path):
     assert res.stderr.strip().count("\n") == 0
     assert "&sweep: worst_by = 'min_clearance_m' is not allowed with a base scenario of scene 'line' (with " \
            "keep_worst > 0 it must be one of its summary variables: peak_line_tension_N, max_end_tension_a_N, " \
-           "max_end_tension_b_N, final_tip_speed_m_s)" in res.stderr
+           "max_end_tension_b_N, line_recoil_speed_m_s, final_tip_speed_m_s)" in res.stderr
 
 
 def test_invalid_and_failed_cases_of_a_line_sweep(tmp_path):
@@ -153,5 +154,7 @@ def test_invalid_and_failed_cases_of_a_line_sweep(tmp_path):
                 "is already 2")
             assert np.isnan(s["peak_line_tension_N"].values[case]) and s["completed"].values[case] == -1
         assert s["line_break_time_s"].values[2] == 0.005 and s["completed"].values[2] == 1
+        # its recoil: every node at c eps0 = sqrt(EA / rho) 0.01 = 20 m/s (the base's grid-scale damping)
+        assert s["line_recoil_speed_m_s"].values[2] == pytest.approx(20.0, rel=5e-3)
         assert "integration failed at t = " in str(s["failure"].values[3]) and s["completed"].values[3] == 0
     assert sorted(p.name for p in (tmp_path / "out" / "trajectories").glob("*.nc")) == ["case_000003.nc"]
