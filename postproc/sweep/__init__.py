@@ -1,4 +1,5 @@
-"""Monte Carlo sweeps of the air-launch scenario: case tables, safety envelopes, figures.
+"""Monte Carlo sweeps of the air-launch scenario and of the standalone line scene: case tables,
+safety envelopes, figures.
 
 The chain (docs/sweep.md):
 
