@@ -918,8 +918,9 @@ contains
     if (.not. (allocated(scene%strength) .or. scene%cfg%break_time > 0.0_dp)) return
     text = "line break: none" // new_line("a")
     if (scene%line_breaks > 0) text = "line break: segment " // str(scene%line_break_segment) // " parted at t = " // &
-      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all; recoil: a node's " // &
-      "speed changed by up to " // str(scene%recoil_speed) // " m/s since (records)" // new_line("a")
+      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all; recoil " // &
+      str(scene%recoil_speed) // " m/s (the largest change of a node's velocity since, over the records)" // &
+      new_line("a")
   end function break_note
 
   !> The summary's line on the initial shape: its largest segment strain and
