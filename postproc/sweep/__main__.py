@@ -76,7 +76,7 @@ def check_summary_belongs(defn, summary, summary_path) -> None:
 
 def cmd_envelope(args) -> int:
     """Evaluate the criteria on the summary; write the envelope and the figures."""
-    from .criteria import read_criteria
+    from .criteria import SCENE_CRITERION_METRICS, base_scene, check_scene, read_criteria
     from .envelope import evaluate, worst_case_table
     from .table import open_netcdf, output_dir_error, write_atomic
 
@@ -85,6 +85,9 @@ def cmd_envelope(args) -> int:
     if not criteria_path:
         raise DefinitionError(f"{defn.path}: &sweep: no criteria file (set criteria = 'FILE' or give --criteria)")
     criteria = read_criteria(criteria_path)
+    # criteria of another scene than the base's: refused before any case runs (scripts/sweep checks first)
+    scene = base_scene(defn.base)
+    check_scene(criteria, scene, SCENE_CRITERION_METRICS.get(scene), criteria_path)
     if args.check:
         print(f"envelope: criteria {criteria_path} ({len(criteria)} criteria) for {defn.path}")
         return 0
@@ -100,17 +103,11 @@ def cmd_envelope(args) -> int:
     if inputs.split() != names:
         raise DefinitionError(f"{summary_path}: the summary's inputs ({inputs}) are "
                               f"not those of {defn.path} ({' '.join(names)})")
-    scene = summary.attrs.get("scene")
+    summary_scene = summary.attrs.get("scene")
     # a summary of another scene than the air-launch (whose summary has every criterion's variable);
     # an envelope file has a scene too, but not the summary's base_namelist
-    other_scene = isinstance(scene, str) and scene != "airlaunch" and "base_namelist" in summary.attrs
-    for c in criteria:
-        missing = [m for m in c.metrics if m not in summary.variables]
-        if missing and other_scene:
-            # a criterion of another scene (the airlaunch scene's clearance on a line-scene sweep)
-            raise DefinitionError(f"{criteria_path}: &criteria: {', '.join(sorted(c.limits))} is not allowed for "
-                                  f"a sweep of scene '{scene}': its summary has no {', '.join(missing)} "
-                                  f"(leave the criterion out; docs/sweep.md lists each scene's summary variables)")
+    if isinstance(summary_scene, str) and summary_scene != "airlaunch" and "base_namelist" in summary.attrs:
+        check_scene(criteria, summary_scene, set(summary.variables), criteria_path)
     needed = ["status"] + names + sorted({m for c in criteria for m in c.metrics})
     for var in needed:
         if var not in summary.variables:

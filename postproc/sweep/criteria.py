@@ -23,6 +23,32 @@ CRITERIA_VARS = ("min_clearance_m", "line_strength_n", "line_safety_factor",
                  "firing_pitch_min_deg", "firing_pitch_max_deg", "firing_time_max_s")
 
 
+#: The criteria's summary variables that a sweep of each scene other than the
+#: air-launch has (an airlaunch-scene summary has every one; docs/sweep.md).
+SCENE_CRITERION_METRICS = {"line": ("peak_line_tension_N",)}
+
+
+def check_scene(criteria, scene, have, path):
+    """Refuse a criterion whose summary variables a sweep of `scene` has not
+    (`have`: the variables it has; None: every one) in one line."""
+    for c in criteria:
+        missing = [m for m in c.metrics if have is not None and m not in have]
+        if missing:
+            raise DefinitionError(f"{path}: &criteria: {', '.join(sorted(c.limits))} is not allowed for a sweep "
+                                  f"of scene '{scene}': its summary has no {', '.join(missing)} (leave the "
+                                  "criterion out; docs/sweep.md lists each scene's summary variables)")
+
+
+def base_scene(base):
+    """The &run scene of a base scenario ('airlaunch' when it sets none; None if
+    the file cannot be read: airlaunch-sweep names that)."""
+    try:
+        nml = f90nml.reads(read_namelist_text(base, "the base scenario"))
+        return str(nml.get("run", {}).get("scene", "airlaunch")).strip().lower()
+    except Exception:   # noqa: BLE001 - any unreadable base is airlaunch-sweep's to report
+        return None
+
+
 @dataclasses.dataclass(frozen=True)
 class Criterion:
     """One evaluated criterion: name, what it limits, and how to compute its margin."""

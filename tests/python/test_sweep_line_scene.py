@@ -102,10 +102,13 @@ def test_envelope_of_the_peak_tension(airdrop_sweep):
         np.testing.assert_array_equal(line["passed"].values, (peak <= 50.0e3).astype(np.int8))
 
 
-def test_criteria_of_the_airlaunch_scene_are_refused(airdrop_sweep):
+@pytest.mark.parametrize("check", [True, False], ids=["before-the-cases", "envelope"])
+def test_criteria_of_the_airlaunch_scene_are_refused(airdrop_sweep, check):
+    """Refused by `envelope --check`, which scripts/sweep runs before any case
+    (from the base's &run scene), and by the envelope step (from the summary)."""
     tmp, _ = airdrop_sweep
     res = run_python(["envelope", tmp / "sweep_airdrop.nml", "--no-figures", "--criteria",
-                      ROOT / "input" / "criteria_paper.nml"], tmp)
+                      ROOT / "input" / "criteria_paper.nml"] + (["--check"] if check else []), tmp)
     assert res.returncode == 2
     assert res.stderr.strip().count("\n") == 0
     assert "&criteria: min_clearance_m is not allowed for a sweep of scene 'line': its summary has no " \
