@@ -25,6 +25,11 @@ from .criteria import Criterion
 Z95 = st.norm.ppf(0.975)
 
 
+def envelope_name(scene: str) -> str:
+    """What the envelope of a sweep of `scene` is called (titles, figures)."""
+    return "separation safety envelope" if scene == "airlaunch" else f"{scene} scene safety envelope"
+
+
 def input_names(summary: xr.Dataset) -> list:
     """The varied inputs of a summary (its `inputs` attribute, in order)."""
     return summary.attrs["inputs"].split()
@@ -80,8 +85,8 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
         for key, value in c.limits.items():
             ds.attrs[f"limit_{key}"] = value
     scene = str(summary.attrs.get("scene", "airlaunch"))   # (summaries before line-scene sweeps: airlaunch)
-    what = "separation safety envelope" if scene == "airlaunch" else f"{scene} scene safety envelope"
-    ds.attrs.update({"title": f"airlaunch {what}: {summary.attrs.get('sweep_name', '')}", "scene": scene,
+    ds.attrs.update({"title": f"airlaunch {envelope_name(scene)}: {summary.attrs.get('sweep_name', '')}",
+                     "scene": scene,
                      "inputs": summary.attrs["inputs"], "n_cases": np.int32(n),
                      "n_not_ok": np.int32((~ok).sum()),
                      "probability_note": "fraction of the table's cases that pass: an estimate of the "

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .envelope import pass_probability_map, worst_case_table  # noqa: E402
+from .envelope import envelope_name, pass_probability_map, worst_case_table  # noqa: E402
 
 PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
 
@@ -95,9 +95,8 @@ def passfail_figure(env, criterion="all"):
         ax.legend(fontsize=7, loc="best")
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
-    scene = str(env.attrs.get("scene", "airlaunch"))
-    what = "separation safety envelope" if scene == "airlaunch" else f"{scene} scene safety envelope"
-    fig.suptitle(f"{what} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
+    name = envelope_name(str(env.attrs.get("scene", "airlaunch")))
+    fig.suptitle(f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
     fig.tight_layout()
     return fig
 
