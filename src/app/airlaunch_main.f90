@@ -191,11 +191,21 @@ contains
     character(len=:), allocatable :: s
     if (r%has_line) then
       s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN, first reached at " // &
-        at(r%peak_tension_time) // new_line("a") // break_note(r)
+        at(r%peak_tension_time) // new_line("a") // line_clearance_note(r) // break_note(r)
     else
       s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
     end if
   end function tension_note
+
+  !> The line's smallest distance from the empennage point (the direct
+  !> coupling's; not tracked when the rigidized coupling ran).
+  function line_clearance_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s, d
+    d = fx(r%min_line_clearance, 2) // " m"
+    if (r%min_line_clearance < 0.0_dp) d = "not tracked (the rigidized coupling ran)"
+    s = "minimum line-empennage clearance: " // d // new_line("a")
+  end function line_clearance_note
 
   !> Where and when the line parted (&line breaking_strength or break_time).
   function break_note(r) result(s)

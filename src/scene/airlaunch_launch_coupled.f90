@@ -33,7 +33,9 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
 
   !> The safety maxima taken over the integrators' steps (docs/output.md):
   !> the largest segment tension, |aircraft pitch - trim|, |n - 1|.
-  integer, parameter :: m_tension = 1, m_pitch = 2, m_load = 3
+  !> (m_line_gap: minus the line's clearance from the empennage point, so that
+  !> its smallest value is a maximum; tracked by the direct coupling only)
+  integer, parameter :: m_tension = 1, m_pitch = 2, m_load = 3, m_line_gap = 4
   !> Which integrator an observer watches: the direct system (all three), the
   !> rigidized coupling's chain (pitch and load factor) or its line (tension).
   integer, parameter :: src_direct = 1, src_chain = 2, src_line = 3
@@ -57,6 +59,7 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   type :: coupled_run
     type(coupling_plan) :: plan                       !< how the coupling is chosen
     integer :: active = coupling_direct               !< the engine in use
+    logical :: rigidized_used = .false.               !< the rigidized coupling ran (no line clearance)
     ! --- the direct coupling (b)
     type(launch_system), pointer :: dsys => null()    !< on the heap: CVODE keeps its address
     type(cvode_solver) :: dsolver                     !< its integrator
@@ -180,6 +183,7 @@ contains
         r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax), r%steps_rec(nmax))
     end if
     r%active = r%plan%initial()
+    r%rigidized_used = r%active /= coupling_direct
     r%auto%active = r%active
     if (.not. r%plan%uses_rigidized()) return
     allocate(r%xl(3, 0:n), r%vl(3, 0:n), r%ten(n))
@@ -845,6 +849,7 @@ contains
       call r%dsys%prepare(t, r%dsolver%y, status)
       call rigidized_resume(r, t, err)
       r%active = coupling_rigidized
+      r%rigidized_used = .true.
     else
       t = r%cpl%t
       call add_rigidized_counts(r, res)
@@ -915,7 +920,7 @@ contains
     type(scenario_config), intent(in) :: cfg
     type(launch_result), intent(inout) :: res
     integer :: status
-    real(dp) :: t
+    real(dp) :: t, gap
     type(error_type), allocatable :: eval_error
     type(launch_sample) :: smp
     t = r%dsolver%t
@@ -925,6 +930,11 @@ contains
       smp = sample_launch(cfg, s%sep, s%iloads)
       if (s%has_line) then
         if (record_milestones(res, t, smp, s%sep, s%tension)) r%last_record_of_extremum = t
+        gap = s%line_clearance()
+        if (gap < res%min_line_clearance) then
+          res%min_line_clearance = gap
+          r%last_record_of_extremum = t
+        end if
       else
         if (record_milestones(res, t, smp, s%sep)) r%last_record_of_extremum = t
       end if
@@ -1010,7 +1020,7 @@ contains
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(in) :: res
     real(dp), intent(in) :: band
-    allocate(r%trk(3))
+    allocate(r%trk(4))
     r%trk%band = band
     r%dobs%source = src_direct
     r%dobs%dsys => r%dsys
@@ -1060,6 +1070,14 @@ contains
     end if
     res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, r%trk(m_pitch)%best)
     res%max_load_factor_excursion = max(res%max_load_factor_excursion, r%trk(m_load)%best)
+    if (res%has_line) then
+      ! the direct coupling's steps alone see the line and the aircraft together
+      if (r%rigidized_used) then
+        res%min_line_clearance = -1.0_dp
+      else if (r%trk(m_line_gap)%t_best >= 0.0_dp) then
+        res%min_line_clearance = min(res%min_line_clearance, -r%trk(m_line_gap)%best)
+      end if
+    end if
   end subroutine take_maxima
 
   !> Whether the observer's integrator carries metric m.
@@ -1068,9 +1086,9 @@ contains
     integer, intent(in) :: m
     select case (self%source)
     case (src_direct)
-      watches = m /= m_tension .or. self%dsys%has_line
+      watches = (m /= m_tension .and. m /= m_line_gap) .or. self%dsys%has_line
     case (src_chain)
-      watches = m /= m_tension
+      watches = m == m_pitch .or. m == m_load
     case default
       watches = m == m_tension
     end select
@@ -1103,8 +1121,11 @@ contains
           call s%prepare(t, self%y, status)
           ok = status == 0
           if (.not. ok) return
-          if (s%has_line) q(m_tension) = maxval(s%tension)
-          if (only == m_tension) return
+          if (s%has_line) then
+            q(m_tension) = maxval(s%tension)
+            q(m_line_gap) = -s%line_clearance()
+          end if
+          if (only == m_tension .or. only == m_line_gap) return
           if (.not. estimate) call s%sep%evaluate(t, s%yabs(1:rigid_size), eval_error)
           ok = .not. allocated(eval_error)
           if (.not. ok) return

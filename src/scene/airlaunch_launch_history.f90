@@ -34,6 +34,9 @@ module airlaunch_launch_history
     real(dp) :: pitch_at_separation_deg = 0.0_dp, pitch_rate_at_separation_deg_s = 0.0_dp
     real(dp) :: pitch_max_time = -1.0_dp, pitch_max_deg = 0.0_dp, nose_elevation_at_max_deg = 0.0_dp
     real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
+    !> smallest distance from the aircraft's empennage point to the line [m]
+    !> (huge: no line; -1: not tracked, the rigidized coupling ran)
+    real(dp) :: min_line_clearance = huge(1.0_dp)
     real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
     real(dp) :: max_constraint_residual = 0.0_dp
     real(dp) :: line_break_time = -1.0_dp    !< the line first parted [s] (-1: it did not)
@@ -363,6 +366,8 @@ contains
     call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
     call w%add_text_att("/", "line_enabled", trim(merge("true ", "false", res%has_line)), error)
     if (res%has_line) then
+      call w%add_real_att("/", "min_line_clearance_m", &
+        merge(res%min_line_clearance, -1.0_dp, res%min_line_clearance < huge(1.0_dp)), error)
       call w%add_real_att("/", "peak_line_tension_N", res%peak_tension, error)
       call w%add_real_att("/", "peak_line_tension_time_s", res%peak_tension_time, error)
       call w%add_real_att("/", "line_break_time_s", res%line_break_time, error)

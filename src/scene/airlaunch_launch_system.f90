@@ -39,7 +39,7 @@ module airlaunch_launch_system
   use airlaunch_rigid_body, only: body_state_name
   use airlaunch_parachute, only: parachute, canopy_node_acceleration
   use airlaunch_launch_loads, only: launch_loads
-  use airlaunch_clearance, only: clearance_geometry, clearance_rate
+  use airlaunch_clearance, only: clearance_geometry, clearance_rate, segment_distance
   implicit none
   private
   public :: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, launch_gust_root
@@ -112,6 +112,7 @@ module airlaunch_launch_system
     procedure :: line_tensions => launch_line_tensions
     procedure :: weakest_segment => launch_weakest_segment
     procedure :: may_still_part => launch_may_still_part
+    procedure :: line_clearance => launch_line_clearance
     procedure :: velocity_partners => launch_velocity_partners
     procedure :: has_projection => launch_has_projection
     procedure :: has_jacobian => launch_has_jacobian
@@ -281,6 +282,25 @@ contains
     integer, intent(out) :: k
     call weakest_segment(self%strength, self%tension, margin, k)
   end subroutine launch_weakest_segment
+
+  !> The line's clearance from the aircraft's empennage point (the rocket
+  !> clearance's point, clr%point): the smallest distance of the point from the
+  !> line's segments that have not parted [m], from the bodies and nodes as
+  !> prepare left them (node 0 at the tie-down); huge without a line.
+  pure real(dp) function launch_line_clearance(self) result(d)
+    class(launch_system), intent(in) :: self
+    real(dp) :: p(3)
+    integer :: j
+    d = huge(1.0_dp)
+    if (.not. self%has_line) return
+    p = self%sep%bodies(0)%point_position(self%clr%point)
+    do j = 1, self%line%n
+      if (self%line%n_parted > 0) then
+        if (self%line%parted(j)) cycle
+      end if
+      d = min(d, segment_distance(p, self%x(:, j - 1), self%x(:, j)))
+    end do
+  end function launch_line_clearance
 
   !> The line can still part later in the run: its scheduled cut (&line
   !> break_time) is still to come, or a segment that has not parted has a

@@ -98,8 +98,8 @@ contains
     end do
     if (def%keep_worst > 0) then
       m = metrics%index(def%worst_by)
-      ! smaller clearance is worse; larger loads and excursions are worse
-      sgn = merge(1.0_dp, -1.0_dp, def%worst_by == "min_clearance_m")
+      ! smaller clearances are worse; larger loads, excursions and speeds are worse
+      sgn = merge(1.0_dp, -1.0_dp, def%worst_by == "min_clearance_m" .or. def%worst_by == "min_line_clearance_m")
       do k = 1, size(rows)
         key(k) = huge(1.0_dp)
         if (rows(k)%status == status_ok .and. rows(k)%metrics(m) == rows(k)%metrics(m)) &

@@ -25,21 +25,21 @@ module airlaunch_sweep_row
   integer, parameter :: status_invalid = 2  !< the case's input was rejected by the scenario reader
   character(len=16), parameter :: status_names(0:2) = [character(len=16) :: "ok", "failed", "invalid_input"]
 
-  integer, parameter :: n_metrics = 30
+  integer, parameter :: n_metrics = 31
   !> Summary variables of the airlaunch scene (the single run's milestone attribute names).
   character(len=40), parameter :: metric_names(n_metrics) = [character(len=40) :: &
     "trim_alpha_deg", "trim_elevator_deg", "trim_thrust_N", &
     "release_time_s", "edge_time_s", "separation_time_s", "early_separation", "edge_pull_time_s", &
     "pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", &
     "pitch_max_time_s", "pitch_max_deg", "nose_elevation_at_pitch_max_deg", &
-    "min_clearance_m", "peak_line_tension_N", "peak_line_tension_time_s", "line_break_time_s", "line_breaks", &
-    "line_break_segment", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
+    "min_clearance_m", "min_line_clearance_m", "peak_line_tension_N", "peak_line_tension_time_s", &
+    "line_break_time_s", "line_breaks", "line_break_segment", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
     "max_constraint_residual_m", &
     "end_time_s", "steps", "rhs_evals", "jac_evals", "nonlin_iters", "nonlin_fails", "err_test_fails", &
     "wall_time_s"]
   character(len=12), parameter :: metric_units(n_metrics) = [character(len=12) :: &
     "degree", "degree", "N", "s", "s", "s", "1", "s", "degree", "degree s-1", "s", "degree", "degree", &
-    "m", "N", "s", "s", "1", "1", "degree", "1", "m", "s", "1", "1", "1", "1", "1", "1", "s"]
+    "m", "m", "N", "s", "s", "1", "1", "degree", "1", "m", "s", "1", "1", "1", "1", "1", "1", "s"]
   character(len=120), parameter :: metric_long_names(n_metrics) = [character(len=120) :: &
     "trim angle of attack (Case 0)", "trim elevator deflection", "trim thrust", &
     "release: Case 0 -> 1 (NaN: not reached)", "rocket CG at the ramp edge: Case 1 -> 2 (NaN: not reached)", &
@@ -49,6 +49,7 @@ module airlaunch_sweep_row
     "time of the first rocket pitch maximum after separation (the firing moment; NaN: not reached)", &
     "rocket Euler pitch at its first maximum", "rocket nose elevation at the first pitch maximum", &
     "minimum distance from the rocket's surface to the empennage point after separation (NaN: not separated)", &
+    "minimum distance from the empennage point to the line (NaN: no line, or the rigidized coupling ran)", &
     "peak line tension (NaN: the scene has no line)", "time of the peak line tension (NaN: no line)", &
     "the line first parted (&line breaking_strength or break_time; NaN: it did not, or no line)", &
     "segments of the line parted (0: none, or no line)", &
@@ -58,8 +59,8 @@ module airlaunch_sweep_row
     "CVODE steps", "right-hand-side evaluations", "Jacobian evaluations", "Newton iterations", &
     "Newton convergence failures", "error-test failures", "wall time of the case on its rank"]
   logical, parameter :: metric_is_integer(n_metrics) = [.false., .false., .false., .false., .false., .false., &
-    .true., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .true., &
-    .true., .false., .false., .false., .false., .true., .true., .true., .true., .true., .true., .false.]
+    .true., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., &
+    .true., .true., .false., .false., .false., .false., .true., .true., .true., .true., .true., .true., .false.]
 
   !> Summary variables of the line scene (scene = 'line': docs/line.md §4;
   !> the names the airlaunch scene shares mean the same).
@@ -171,6 +172,8 @@ contains
       event(res%pitch_max_time), merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%min_clearance, nan, res%min_clearance < huge(1.0_dp)), &
+      merge(res%min_line_clearance, nan, res%min_line_clearance >= 0.0_dp .and. &
+        res%min_line_clearance < huge(1.0_dp)), &
       merge(res%peak_tension, nan, res%has_line), merge(event(res%peak_tension_time), nan, res%has_line), &
       event(res%line_break_time), real(res%line_breaks, dp), real(res%line_break_segment, dp), &
       res%max_aircraft_pitch_excursion_deg, res%max_load_factor_excursion, res%max_constraint_residual, &
