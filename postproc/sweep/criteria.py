@@ -18,7 +18,7 @@ import numpy as np
 from .definition import DefinitionError, check_namelist_text, read_namelist_text, show, to_float
 
 #: Variables of &criteria (what each limits is in docs/sweep.md).
-CRITERIA_VARS = ("min_clearance_m", "line_strength_n", "line_safety_factor",
+CRITERIA_VARS = ("min_clearance_m", "min_line_clearance_m", "line_strength_n", "line_safety_factor",
                  "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion",
                  "firing_pitch_min_deg", "firing_pitch_max_deg", "firing_time_max_s")
 
@@ -66,6 +66,8 @@ class Criterion:
         lim = self.limits
         if self.name == "clearance":
             return m["min_clearance_m"] - lim["min_clearance_m"]
+        if self.name == "line_clearance":
+            return m["min_line_clearance_m"] - lim["min_line_clearance_m"]
         if self.name == "line_tension":
             return lim["line_strength_n"] / lim["line_safety_factor"] - m["peak_line_tension_N"]
         if self.name == "aircraft_pitch":
@@ -126,6 +128,13 @@ def parse_criteria(text, path="<criteria>"):
         out.append(Criterion("clearance", "minimum rocket-aircraft clearance after separation >= limit",
                              "m", max(v["min_clearance_m"], 1.0), ("min_clearance_m",),
                              {"min_clearance_m": v["min_clearance_m"]}))
+    if "min_line_clearance_m" in v:
+        if v["min_line_clearance_m"] < 0:
+            raise DefinitionError(f"{where}min_line_clearance_m = {v['min_line_clearance_m']:g} is not allowed "
+                                  "(must be >= 0 m)")
+        out.append(Criterion("line_clearance", "minimum line-empennage clearance >= limit (direct coupling)",
+                             "m", max(v["min_line_clearance_m"], 1.0), ("min_line_clearance_m",),
+                             {"min_line_clearance_m": v["min_line_clearance_m"]}))
     if "line_strength_n" in v or "line_safety_factor" in v:
         if "line_strength_n" not in v:
             raise DefinitionError(f"{where}line_safety_factor needs line_strength_n (the line's breaking strength, N)")

@@ -237,3 +237,18 @@ def test_worst_cases_not_computed_before_computed_cases_with_a_nan_metric():
     # by hand: not computed (1, 4), then the NaN metrics (0, 3), then by margin (2: 0.1 m, 5: 18.5 m)
     assert list(worst_cases(env, 6)) == [1, 4, 0, 3, 2, 5]
     assert list(worst_cases(env, 3)) == [1, 4, 0]
+
+
+def test_line_clearance_margin_and_untracked_cases():
+    """&criteria min_line_clearance_m: margin = min_line_clearance_m - limit; a
+    case whose line clearance was not tracked (NaN: the rigidized coupling ran)
+    fails it, as any NaN metric."""
+    a = np.linspace(0, 1, 5)
+    ds = synthetic_summary(a, a, np.full(5, 9.0))
+    ds["min_line_clearance_m"] = ("case", np.array([6.6, 4.0, 5.0, np.nan, 7.5]))
+    env = evaluate(ds, parse_criteria("&criteria\n  min_line_clearance_m = 5.0\n/\n"))
+    margin = env["margin"].sel(criterion="line_clearance").values
+    np.testing.assert_allclose(margin, [1.6, -1.0, 0.0, np.nan, 2.5], atol=1e-12)
+    assert list(env["passed"].sel(criterion="line_clearance").values) == [1, 0, 1, 0, 1]
+    with pytest.raises(DefinitionError, match="min_line_clearance_m = -1 is not allowed"):
+        parse_criteria("&criteria\n  min_line_clearance_m = -1.0\n/\n")
