@@ -59,7 +59,6 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   type :: coupled_run
     type(coupling_plan) :: plan                       !< how the coupling is chosen
     integer :: active = coupling_direct               !< the engine in use
-    logical :: rigidized_used = .false.               !< the rigidized coupling ran (no line clearance)
     ! --- the direct coupling (b)
     type(launch_system), pointer :: dsys => null()    !< on the heap: CVODE keeps its address
     type(cvode_solver) :: dsolver                     !< its integrator
@@ -183,7 +182,6 @@ contains
         r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax), r%steps_rec(nmax))
     end if
     r%active = r%plan%initial()
-    r%rigidized_used = r%active /= coupling_direct
     r%auto%active = r%active
     if (.not. r%plan%uses_rigidized()) return
     allocate(r%xl(3, 0:n), r%vl(3, 0:n), r%ten(n))
@@ -849,7 +847,6 @@ contains
       call r%dsys%prepare(t, r%dsolver%y, status)
       call rigidized_resume(r, t, err)
       r%active = coupling_rigidized
-      r%rigidized_used = .true.
     else
       t = r%cpl%t
       call add_rigidized_counts(r, res)
@@ -920,7 +917,7 @@ contains
     type(scenario_config), intent(in) :: cfg
     type(launch_result), intent(inout) :: res
     integer :: status
-    real(dp) :: t, gap
+    real(dp) :: t
     type(error_type), allocatable :: eval_error
     type(launch_sample) :: smp
     t = r%dsolver%t
@@ -929,12 +926,7 @@ contains
       call s%sep%evaluate(t, s%yabs(1:rigid_size), eval_error)
       smp = sample_launch(cfg, s%sep, s%iloads)
       if (s%has_line) then
-        if (record_milestones(res, t, smp, s%sep, s%tension)) r%last_record_of_extremum = t
-        gap = s%line_clearance()
-        if (gap < res%min_line_clearance) then
-          res%min_line_clearance = gap
-          r%last_record_of_extremum = t
-        end if
+        if (record_milestones(res, t, smp, s%sep, s%tension, s%line_clearance())) r%last_record_of_extremum = t
       else
         if (record_milestones(res, t, smp, s%sep)) r%last_record_of_extremum = t
       end if
@@ -1072,7 +1064,7 @@ contains
     res%max_load_factor_excursion = max(res%max_load_factor_excursion, r%trk(m_load)%best)
     if (res%has_line) then
       ! the direct coupling's steps alone see the line and the aircraft together
-      if (r%rigidized_used) then
+      if (r%plan%initial() /= coupling_direct .or. r%switches > 0) then   ! the rigidized coupling ran
         res%min_line_clearance = -1.0_dp
       else if (r%trk(m_line_gap)%t_best >= 0.0_dp) then
         res%min_line_clearance = min(res%min_line_clearance, -r%trk(m_line_gap)%best)

@@ -197,12 +197,13 @@ contains
 
   !> Update the running milestones with a sample; true if any extremum moved
   !> (for &run stop_when_final).  `tension` absent: the scene has no line.
-  logical function record_milestones(res, t, s, sep, tension) result(changed)
+  logical function record_milestones(res, t, s, sep, tension, line_gap) result(changed)
     type(launch_result), intent(inout) :: res
     real(dp), intent(in) :: t
     type(launch_sample), intent(in) :: s
     type(separation_system), intent(in) :: sep
     real(dp), intent(in), optional :: tension(:)
+    real(dp), intent(in), optional :: line_gap   !< the line's clearance from the empennage point [m]
     real(dp) :: dtheta, dn
     changed = .false.
     if (sep%phase == phase_free .and. s%clearance < res%min_clearance) then
@@ -213,6 +214,12 @@ contains
       if (maxval(tension) > res%peak_tension) then
         res%peak_tension = maxval(tension)
         res%peak_tension_time = t
+        changed = .true.
+      end if
+    end if
+    if (present(line_gap)) then
+      if (line_gap < res%min_line_clearance) then
+        res%min_line_clearance = line_gap
         changed = .true.
       end if
     end if

@@ -33,7 +33,8 @@ module airlaunch_sweep_row
     "pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", &
     "pitch_max_time_s", "pitch_max_deg", "nose_elevation_at_pitch_max_deg", &
     "min_clearance_m", "min_line_clearance_m", "peak_line_tension_N", "peak_line_tension_time_s", &
-    "line_break_time_s", "line_breaks", "line_break_segment", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
+    "line_break_time_s", "line_breaks", "line_break_segment", "max_aircraft_pitch_excursion_deg", &
+    "max_load_factor_excursion", &
     "max_constraint_residual_m", &
     "end_time_s", "steps", "rhs_evals", "jac_evals", "nonlin_iters", "nonlin_fails", "err_test_fails", &
     "wall_time_s"]
@@ -165,27 +166,21 @@ contains
     nan = row_nan()
     row = ran_row(id, failed, message)
     row%metrics = [res%trim_alpha_deg, res%trim_elevator_deg, res%trim_thrust_n, &
-      event(res%release_time), event(res%edge_time), event(res%separation_time), &
-      merge(1.0_dp, 0.0_dp, res%early_separation), event(res%edge_pull_time), &
+      defined(res%release_time), defined(res%edge_time), defined(res%separation_time), &
+      merge(1.0_dp, 0.0_dp, res%early_separation), defined(res%edge_pull_time), &
       merge(res%pitch_at_separation_deg, nan, res%separation_time >= 0.0_dp), &
       merge(res%pitch_rate_at_separation_deg_s, nan, res%separation_time >= 0.0_dp), &
-      event(res%pitch_max_time), merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
+      defined(res%pitch_max_time), merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%min_clearance, nan, res%min_clearance < huge(1.0_dp)), &
       merge(res%min_line_clearance, nan, res%min_line_clearance >= 0.0_dp .and. &
         res%min_line_clearance < huge(1.0_dp)), &
-      merge(res%peak_tension, nan, res%has_line), merge(event(res%peak_tension_time), nan, res%has_line), &
-      event(res%line_break_time), real(res%line_breaks, dp), real(res%line_break_segment, dp), &
+      merge(res%peak_tension, nan, res%has_line), merge(defined(res%peak_tension_time), nan, res%has_line), &
+      defined(res%line_break_time), real(res%line_breaks, dp), real(res%line_break_segment, dp), &
       res%max_aircraft_pitch_excursion_deg, res%max_load_factor_excursion, res%max_constraint_residual, &
       res%end_time, real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       real(res%stats%nonlin_iters, dp), real(res%stats%nonlin_fails, dp), real(res%stats%err_test_fails, dp), &
       wall]
-  contains
-    !> An event's time, NaN if it did not happen (time < 0).
-    real(dp) function event(t)
-      real(dp), intent(in) :: t
-      event = defined(t)
-    end function event
   end function row_from_result
 
   !> The row of a line-scene case that ran (completed or failed).
@@ -199,7 +194,8 @@ contains
     row = ran_row(id, failed, message)
     row%metrics = [defined(res%peak_tension), defined(res%peak_tension_time), defined(res%max_end_tension(1)), &
       defined(res%max_end_tension(2)), defined(res%line_break_time), real(res%line_breaks, dp), &
-      real(res%line_break_segment, dp), defined(res%recoil_speed), defined(res%deploy_speed), defined(res%final_tip_speed), res%end_time, &
+      real(res%line_break_segment, dp), defined(res%recoil_speed), defined(res%deploy_speed), &
+      defined(res%final_tip_speed), res%end_time, &
       real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       merge(1.0_dp, 0.0_dp, res%completed), wall]
   end function row_from_line_result
