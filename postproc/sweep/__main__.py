@@ -133,6 +133,10 @@ def cmd_envelope(args) -> int:
         row = env.sel(criterion=c)
         print(f"  {c:16s} {float(row['probability']):.4f} "
               f"[{float(row['wilson_low']):.4f}, {float(row['wilson_high']):.4f}]")
+    from .sensitivity import DRIVERS_HEADING, drivers_table
+
+    print(f"{DRIVERS_HEADING}, over {int(env['sensitivity_cases'].values[0])} computed cases:")
+    print(drivers_table(env), end="")
     if not args.no_figures:
         from .figures import draw_all
 

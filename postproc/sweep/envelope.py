@@ -7,7 +7,9 @@
 - ``pass_probability_map``: the probability of passing over a pair of inputs
   (Gaussian-kernel regression of the pass indicator, bandwidth by
   leave-one-out likelihood), whose 0.5 level is the boundary of the safe region;
-- ``worst_cases``: the cases with the smallest relative margin.
+- ``worst_cases``: the cases with the smallest relative margin;
+- the rank sensitivities of every margin to every input (``sensitivity.py``:
+  Spearman and partial rank correlations with 95 % intervals).
 
 A case that failed numerically or whose input was invalid passes no criterion
 (its margins are NaN): a sweep never counts what it could not compute as safe.
@@ -21,6 +23,7 @@ import scipy.stats as st
 import xarray as xr
 
 from .criteria import Criterion
+from .sensitivity import sensitivity
 
 Z95 = st.norm.ppf(0.975)
 
@@ -92,6 +95,7 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
                      "probability_note": "fraction of the table's cases that pass: an estimate of the "
                                          "probability of success under the table's input distributions; "
                                          "cases not computed count as failing"})
+    ds.update(sensitivity(ds))
     return ds
 
 

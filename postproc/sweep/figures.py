@@ -5,7 +5,9 @@
   0.5 level, the boundary of the safe region;
 - ``margins.png``: each criterion's margin against each input;
 - ``probability.png``: probability of success per criterion with 95 % intervals;
-- ``worst_cases.png`` (and ``worst_cases.md``): the table of the worst cases.
+- ``worst_cases.png`` (and ``worst_cases.md``): the table of the worst cases;
+- ``sensitivity.png``: which inputs drive each criterion (standardised rank
+  regression coefficients of the margins; sensitivity.py).
 """
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .envelope import envelope_name, pass_probability_map, worst_case_table  # noqa: E402
+from .sensitivity import by_importance, significant  # noqa: E402
 
 PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
 
@@ -149,6 +152,45 @@ def probability(env, path):
     plt.close(fig)
 
 
+def sensitivity(env, path):
+    """One panel per criterion: the standardised rank regression coefficient of
+    its margin on each input (largest on top; its square is the input's share
+    of the margin's rank variance), pale where the partial rank correlation's
+    95 % interval holds 0; the rank regression's R^2 in the title."""
+    crit = list(env["criterion"].values)
+    inputs = [str(v) for v in env["input"].values]
+    ncol = min(3, len(crit))
+    nrow = int(np.ceil(len(crit) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.8 * ncol, (0.45 * len(inputs) + 1.6) * nrow), squeeze=False)
+    for ax, c in zip(axes.ravel(), crit):
+        srrc = env["srrc"].sel(criterion=c).values
+        sig = significant(env, c)
+        order = by_importance(env, c)[::-1]   # the largest drawn on top
+        yy = np.arange(len(order))
+        for y_, j in zip(yy, order):
+            if np.isnan(srrc[j]):
+                ax.text(0.0, y_, "n/a", ha="center", va="center", fontsize=7)
+                continue
+            ax.barh(y_, srrc[j], color=PASS_COLOUR if srrc[j] > 0 else FAIL_COLOUR, alpha=0.8 if sig[j] else 0.25)
+            ax.text(srrc[j], y_, f" {srrc[j]:+.2f} ", ha="left" if srrc[j] >= 0 else "right", va="center",
+                    fontsize=7)
+        ax.axvline(0.0, color="k", lw=0.8)
+        ax.set_yticks(yy)
+        ax.set_yticklabels([inputs[j] for j in order], fontsize=7)
+        ax.set_xlim(-1.3, 1.3)
+        ax.set_title(f"{c} (rank R$^2$ = {float(env['rank_r2'].sel(criterion=c)):.2f})", fontsize=9)
+        ax.tick_params(axis="x", labelsize=7)
+    for ax in axes.ravel()[len(crit):]:
+        ax.axis("off")
+    n = int(env["sensitivity_cases"].values[0])
+    fig.suptitle("drivers: standardised rank regression coefficient of each margin on each input "
+                 f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
+                 "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def worst_table(env, path_png, path_md, k=10):
     """The worst cases as Markdown and as a picture of the table."""
     text = worst_case_table(env, k)
@@ -175,9 +217,10 @@ def draw_all(env, figure_dir):
     d.mkdir(parents=True, exist_ok=True)
     paths = {"passfail_map": d / "passfail_map.png", "margins": d / "margins.png",
              "probability": d / "probability.png", "worst_cases": d / "worst_cases.png",
-             "worst_cases_md": d / "worst_cases.md"}
+             "worst_cases_md": d / "worst_cases.md", "sensitivity": d / "sensitivity.png"}
     passfail_map(env, paths["passfail_map"])
     margins(env, paths["margins"])
     probability(env, paths["probability"])
     worst_table(env, paths["worst_cases"], paths["worst_cases_md"])
+    sensitivity(env, paths["sensitivity"])
     return paths

@@ -190,9 +190,11 @@ def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):
     assert res.returncode == 0, res.stdout + res.stderr
     out = tmp_path / "out"
     for name in ("table.nc", "summary.nc", "envelope.nc", "figures/passfail_map.png", "figures/margins.png",
-                 "figures/probability.png", "figures/worst_cases.png", "figures/worst_cases.md"):
+                 "figures/probability.png", "figures/worst_cases.png", "figures/worst_cases.md",
+                 "figures/sensitivity.png"):
         assert (out / name).is_file(), name
     assert "12 cases: 12 ok" in res.stdout
+    assert "drivers (standardised rank regression coefficient" in res.stdout
     with xr.open_dataset(out / "envelope.nc") as env:
         assert env.sizes["case"] == 12
         assert set(env["criterion"].values) >= {"clearance", "line_tension", "firing_attitude", "all"}
