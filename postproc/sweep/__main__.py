@@ -2,6 +2,7 @@
 
     python -m postproc.sweep table SWEEP.nml [--check]
     python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures] [--check]
+    python -m postproc.sweep verify SWEEP.nml [--cases K | --ids I,J,...] [--segments F] [--tolerance F] [--jobs J]
 
 Exit status 0 on success, 2 for bad input (one line on stderr).
 """
@@ -10,6 +11,8 @@ from __future__ import annotations
 import argparse
 import pathlib
 import sys
+
+import numpy as np
 
 from .definition import DefinitionError, check_base, read_definition
 
@@ -74,13 +77,11 @@ def check_summary_belongs(defn, summary, summary_path) -> None:
             raise DefinitionError(f"{where} (its values of {s.name} are not those of {source}): {again}")
 
 
-def cmd_envelope(args) -> int:
-    """Evaluate the criteria on the summary; write the envelope and the figures."""
+def read_criteria_for(defn, args):
+    """The criteria of the definition (or --criteria), refused in one line if
+    they are not those of the base's scene."""
     from .criteria import SCENE_CRITERION_METRICS, base_scene, check_scene, read_criteria
-    from .envelope import evaluate, worst_case_table
-    from .table import open_netcdf, output_dir_error, write_atomic
 
-    defn = read_definition(args.definition)
     criteria_path = args.criteria or defn.criteria
     if not criteria_path:
         raise DefinitionError(f"{defn.path}: &sweep: no criteria file (set criteria = 'FILE' or give --criteria)")
@@ -88,10 +89,17 @@ def cmd_envelope(args) -> int:
     # criteria of another scene than the base's: refused before any case runs (scripts/sweep checks first)
     scene = base_scene(defn.base)
     check_scene(criteria, scene, SCENE_CRITERION_METRICS.get(scene), criteria_path)
-    if args.check:
-        print(f"envelope: criteria {criteria_path} ({len(criteria)} criteria) for {defn.path}")
-        return 0
-    summary_path = pathlib.Path(args.summary or defn.summary_path)
+    return criteria, criteria_path
+
+
+def load_summary(defn, summary_arg, criteria, criteria_path):
+    """The sweep's summary (OUTPUT_DIR/summary.nc or summary_arg), checked: a
+    sweep summary with the definition's inputs and the criteria's variables,
+    of the definition's current table."""
+    from .criteria import check_scene
+    from .table import open_netcdf
+
+    summary_path = pathlib.Path(summary_arg or defn.summary_path)
     if not summary_path.is_file():
         raise DefinitionError(f"{summary_path}: summary does not exist (run airlaunch-sweep first)")
     hint = "give the summary.nc that airlaunch-sweep writes"
@@ -116,6 +124,20 @@ def cmd_envelope(args) -> int:
             raise DefinitionError(f"{summary_path}: not a sweep summary: variable '{var}' is not a number per case "
                                   f"(dimensions {summary[var].dims}, type {summary[var].dtype}) ({hint})")
     check_summary_belongs(defn, summary, summary_path)
+    return summary, summary_path
+
+
+def cmd_envelope(args) -> int:
+    """Evaluate the criteria on the summary; write the envelope and the figures."""
+    from .envelope import evaluate, worst_case_table
+    from .table import output_dir_error, write_atomic
+
+    defn = read_definition(args.definition)
+    criteria, criteria_path = read_criteria_for(defn, args)
+    if args.check:
+        print(f"envelope: criteria {criteria_path} ({len(criteria)} criteria) for {defn.path}")
+        return 0
+    summary, summary_path = load_summary(defn, args.summary, criteria, criteria_path)
     env = evaluate(summary, criteria)
     env.attrs["criteria_file"] = str(criteria_path)
     env.attrs["summary"] = str(summary_path)
@@ -150,9 +172,91 @@ def cmd_envelope(args) -> int:
     return 0
 
 
+def cmd_verify(args) -> int:
+    """Rerun the cases nearest the boundary (or --ids) refined; compare margins."""
+    from .criteria import base_scene
+    from .envelope import evaluate
+    from .table import output_dir_error, write_atomic
+    from .verify import nearest_the_boundary, verification_table, verify
+
+    defn = read_definition(args.definition)
+    criteria, criteria_path = read_criteria_for(defn, args)
+    summary, _ = load_summary(defn, args.summary, criteria, criteria_path)
+    env = evaluate(summary, criteria)
+    n = env.sizes["case"]
+    if args.ids:
+        try:
+            ids = [int(v) for v in args.ids.split(",")]
+        except ValueError:
+            raise DefinitionError(f"--ids {args.ids}: not a comma-separated list of case ids") from None
+        bad = [i for i in ids if not 0 <= i < n]
+        if bad:
+            raise DefinitionError(f"--ids {args.ids}: case {bad[0]} is not in 0 ... {n - 1}")
+    else:
+        ids = list(nearest_the_boundary(env, args.cases))
+    if not ids:   # not an error: the sweep has no case with a margin on every criterion
+        print("verify: no computed case has a finite margin on every criterion (an event never came in any "
+              "case): nothing near the boundary to verify; choose cases with --ids")
+        return 0
+    exe_dir = pathlib.Path(args.exe_dir)
+    out_dir = pathlib.Path(defn.output_dir)
+    ds = verify(env, criteria, base_scene(defn.base) or "airlaunch", ids, defn.path, exe_dir / "airlaunch-sweep",
+                exe_dir / "airlaunch", out_dir / "verify", segments=args.segments, tolerance=args.tolerance,
+                jobs=args.jobs)
+    try:
+        path = write_atomic(ds, out_dir / "verify.nc")
+    except (OSError, RuntimeError) as exc:
+        raise output_dir_error(defn, out_dir / "verify.nc", exc) from None
+    print(f"verify: {len(ids)} case(s) rerun with {ds.attrs['refinement']} ({path}; their runs in {out_dir / 'verify'})")
+    print(verification_table(ds), end="")
+    for c in ds["criterion"].values:
+        row = ds.sel(criterion=c)
+        diff, margin = np.abs(row["difference"].values), np.abs(row["margin_sweep"].values)
+        units = str(row["criterion_units"].values)
+        if np.isfinite(diff).any():
+            print(f"  {c:16s} largest |difference| {np.nanmax(diff):.3g} {units}, smallest |margin| "
+                  f"{np.nanmin(margin):.3g} {units}")
+        else:
+            print(f"  {c:16s} no margin computed at both settings")
+    flips = int(ds["flipped"].values.any(axis=0).sum())
+    not_run = int((ds["refined_status"].values != "ok").sum())
+    worst = np.nanmax(np.abs(ds["relative_difference"].values)) if np.isfinite(
+        ds["relative_difference"].values).any() else float("nan")
+    print(f"verify: {flips} of {len(ids)} case(s) change pass/fail at the refined settings; "
+          f"{not_run} refined run(s) did not complete; largest |difference| {worst:.3g} of a criterion's scale")
+    return 0
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """A command-line error is one line (the project's rule for bad input) and status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
+    return value
+
+
+def _factor(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not (value >= 1.0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a factor >= 1")
+    return value
+
+
 def main(argv=None) -> int:
     """Parse the command line and run one step; bad input is one line and status 2."""
-    parser = argparse.ArgumentParser(prog="python -m postproc.sweep", description=__doc__,
+    parser = OneLineParser(prog="python -m postproc.sweep", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="step", required=True)
     p = sub.add_parser("table", help="draw the case table of a sweep definition")
@@ -167,6 +271,21 @@ def main(argv=None) -> int:
     p.add_argument("--check", action="store_true",
                    help="only check that the criteria file is given and valid (before a run)")
     p.set_defaults(func=cmd_envelope)
+    p = sub.add_parser("verify", help="rerun the cases nearest the boundary with refined settings")
+    p.add_argument("definition")
+    p.add_argument("--criteria", help="criteria file (default: the definition's)")
+    p.add_argument("--summary", help="summary file (default: OUTPUT_DIR/summary.nc)")
+    p.add_argument("--cases", type=_positive_int, default=8,
+                   help="how many computed cases nearest the boundary (smallest |relative margin|; default 8)")
+    p.add_argument("--ids", help="these case ids instead (comma-separated)")
+    p.add_argument("--segments", type=_positive_int, default=4,
+                   help="line segments times this (at most 1000 segments; default 4)")
+    p.add_argument("--tolerance", type=_factor, default=100.0,
+                   help="rtol and atol divided by this (default 100)")
+    p.add_argument("--jobs", type=_positive_int, default=2, help="cases run at once (default 2)")
+    p.add_argument("--exe-dir", default=str(pathlib.Path(__file__).resolve().parents[2] / "build" / "release" / "bin"),
+                   help="where airlaunch and airlaunch-sweep are (default build/release/bin)")
+    p.set_defaults(func=cmd_verify)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -185,7 +185,7 @@ def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):
     """scripts/sweep: table -> check -> mpirun -> envelope, with every output."""
     definition = small_definition(tmp_path / "chain.nml", n_cases=12, output_dir=str(tmp_path / "out"),
                                   extra_sweep=f"criteria = '{ROOT}/input/criteria_paper.nml'")
-    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "2"], cwd=tmp_path,
+    res = subprocess.run([str(ROOT / "scripts" / "sweep"), str(definition), "-n", "2", "--verify", "2"], cwd=tmp_path,
                          capture_output=True, text=True, env=ENV, timeout=900)
     assert res.returncode == 0, res.stdout + res.stderr
     out = tmp_path / "out"
@@ -195,6 +195,8 @@ def test_scripts_sweep_runs_the_whole_chain(tmp_path, exes):
         assert (out / name).is_file(), name
     assert "12 cases: 12 ok" in res.stdout
     assert "drivers (standardised rank regression coefficient" in res.stdout
+    # 4 s: no case reaches its pitch maximum, so none has a margin on every criterion to verify
+    assert "== verify (2 case(s)" in res.stdout and "nothing near the boundary to verify" in res.stdout
     with xr.open_dataset(out / "envelope.nc") as env:
         assert env.sizes["case"] == 12
         assert set(env["criterion"].values) >= {"clearance", "line_tension", "firing_attitude", "all"}

@@ -1,0 +1,157 @@
+"""The verification step (postproc/sweep/verify.py): the cases nearest the
+boundary rerun with more segments and tighter tolerances.  Checked against
+independent references: at factors 1 and 1 the rerun reproduces the summary's
+margins bit for bit — in both scenes, with events that did not happen (NaN) —
+so the margins are computed from a single run exactly as airlaunch-sweep
+computes them; the refined namelist, read back by the scenario reader itself
+(`airlaunch --check`), has the multiplied segments, the divided tolerances and
+break segments that cover the same stretch of line; and bad arguments are one
+line and status 2."""
+import subprocess
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from test_sweep_support import (AIRLAUNCH_EXE, ENV, PAPER, ROOT, make_table, run_example_sweep, run_python, run_sweep,
+                                small_definition)
+
+from postproc.sweep.verify import refine_namelist, refined_segment
+
+
+@pytest.fixture(scope="module")
+def paper_sweep(tmp_path_factory):
+    """6 cases of the paper scenario to 6 s: separated (a clearance) but before
+    the first pitch maximum (firing attitude and time NaN)."""
+    tmp = tmp_path_factory.mktemp("verify")
+    definition = small_definition(tmp / "v.nml", n_cases=6, t_end=6.0,
+                                  extra_sweep=f"criteria = '{ROOT}/input/criteria_paper.nml'")
+    make_table(definition, tmp)
+    res = run_sweep(definition, tmp)
+    assert res.returncode == 0, res.stdout + res.stderr
+    return tmp, definition
+
+
+def verify(tmp, definition, *args):
+    return run_python(["verify", definition, *args], tmp)
+
+
+def assert_same_margins(ds):
+    """margin_refined == margin_sweep bit for bit, NaN where NaN."""
+    a, b = ds["margin_sweep"].values, ds["margin_refined"].values
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    np.testing.assert_array_equal(a[~np.isnan(a)], b[~np.isnan(b)])
+    assert not ds["flipped"].values.any()
+
+
+def test_unrefined_rerun_is_the_summary_row(paper_sweep):
+    tmp, definition = paper_sweep
+    res = verify(tmp, definition, "--ids", "0,1,2,3,4,5", "--segments", "1", "--tolerance", "1")
+    assert res.returncode == 0, res.stdout + res.stderr
+    with xr.open_dataset(tmp / "out" / "verify.nc") as ds:
+        assert list(ds["refined_status"].values) == ["ok"] * 6
+        assert_same_margins(ds)
+        clearance = ds["margin_sweep"].sel(criterion="clearance").values
+        firing = ds["margin_sweep"].sel(criterion="firing_attitude").values
+        assert np.isfinite(clearance).any() and np.isnan(firing).all()   # both kinds compared
+    assert "0 of 6 case(s) change pass/fail" in res.stdout
+
+
+def test_line_scene_unrefined_rerun_is_the_summary_row(tmp_path):
+    summary = run_example_sweep("sweep_airdrop", tmp_path, [("n_cases = 200", "n_cases = 3"),
+                                                           ("t_end = 10.0 ", "t_end = 3.0 ")])
+    assert summary.is_file()
+    res = verify(tmp_path, tmp_path / "sweep_airdrop.nml", "--cases", "3", "--segments", "1", "--tolerance", "1")
+    assert res.returncode == 0, res.stdout + res.stderr
+    with xr.open_dataset(tmp_path / "out" / "verify.nc") as ds:
+        assert ds.sizes["case"] == 3 and list(ds["criterion"].values) == ["line_tension"]
+        assert np.isfinite(ds["margin_sweep"].values).all()
+        assert_same_margins(ds)
+
+
+def test_nothing_to_verify_is_said_not_an_error(paper_sweep):
+    tmp, definition = paper_sweep
+    res = verify(tmp, definition, "--cases", "3")   # the paper criteria: firing attitude NaN in every case
+    assert res.returncode == 0 and "nothing near the boundary to verify" in res.stdout, res.stdout + res.stderr
+
+
+def test_refined_rerun_reports_consistent_differences(paper_sweep):
+    """Default factors (segments x 4, tolerances / 100): the two nearest cases;
+    the difference is the two margins' and a flip is a change of sign."""
+    tmp, definition = paper_sweep
+    criteria = tmp / "criteria_no_firing.nml"   # 6 s: no pitch maximum yet, so no firing criteria
+    criteria.write_text("&criteria\n  min_clearance_m = 1.5\n  line_strength_n = 300e3, line_safety_factor = 1.5\n"
+                        "  max_aircraft_pitch_excursion_deg = 3.0\n  max_load_factor_excursion = 0.5\n/\n")
+    res = verify(tmp, definition, "--cases", "2", "--criteria", criteria)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "line%n_seg 10 -> 40" in res.stdout and "run%rtol 1e-05 -> 1e-07" in res.stdout
+    with xr.open_dataset(tmp / "out" / "verify.nc") as ds, xr.open_dataset(tmp / "out" / "summary.nc") as s:
+        assert ds.sizes["case"] == 2 and list(ds["refined_status"].values) == ["ok"] * 2
+        a, b = ds["margin_sweep"].values, ds["margin_refined"].values
+        np.testing.assert_array_equal(ds["difference"].values, a - b)
+        flipped = (np.where(np.isnan(a), False, a >= 0) != np.where(np.isnan(b), False, b >= 0))
+        np.testing.assert_array_equal(ds["flipped"].values.astype(bool), flipped)
+        # the nearest cases: no other computed case has a smaller |relative margin| of 'all'
+        rel = np.min([ds["margin_sweep"].sel(criterion=c).values / scale for c, scale in
+                      (("clearance", 1.5), ("line_tension", 200e3), ("aircraft_pitch", 3.0), ("load_factor", 0.5))],
+                     axis=0)
+        others = np.min([(s["min_clearance_m"].values - 1.5) / 1.5, (200e3 - s["peak_line_tension_N"].values) / 200e3,
+                         (3.0 - s["max_aircraft_pitch_excursion_deg"].values) / 3.0,
+                         (0.5 - s["max_load_factor_excursion"].values) / 0.5], axis=0)
+        others = np.delete(others, ds["case"].values)
+        assert np.abs(rel).max() <= np.nanmin(np.abs(others))
+        refined = (tmp / "out" / "verify" / f"case_{int(ds['case'].values[0]):06d}_refined.nml").read_text()
+        assert "N_SEG=40" in refined.replace(" ", "")
+
+
+def resolved(path, tmp_path):
+    res = subprocess.run([str(AIRLAUNCH_EXE), str(path), "--check", "--output", str(tmp_path / "x.nc")],
+                         capture_output=True, text=True, env=ENV, timeout=60)
+    assert res.returncode == 0, res.stderr
+    return res.stdout.split("\n", 1)[1]
+
+
+@pytest.mark.parametrize("segment", [1, 7, 15])
+def test_refined_namelist_read_back_by_the_scenario_reader(tmp_path, segment):
+    text = PAPER.read_text().replace("&line", f"&line\n  break_time = 5.0, break_segment = {segment}", 1)
+    base = tmp_path / "base.nml"
+    base.write_text(text)
+    refined, changes = refine_namelist(resolved(base, tmp_path), 4, 100.0)
+    out = tmp_path / "refined.nml"
+    out.write_text(refined)
+    back = resolved(out, tmp_path)   # the reader accepts it, and says what it holds
+    flat = back.replace(" ", "")
+    assert "N_SEG=60," in flat
+    assert f"BREAK_SEGMENT={refined_segment(segment, 15, 4)}," in flat
+    import f90nml
+    nml = f90nml.reads(back)
+    assert nml["run"]["rtol"] == pytest.approx(1e-7, rel=1e-15)
+    assert nml["run"]["atol"] == pytest.approx(1e-8, rel=1e-15)
+
+
+@pytest.mark.parametrize("n, k", [(15, 4), (10, 3), (7, 2), (1, 5)])
+def test_refined_segment_covers_the_same_stretch_of_line(n, k):
+    """Segment j of n spans [(j-1)/n, j/n] of the line; its refined index spans
+    a piece inside it; the ends stay the ends (a one-segment line: the end the
+    variable means)."""
+    for last in (False, True):
+        for j in range(1, n + 1):
+            r = refined_segment(j, n, k, last)
+            assert (j - 1) / n <= (r - 1) / (n * k) and r / (n * k) <= j / n, (j, r)
+    if n > 1:
+        assert refined_segment(1, n, k) == 1 and refined_segment(n, n, k) == n * k
+    else:
+        assert refined_segment(1, 1, k, False) == 1 and refined_segment(1, 1, k, True) == k
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--ids", "0,99"], "--ids 0,99: case 99 is not in 0 ... 5"),
+    (["--ids", "a"], "not a comma-separated list"),
+    (["--segments", "0"], "is not a positive integer"),
+    (["--tolerance", "0.5"], "is not a factor >= 1"),
+])
+def test_bad_arguments_are_one_line(paper_sweep, args, match):
+    tmp, definition = paper_sweep
+    res = verify(tmp, definition, *args)
+    assert res.returncode == 2 and match in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
