@@ -142,9 +142,7 @@ def _run(cmd, cwd, timeout):
 
 
 def case_namelist(case_id, definition, sweep_exe, timeout):
-    """The namelist of one case (airlaunch-sweep --case-namelist).  One at a
-    time: airlaunch-sweep writes its check of the base to a scratch file of
-    the sweep's work directory, which two of it at once would share."""
+    """The namelist of one case (airlaunch-sweep --case-namelist)."""
     res = _run([str(sweep_exe), str(definition), "--case-namelist", str(case_id)], None, timeout)
     if res.returncode != 0:
         raise DefinitionError(f"airlaunch-sweep --case-namelist {case_id}: {res.stderr.strip()}")

@@ -21,7 +21,7 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file, process_id
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -41,7 +41,7 @@ program airlaunch_sweep
   integer, parameter :: exit_ok = 0, exit_input = 2, exit_runtime = 4
   type(sweep_setup) :: s
   type(error_type), allocatable :: error
-  character(len=:), allocatable :: path, scratch
+  character(len=:), allocatable :: path, scratch, tag
   integer :: rank, nranks, status, case_id, n_resumed, k, n_written
   logical :: check_only, restart
   integer, allocatable :: pending(:), keep(:)
@@ -60,7 +60,11 @@ program airlaunch_sweep
   status = exit_ok
   n_resumed = 0
   if (rank == 0) then
-    call load_sweep(path, .not. check_only, "rank0", s, error)
+    ! --case-namelist is a query that scripts may run many at once: its check file is its own
+    tag = "rank0"
+    if (case_id >= 0) tag = "case_namelist_" // str(process_id())
+    call load_sweep(path, .not. check_only, tag, s, error)
+    if (case_id >= 0 .and. allocated(s%def%output_dir)) call delete_file(s%def%work_dir() // "/check_" // tag // ".nml")
     if (allocated(error)) status = exit_input
     if (status == exit_ok .and. case_id >= 0) then
       if (case_id >= s%table%n_cases) then

@@ -334,3 +334,24 @@ def test_one_rank_in_a_multi_task_slurm_job_is_refused(tmp_path, exes):
     res = subprocess.run([str(SWEEP_EXE), str(definition), "--check"], cwd=tmp_path, capture_output=True,
                          text=True, env=env, timeout=120)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_case_namelists_asked_at_once_are_each_the_case_alone(tmp_path, exes):
+    """airlaunch-sweep --case-namelist is a query that scripts run many at once
+    (the verification step, users' own): each process checks the base in a
+    scratch file of its own and removes it.  (They shared work/check_rank0.nml,
+    and one of 8 at once failed with "cannot read the group: End of file".)
+    Eight at once, three times: each the sequential answer, no scratch left."""
+    definition = small_definition(tmp_path / "q.nml", n_cases=8)
+    make_table(definition, tmp_path)
+    alone = [run_sweep(definition, tmp_path, None, "--case-namelist", i).stdout for i in range(8)]
+    assert all(text.strip() for text in alone)
+    for _ in range(3):
+        procs = [subprocess.Popen([str(SWEEP_EXE), str(definition), "--case-namelist", str(i)], cwd=tmp_path,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+                 for i in range(8)]
+        for i, p in enumerate(procs):
+            out, err = p.communicate(timeout=120)
+            assert p.returncode == 0, err
+            assert out == alone[i]
+    assert not list((tmp_path / "out" / "work").glob("check_case_namelist_*"))
