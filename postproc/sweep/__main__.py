@@ -80,7 +80,7 @@ def check_summary_belongs(defn, summary, summary_path) -> None:
 def read_criteria_for(defn, args):
     """The criteria of the definition (or --criteria), refused in one line if
     they are not those of the base's scene."""
-    from .criteria import SCENE_CRITERION_METRICS, base_scene, check_scene, read_criteria
+    from .criteria import SCENE_CRITERION_METRICS, base_scene, check_scene, check_tracked, read_criteria
 
     criteria_path = args.criteria or defn.criteria
     if not criteria_path:
@@ -89,6 +89,7 @@ def read_criteria_for(defn, args):
     # criteria of another scene than the base's: refused before any case runs (scripts/sweep checks first)
     scene = base_scene(defn.base)
     check_scene(criteria, scene, SCENE_CRITERION_METRICS.get(scene), criteria_path)
+    check_tracked(criteria, defn, criteria_path)
     return criteria, criteria_path
 
 

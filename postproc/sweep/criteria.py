@@ -39,6 +39,54 @@ def check_scene(criteria, scene, have, path):
                                   "criterion out; docs/sweep.md lists each scene's summary variables)")
 
 
+#: Settings of a base scenario (or of its sweep's &fixed) under which a
+#: criterion's metric is never computed, so that every case's margin would be
+#: NaN and fail: (group, variable, the value, the criteria, why).
+UNTRACKED = (
+    ("line", "enabled", False, ("line_tension", "line_clearance"), "the scene has no line"),
+    ("line_scene", "peak_tension", False, ("line_tension",), "the peak tension is not tracked"),
+    ("line", "coupling", "rigidized", ("line_clearance",), "the rigidized coupling does not track the line's "
+                                                          "clearance"),
+)
+
+
+def _setting(defn, group, var):
+    """The value of group%var for every case of a sweep (&fixed, else the
+    base; None where neither sets it or the base cannot be read)."""
+    name = f"{group}%{var}"
+    for fixed_name, text in defn.fixed:
+        if fixed_name == name:
+            try:
+                return f90nml.reads(f"&x v = {text} /\n")["x"]["v"]
+            except Exception:   # noqa: BLE001 - airlaunch-sweep names an unreadable value
+                return None
+    try:
+        nml = f90nml.reads(read_namelist_text(defn.base, "the base scenario"))
+    except Exception:   # noqa: BLE001 - any unreadable base is airlaunch-sweep's to report
+        return None
+    group_vars = nml.get(group)
+    return group_vars.get(var) if hasattr(group_vars, "get") else None
+
+
+def check_tracked(criteria, defn, path):
+    """Refuse in one line a criterion whose metric the sweep's base (with its
+    &fixed) never computes: its margin would be NaN, and fail, in every case."""
+    for group, var, off, names, why in UNTRACKED:
+        value = _setting(defn, group, var)
+        if isinstance(value, str):
+            value = value.strip().lower()
+        if value is None or value != off or isinstance(value, bool) != isinstance(off, bool):
+            continue
+        for c in criteria:
+            if c.name in names:
+                shown = show(off) if not isinstance(off, bool) else (".true." if off else ".false.")
+                source = (f"&fixed '{group}%{var}'" if any(n == f"{group}%{var}" for n, _ in defn.fixed)
+                          else f"the base scenario {defn.base}")
+                raise DefinitionError(f"{path}: &criteria: {', '.join(sorted(c.limits))} is not allowed for this "
+                                      f"sweep: {source} sets &{group} {var} = {shown} ({why}: every case's "
+                                      f"margin would be NaN, failing; leave the criterion out or change {var})")
+
+
 def base_scene(base):
     """The &run scene of a base scenario ('airlaunch' when it sets none; None if
     the file cannot be read: airlaunch-sweep names that)."""

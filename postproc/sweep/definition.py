@@ -90,7 +90,7 @@ class SweepDefinition:
     t_end: float = 0.0
     keep_failed: bool = False
     keep_worst: int = 0
-    worst_by: str = "min_clearance_m"
+    worst_by: str = ""   # '' : the base scene's default
     keep_ids: tuple = ()
     criteria: str = ""
     progress_interval: float = 5.0
@@ -710,8 +710,10 @@ def parse_definition(text, path="<sweep>"):
     keep_worst = _int(where, sweep, "keep_worst", 0)
     if keep_worst < 0:
         raise DefinitionError(f"{where}keep_worst = {show(keep_worst)} is not allowed (must be >= 0)")
-    worst_by = _str(where, sweep, "worst_by", "min_clearance_m")
-    _choice(where, "worst_by", worst_by, WORST_BY)
+    # not set: the base scene's default (airlaunch-sweep: min_clearance_m, a line scene's peak_line_tension_N)
+    worst_by = _str(where, sweep, "worst_by", "")
+    if worst_by:
+        _choice(where, "worst_by", worst_by, WORST_BY)
     keep_ids = []
     for v in _as_list(sweep.get("keep_ids")):
         if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < n_cases:

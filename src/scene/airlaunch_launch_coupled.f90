@@ -875,7 +875,8 @@ contains
 
   !> &run stop_when_final: the milestones cannot change any more (the rocket
   !> is free, its first pitch maximum found, and 1 s has passed since both,
-  !> during which no extremum moved).  A later snatch of the line is not
+  !> during which no extremum moved: the clearance and line-clearance minima,
+  !> the aircraft excursions, the peak tension).  A later snatch of the line is not
   !> waited for, but a line that can still part (a scheduled cut to come, or
   !> an intact segment with a strength: launch_system%may_still_part) keeps
   !> the run going, so that its break is recorded, and a break counts as a

@@ -58,6 +58,13 @@ module airlaunch_line_scene
   !> Largest initial end separation, as strain of the unstretched line: the
   !> model assumes small axial strain (assumption 3 of §2.1).
   real(dp), parameter :: max_initial_strain = 0.5_dp
+  !> The recoil's window after the first break, in L/c: the unloading wave's
+  !> round trip (the free end's snap-back is over by then; afterwards the pieces
+  !> fall or are dragged, which is not the recoil).
+  real(dp), parameter :: recoil_window = 2.0_dp
+  !> Samples of the recoil over its window (every 0.05 L/c; the undamped
+  !> chain's largest node speed comes within 0.1 L/c of the cut)
+  integer, parameter :: recoil_samples = 40
 
   !> What a run of the line scene found (its milestones, for a sweep's
   !> summary row): times are -1 and tensions or speeds negative where not
@@ -71,7 +78,8 @@ module airlaunch_line_scene
     integer :: line_breaks = 0                 !< segments parted in all
     real(dp) :: deploy_speed = -1.0_dp         !< air speed at the canopy's deployment [m/s]
     real(dp) :: final_tip_speed = -1.0_dp      !< speed of node N (end b) at the last record [m/s]
-    real(dp) :: recoil_speed = -1.0_dp         !< largest node speed change since the first break (records) [m/s]
+    !> largest node speed change within 2 L/c of the first break (records and the window's end) [m/s]
+    real(dp) :: recoil_speed = -1.0_dp
     real(dp) :: end_time = 0.0_dp              !< time the integration reached [s]
     type(line_scheme_stats) :: stats           !< integrator work
     logical :: completed = .false.             !< reached t_end
@@ -114,9 +122,16 @@ module airlaunch_line_scene
     integer :: line_break_segment = 0                !< there, this segment (0: whole)
     integer :: line_breaks = 0                       !< segments parted in all
     !> the recoil after the first break: the largest speed change of a node since
-    !> that instant, |v_k(t) - v_k(t_break)|, over the records [m/s] (-1: no break)
+    !> that instant, |v_k(t) - v_k(t_break)|, within 2 L/c of it (the unloading
+    !> wave's round trip), over the records there and recoil_samples instants
+    !> evenly over it (the integrator stops at each) [m/s]
+    !> (-1: no break).  Bounded so, it does not grow with t_end as the pieces
+    !> then fall or are dragged.
     real(dp) :: recoil_speed = -1.0_dp
     real(dp), allocatable :: v_break(:, :)           !< node velocities at the first break (3, 0:N) [m/s]
+    real(dp) :: recoil_end = -1.0_dp                 !< the recoil's window closes [s] (-1: no break)
+    real(dp) :: recoil_next = -1.0_dp                !< the window's next sample [s]
+    logical :: recoil_open = .false.                 !< the window is open (its end not yet sampled)
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -339,6 +354,7 @@ contains
     if (self%deploy_pending) next = min(next, deployment_time(self%cfg))
     if (self%fill_end > t) next = min(next, self%fill_end)
     if (self%break_pending) next = min(next, self%cfg%break_time)
+    if (self%recoil_open) next = min(next, self%recoil_next)
     if (next > t .and. next < huge(1.0_dp)) call self%scheme%set_stop_time(next, error)
   end subroutine set_next_stop
 
@@ -364,6 +380,7 @@ contains
       end if
       if (allocated(error)) return
       if (self%deploy_pending .and. self%scheme%t >= deployment_time(self%cfg)) call deploy(self, error)
+      if (self%recoil_open .and. self%scheme%t >= self%recoil_next) call sample_recoil(self)
       if (.not. allocated(error)) call set_next_stop(self, error)
       if (allocated(error)) return
     end do
@@ -400,9 +417,33 @@ contains
       call self%scheme%get_state(self%x, self%v)
       self%v_break = self%v
       self%recoil_speed = 0.0_dp
+      self%recoil_end = self%scheme%t + recoil_window*self%model%n*self%model%l0/self%model%wave_speed()
+      self%recoil_next = self%scheme%t + (self%recoil_end - self%scheme%t)/recoil_samples
+      self%recoil_open = .true.
     end if
     self%line_breaks = self%model%n_parted
   end subroutine take_parts
+
+  !> One of the recoil window's samples (the scheme at recoil_next): the
+  !> recoil with the scheme's velocities, and the next sample (none after the
+  !> window's end).
+  subroutine sample_recoil(self)
+    type(line_scene), intent(inout) :: self   !< scene (the window open)
+    call self%scheme%get_state(self%x, self%v)
+    call take_recoil(self)
+    self%recoil_next = self%recoil_next + (self%recoil_end - self%line_break_time)/recoil_samples
+    ! (the last sample lands on the window's end up to rounding)
+    self%recoil_open = self%recoil_next <= self%recoil_end*(1.0_dp + 1.0e-12_dp)
+  end subroutine sample_recoil
+
+  !> The recoil so far with the current velocities (self%v).
+  subroutine take_recoil(self)
+    type(line_scene), intent(inout) :: self   !< scene (after the first break)
+    integer :: k
+    do k = 0, self%model%n
+      self%recoil_speed = max(self%recoil_speed, norm2(self%v(:, k) - self%v_break(:, k)))
+    end do
+  end subroutine take_recoil
 
   !> The canopy's deployment time [s].
   pure real(dp) function deployment_time(cfg) result(t)
@@ -488,11 +529,7 @@ contains
     self%time(m) = t
     self%tip(:, m) = self%x(:, n)
     self%tip_velocity(:, m) = self%v(:, n)
-    if (allocated(self%v_break)) then
-      do k = 0, n
-        self%recoil_speed = max(self%recoil_speed, norm2(self%v(:, k) - self%v_break(:, k)))
-      end do
-    end if
+    if (self%recoil_open .and. t <= self%recoil_end) call take_recoil(self)
     self%end_tension(:, m) = [self%tension(1), self%tension(n)]
     self%end_force(:, 1, m) = self%f(:, 0)
     self%end_force(:, 2, m) = self%f(:, n)
@@ -532,6 +569,9 @@ contains
     self%line_break_segment = 0
     self%line_breaks = 0
     self%recoil_speed = -1.0_dp
+    self%recoil_end = -1.0_dp
+    self%recoil_next = -1.0_dp
+    self%recoil_open = .false.
     if (allocated(self%v_break)) deallocate(self%v_break)
     self%n_out = 0
     self%completed = .false.
@@ -919,7 +959,7 @@ contains
     text = "line break: none" // new_line("a")
     if (scene%line_breaks > 0) text = "line break: segment " // str(scene%line_break_segment) // " parted at t = " // &
       str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all; recoil " // &
-      str(scene%recoil_speed) // " m/s (the largest change of a node's velocity since, over the records)" // &
+      str(scene%recoil_speed) // " m/s (the largest change of a node's velocity within 2 L/c of it)" // &
       new_line("a")
   end function break_note
 

@@ -66,7 +66,10 @@ module airlaunch_sweep_definition
     character(len=:), allocatable :: base        !< base scenario file
     character(len=:), allocatable :: output_dir  !< table, journal, summary, trajectories
     character(len=:), allocatable :: design      !< lhs, sobol or grid
-    character(len=:), allocatable :: worst_by    !< summary variable ranking the worst cases
+    !> summary variable ranking the worst cases ('' as read: the base scene's
+    !> default, which load_sweep sets: min_clearance_m, for a line scene
+    !> peak_line_tension_N)
+    character(len=:), allocatable :: worst_by
     character(len=:), allocatable :: criteria    !< criteria file of the envelope step
     integer :: n_cases = 0                       !< number of cases
     integer :: seed = 0                          !< seed of the design
@@ -223,7 +226,7 @@ contains
       nml_var("progress_interval", "real")]
 
     where = f%path // ": &sweep: "
-    name = ""; base = ""; output_dir = ""; design = ""; worst_by = "min_clearance_m"; criteria = ""
+    name = ""; base = ""; output_dir = ""; design = ""; worst_by = ""; criteria = ""
     n_cases = unset_int; seed = unset_int; keep_worst = 0; keep_ids = unset_int
     t_end = 0.0_dp; progress_interval = 5.0_dp; keep_failed = .false.
     call f%check_group("sweep", vars, error)
@@ -342,7 +345,7 @@ contains
       call fatal_error(error, where // "keep_worst = " // str(keep_worst) // " is not allowed (must be >= 0)")
       return
     end if
-    if (.not. any(worst_by_names == worst_by)) then
+    if (len_trim(worst_by) > 0 .and. .not. any(worst_by_names == worst_by)) then
       call fatal_error(error, where // "worst_by = '" // trim(worst_by) // "' is not allowed (one of: " // &
         join(worst_by_names) // ")")
       return

@@ -40,7 +40,7 @@ contains
     if (allocated(error)) return
     call check_varied_inputs(setup%def, setup%base, error)
     if (allocated(error)) return
-    call check_worst_by(setup%def, setup%base, error)
+    call settle_worst_by(setup%def, setup%base, error)
     if (allocated(error)) return
     call make_output_dir(setup%def, setup%def%work_dir(), error)
     if (allocated(error)) return
@@ -118,13 +118,22 @@ contains
 
   !> keep_worst ranks the cases by worst_by: a summary variable of the base's
   !> scene (the airlaunch scene's clearance, say, is not one of the line
-  !> scene's).
-  subroutine check_worst_by(def, base, error)
-    type(sweep_definition), intent(in) :: def             !< the sweep
+  !> scene's).  Not set, it is the scene's first of worst_by_names:
+  !> min_clearance_m, for a line scene peak_line_tension_N.
+  subroutine settle_worst_by(def, base, error)
+    type(sweep_definition), intent(inout) :: def          !< the sweep
     type(base_scenario), intent(in) :: base               !< its base scenario
     type(error_type), allocatable, intent(inout) :: error !< set if it is not
     character(len=:), allocatable :: allowed
     integer :: k
+    if (len(def%worst_by) == 0) then
+      do k = 1, size(worst_by_names)
+        if (base%metrics%index(trim(worst_by_names(k))) > 0) then
+          def%worst_by = trim(worst_by_names(k))
+          exit
+        end if
+      end do
+    end if
     if (def%keep_worst == 0 .or. base%metrics%index(def%worst_by) > 0) return
     allowed = ""
     do k = 1, size(worst_by_names)
@@ -133,7 +142,7 @@ contains
     call fatal_error(error, def%path // ": &sweep: worst_by = '" // def%worst_by // "' is not allowed with a " // &
       "base scenario of scene '" // trim(base%scene) // "' (with keep_worst > 0 it must be one of its summary " // &
       "variables: " // allowed(:len(allowed)-2) // ")")
-  end subroutine check_worst_by
+  end subroutine settle_worst_by
 
   !> Make a directory under the definition's output_dir; a failure names
   !> &sweep output_dir (a file in its way, no permission).

@@ -10,6 +10,7 @@ speed, the steps - so the sweep runs the line scene as `airlaunch` does; two
 ranks give the one-rank summary bit for bit; keep_worst keeps the largest peak
 tensions; the envelope judges the peak against the criteria's allowable load;
 and criteria or a worst_by of the airlaunch scene are refused in one line."""
+import re
 import subprocess
 
 import numpy as np
@@ -69,14 +70,21 @@ def test_rows_are_the_single_runs_of_the_cases(airdrop_sweep):
 
 
 def test_two_ranks_give_the_one_rank_summary(airdrop_sweep, tmp_path):
+    """... and without worst_by the line scene's default, the peak tension,
+    ranks the worst cases (before the twenty-sixth session the airlaunch
+    scene's min_clearance_m was the default, and was refused here)."""
     tmp, summary = airdrop_sweep
     definition = tmp_path / "sweep_airdrop.nml"
-    definition.write_text((tmp / "sweep_airdrop.nml").read_text())
+    text = (tmp / "sweep_airdrop.nml").read_text()
+    assert "  worst_by = 'peak_line_tension_N'\n" in text
+    definition.write_text(text.replace("  worst_by = 'peak_line_tension_N'\n", ""))
     make_table(definition, tmp_path)
     res = run_sweep(definition, tmp_path, 2)
     assert res.returncode == 0, res.stderr
     # (the same cases from a copy of the definition elsewhere: its path differs)
     assert_same_summary(summary, tmp_path / "out" / "summary.nc", ignore_attrs=("created", "definition"))
+    kept = [sorted(p.name for p in (d / "out" / "trajectories").glob("case_*.nc")) for d in (tmp, tmp_path)]
+    assert len(kept[0]) == 3 and kept[1] == kept[0]
 
 
 def test_keep_worst_keeps_the_largest_peak_tensions(airdrop_sweep):
@@ -161,3 +169,50 @@ def test_invalid_and_failed_cases_of_a_line_sweep(tmp_path):
         assert s["line_recoil_speed_m_s"].values[2] == pytest.approx(20.0, rel=5e-3)
         assert "integration failed at t = " in str(s["failure"].values[3]) and s["completed"].values[3] == 0
     assert sorted(p.name for p in (tmp_path / "out" / "trajectories").glob("*.nc")) == ["case_000003.nc"]
+
+
+def absolute_definition(name, tmp_path, extra):
+    """input/NAME.nml with its base and criteria paths absolute and the text
+    `extra` appended, in tmp_path."""
+    text = re.sub(r"^(\s*(?:base|criteria)\s*=\s*')input/", lambda m: f"{m.group(1)}{ROOT / 'input'}/",
+                  (ROOT / "input" / f"{name}.nml").read_text(), flags=re.M)
+    definition = tmp_path / f"{name}.nml"
+    definition.write_text(text + extra)
+    return definition
+
+
+@pytest.mark.parametrize("name, fixed, refused", [
+    ("sweep_airdrop", "&fixed name = 'line_scene%peak_tension', value = '.false.' /",
+     "line_safety_factor, line_strength_n is not allowed for this sweep: &fixed 'line_scene%peak_tension' sets "
+     "&line_scene peak_tension = .false. (the peak tension is not tracked: every case's margin would be NaN, "
+     "failing; leave the criterion out or change peak_tension)"),
+    ("sweep_paper", "&fixed name = 'line%enabled', value = 'F' /",
+     "line_safety_factor, line_strength_n is not allowed for this sweep: &fixed 'line%enabled' sets &line "
+     "enabled = .false. (the scene has no line"),
+    ("sweep_paper", "&fixed name = 'line%coupling', value = \"'Rigidized'\" /", None),
+], ids=["peak-tension-off", "no-line", "rigidized-without-line-clearance"])
+def test_criteria_the_base_never_computes_are_refused(tmp_path, name, fixed, refused):
+    """A criterion whose metric the base (with the sweep's &fixed) never
+    computes would fail every case silently (a NaN margin fails): refused
+    before any case, in one line naming the setting.  criteria_paper.nml has
+    no line-clearance criterion, so the rigidized coupling is accepted."""
+    definition = absolute_definition(name, tmp_path, fixed + "\n")
+    res = run_python(["envelope", definition, "--no-figures", "--check"], tmp_path)
+    if refused is None:
+        assert res.returncode == 0, res.stderr
+        return
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.strip().count("\n") == 0
+    assert refused in res.stderr
+
+
+def test_line_clearance_under_the_rigidized_coupling_is_refused(tmp_path):
+    """The rigidized coupling does not track the line's clearance (docs/sweep.md)."""
+    definition = absolute_definition("sweep_paper", tmp_path, "&fixed name = 'line%coupling', value = "
+                                     "\"'rigidized'\" /\n")
+    criteria = tmp_path / "criteria.nml"
+    criteria.write_text("&criteria min_line_clearance_m = 2.0 /\n")
+    res = run_python(["envelope", definition, "--no-figures", "--check", "--criteria", criteria], tmp_path)
+    assert res.returncode == 2 and res.stderr.strip().count("\n") == 0
+    assert ("min_line_clearance_m is not allowed for this sweep: &fixed 'line%coupling' sets &line coupling = "
+            "'rigidized' (the rigidized coupling does not track the line's clearance") in res.stderr
