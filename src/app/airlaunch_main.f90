@@ -52,6 +52,7 @@ program airlaunch
     case ("--check")
       check_only = .true.
     case ("-o", "--output")
+      if (len(output_override) > 0) call fail_input("--output given more than once (give one output file)")
       i = i + 1
       if (i > nargs) call fail_input("--output needs a file name")
       call get_command_argument(i, arg, length=n_arg)
@@ -150,14 +151,25 @@ contains
     if (.not. run%trajectory .and. check_only) call print_resolved_input()
     if (.not. run%trajectory) return
     if (len(output_override) > 0) then
-      call require_output_directory("--output", run%output, out_error)
+      call require_output_directory("--output", run%output, out_error, input=path)
     else
-      call require_output_directory(path // ": &run: output", run%output, out_error)
+      call require_output_directory(path // ": &run: output", run%output, out_error, input=path)
     end if
     if (allocated(out_error)) call fail_input(out_error%message)
     if (check_only) call print_resolved_input()
+    ! (a regular file or nothing: require_output_directory refused anything else)
     open(newunit=u, file=trim(run%output), status="old", action="read", iostat=ios)
     if (ios == 0) close(u, status="delete", iostat=ios)
+    inquire(file=trim(run%output), exist=written)
+    if (written) then
+      if (len(output_override) > 0) then
+        call fail_input("--output = '" // trim(run%output) // "' is not allowed: an older file of that " // &
+          "name cannot be removed (no permission; remove it or choose another path)")
+      else
+        call fail_input(path // ": &run: output = '" // trim(run%output) // "' is not allowed: an older " // &
+          "file of that name cannot be removed (no permission; remove it or choose another path)")
+      end if
+    end if
   end subroutine prepare_output_file
 
   !> The milestones of an air-launch run, one per line.

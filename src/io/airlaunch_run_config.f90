@@ -1,13 +1,31 @@
 !> The &run group, common to every scene: which scene, how long, how often to
 !> write, where, and the integrator's tolerances.
 module airlaunch_run_config
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_namelist
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory
+  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory, path_kind
+
+  !> What a path names (airlaunch_path_kind.c).
+  integer, parameter, public :: kind_missing = 0, kind_regular = 1, kind_directory = 2, kind_other = 3
+
+  interface
+    integer(c_int) function c_path_kind(path) bind(c, name="airlaunch_path_kind")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function c_path_kind
+    integer(c_int) function c_same_file(a, b) bind(c, name="airlaunch_same_file")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: a(*), b(*)
+    end function c_same_file
+    integer(c_int) function process_id() bind(c, name="airlaunch_io_process_id")
+      import :: c_int
+    end function process_id
+  end interface
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -119,29 +137,44 @@ contains
     call echo_namelist_unit(u, text)
   end function run_echo
 
-  !> The output file must be one that can be created: not a directory, in an
-  !> existing directory where a file can be written.  Checked before the run
-  !> (by the program, after any command-line override), not found missing
-  !> after it: a probe file `output`.part (the name the writer uses until the
-  !> run ends) is created and removed.  `what` names where the value came
-  !> from, e.g. "case.nml: &run: output".
-  subroutine require_output_directory(what, output, error)
+  !> The output file must be one that can be created: not a directory nor a
+  !> device, FIFO or socket (which the run would replace or block on), not the
+  !> scenario file itself, in an existing directory where a file can be
+  !> written.  Checked before the run (by the program, after any command-line
+  !> override), not found missing after it: a probe file of this process's own
+  !> (`output`.probe-PID) is created and removed, so that no other file
+  !> (another run's `output`.part) is touched.  `what` names where the value
+  !> came from, e.g. "case.nml: &run: output"; `input`, the scenario file.
+  subroutine require_output_directory(what, output, error, input)
     character(len=*), intent(in) :: what                  !< origin of the value, for the message
     character(len=*), intent(in) :: output                !< output file name
     type(error_type), allocatable, intent(inout) :: error !< set if no file can be written there
-    character(len=:), allocatable :: name, dir
+    character(len=*), intent(in), optional :: input       !< the scenario file (must not be the output)
+    character(len=:), allocatable :: name, dir, probe
     character(len=256) :: msg
-    integer :: slash, u, ios
+    integer :: slash, u, ios, what_is_there
     logical :: exists
     name = trim(output)
     slash = index(name, "/", back=.true.)
-    inquire(file=name // "/.", exist=exists)
-    if (slash == len(name) .or. exists) then
+    what_is_there = path_kind(name)
+    if (slash == len(name) .or. what_is_there == kind_directory) then
       dir = name
       if (slash /= len(name)) dir = name // "/"
       call fatal_error(error, what // " = '" // name // "' is not allowed: it names a directory (give a " // &
         "file name, e.g. '" // dir // "run.nc')")
       return
+    end if
+    if (what_is_there == kind_other) then
+      call fatal_error(error, what // " = '" // name // "' is not allowed: it names a device, FIFO or socket, " // &
+        "not a file (give the name of a regular file)")
+      return
+    end if
+    if (present(input)) then
+      if (same_file(name, input)) then
+        call fatal_error(error, what // " = '" // name // "' is not allowed: it is the scenario file itself " // &
+          "(give another name, e.g. 'output/run.nc')")
+        return
+      end if
     end if
     if (slash > 1) then
       dir = name(1:slash-1)
@@ -158,7 +191,8 @@ contains
         return
       end if
     end if
-    open(newunit=u, file=name // ".part", status="replace", action="write", iostat=ios, iomsg=msg)
+    probe = name // ".probe-" // str(int(process_id()))
+    open(newunit=u, file=probe, status="new", action="write", iostat=ios, iomsg=msg)
     if (ios /= 0) then
       call fatal_error(error, what // " = '" // name // "' is not allowed: no file can be written there (" // &
         trim(msg) // ")")
@@ -166,6 +200,25 @@ contains
     end if
     close(u, status="delete")
   end subroutine require_output_directory
+
+  !> What `path` names (kind_missing, kind_regular, kind_directory, kind_other).
+  integer function path_kind(path)
+    character(len=*), intent(in) :: path   !< a file name
+    path_kind = int(c_path_kind(c_string(path)))
+  end function path_kind
+
+  !> Both paths name the same existing file.
+  logical function same_file(a, b)
+    character(len=*), intent(in) :: a, b   !< file names
+    same_file = c_same_file(c_string(a), c_string(b)) /= 0
+  end function same_file
+
+  !> A NUL-terminated copy of `s` for C.
+  pure function c_string(s) result(c)
+    character(len=*), intent(in) :: s
+    character(kind=c_char, len=:), allocatable :: c
+    c = trim(s) // c_null_char
+  end function c_string
 
   !> Append the text written to scratch unit `u` to `echo`, and close `u`.
   subroutine echo_namelist_unit(u, echo)

@@ -1,6 +1,7 @@
 """Foundation end to end: the demo scene runs, its output opens in xarray with
 units on every variable and the resolved input echoed, and bad input gives one
 clear line and a nonzero status without leaving an output file."""
+import pathlib
 import re
 import subprocess
 import sys
@@ -225,6 +226,86 @@ def test_an_output_that_cannot_be_written_is_an_input_error(airlaunch_exe, tmp_p
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert_input_error(res, fragment, tmp_path / "drop.nc")
     assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".part"))
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo", "the scenario file"])
+def test_an_output_that_is_not_a_file_to_replace_is_an_input_error(airlaunch_exe, tmp_path, kind):
+    """A device, a FIFO or the scenario file itself is refused before the run
+    and left as it was: before the twenty-sixth session the program deleted
+    /dev/null (as root) and wrote a regular HDF5 file in its place, blocked
+    for good opening a FIFO, and replaced the scenario file by its output."""
+    import os
+    import stat
+    nml, _ = drop_nml(tmp_path)
+    text = nml.read_text()
+    if kind == "device":
+        out, fragment = "/dev/null", "it names a device, FIFO or socket, not a file"
+    elif kind == "fifo":
+        out, fragment = tmp_path / "fifo", "it names a device, FIFO or socket, not a file"
+        os.mkfifo(out)
+    else:
+        out, fragment = nml, "it is the scenario file itself"
+    res = subprocess.run([str(airlaunch_exe), str(nml), "--output", str(out)], capture_output=True, text=True,
+                         timeout=60)
+    assert_input_error(res, fragment, tmp_path / "drop.nc")
+    if kind == "device":
+        assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+    elif kind == "fifo":
+        assert stat.S_ISFIFO(os.stat(out).st_mode)
+    assert nml.read_text() == text
+
+
+def test_check_and_runs_leave_other_files_alone(airlaunch_exe, tmp_path):
+    """The output's probe is a file of the process's own: --check removes no
+    file ("No file is written or removed": it deleted an existing
+    OUTPUT.part, another run's file in the making, before the twenty-sixth
+    session) and a run leaves no probe behind; --output twice is refused."""
+    nml, out = drop_nml(tmp_path)
+    part = tmp_path / "drop.nc.part"
+    part.write_text("another run's file\n")
+    res = run_airlaunch(airlaunch_exe, nml, "--check")
+    assert res.returncode == 0, res.stderr
+    assert part.read_text() == "another run's file\n"
+    part.unlink()
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["drop.nc", "drop.nml"]
+    res = run_airlaunch(airlaunch_exe, nml, "-o", tmp_path / "a.nc", "--output", tmp_path / "b.nc")
+    assert_input_error(res, "--output given more than once", tmp_path / "b.nc")
+
+
+def test_an_older_output_that_cannot_be_removed_is_an_input_error(airlaunch_exe, tmp_path):
+    """Another user's file under the output's name in a sticky directory
+    cannot be removed: refused before the run.  Before the twenty-sixth
+    session the run went on, lost its result at the rename and named the
+    other user's file as its 'output so far'."""
+    import os
+    import shutil
+    if os.geteuid() != 0 or shutil.which("setpriv") is None:
+        pytest.skip("needs root and setpriv to run as another user")
+    nobody = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"]
+    if subprocess.run(nobody + [str(airlaunch_exe), "--version"], capture_output=True, timeout=60).returncode != 0:
+        pytest.skip("the build is not reachable for another user (a clone in a private directory)")
+    import tempfile
+    # (pytest's tmp_path is under a directory only root may enter)
+    with tempfile.TemporaryDirectory(dir="/tmp") as top:
+        top = pathlib.Path(top)
+        top.chmod(0o755)
+        sticky = top / "sticky"
+        sticky.mkdir()
+        sticky.chmod(0o1777)
+        old = sticky / "r.nc"
+        old.write_text("root's file\n")
+        old.chmod(0o600)
+        nml, _ = drop_nml(top)
+        nml.chmod(0o644)
+        res = subprocess.run(nobody + [str(airlaunch_exe), str(nml), "--output", str(old)], capture_output=True,
+                             text=True, timeout=60)
+        assert res.returncode == 2, res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1
+        assert "an older file of that name cannot be removed" in res.stderr
+        assert old.read_text() == "root's file\n"
+        assert sorted(p.name for p in sticky.iterdir()) == ["r.nc"]
 
 
 def test_resolved_input_records_the_settings_used(airlaunch_exe, tmp_path):
