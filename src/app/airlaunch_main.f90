@@ -119,6 +119,10 @@ program airlaunch
     call fail_input(path // ": &run: scene = '" // trim(run%scene) // "' is not available in this build")
   end select
 
+  ! what the input asks for cannot be done (found once the run is set up): bad input, nothing written
+  if (allocated(error)) then
+    if (error%input) call fail_input(path // ": " // error%message)
+  end if
   if (allocated(error)) then
     write(error_unit, '(a)') "airlaunch: error: " // error%message
     if (allocated(summary)) write(error_unit, '(a)') summary

@@ -7,7 +7,7 @@
 !> parabola), and is a quick first look at a free-falling cargo.
 module airlaunch_drop_scene
   use airlaunch_kinds, only: dp, g0
-  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_error, only: error_type, fatal_error, refuse_records
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state, isa_min_altitude, isa_max_altitude
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
@@ -153,7 +153,7 @@ contains
     type(error_type), allocatable :: run_error
     real(dp), allocatable :: time(:), pos(:, :), vel(:, :), mach(:)
     real(dp) :: tout, v0, t_impact
-    integer :: n, nmax, k
+    integer :: n, nmax, k, st
     logical :: event
     type(air_state) :: air
 
@@ -170,7 +170,11 @@ contains
     call solver%init(sys, 0.0_dp, [0.0_dp, cfg%altitude, 0.0_dp, v0, 0.0_dp, 0.0_dp], opts, error)
     if (allocated(error)) return
     nmax = ceiling(run%t_end/run%output_dt) + 2
-    allocate(time(nmax), pos(3, nmax), vel(3, nmax), mach(nmax))
+    allocate(time(nmax), pos(3, nmax), vel(3, nmax), mach(nmax), stat=st)
+    if (st /= 0) then
+      call refuse_records(error, run%output_dt, nmax, 64.0_dp*nmax)
+      return
+    end if
     n = 0
     call record()
     t_impact = -1.0_dp

@@ -156,7 +156,7 @@ contains
     type(scenario_config), intent(in) :: cfg
     integer, intent(in) :: n_state
     type(error_type), allocatable, intent(inout) :: error
-    integer :: nmax, k, n
+    integer :: nmax, k, n, st
     n = r%dsys%line%n
     call set_direct_options(run, n_state, r%dsys%has_line, r%dopts)
     ! with a &gust, a quarter of its passage 2H/V0 (launch_system%gust_max_step):
@@ -177,9 +177,14 @@ contains
     r%iout = 1
     r%extras = r%plan%mode /= "direct"
     if (run%trajectory) then
-      call r%hist%init(nmax, n, r%dsys%has_line)
-      if (r%extras) allocate(r%m_rig(nmax), r%j_rig(nmax), r%d_rig(nmax), r%f_rig(3, nmax), r%mismatch(nmax), &
-        r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax), r%steps_rec(nmax))
+      call r%hist%init(nmax, n, r%dsys%has_line, st)
+      if (st == 0 .and. r%extras) allocate(r%m_rig(nmax), r%j_rig(nmax), r%d_rig(nmax), r%f_rig(3, nmax), &
+        r%mismatch(nmax), r%active_rec(nmax), r%strain_rec(nmax), r%change_rec(nmax), r%steps_rec(nmax), stat=st)
+      if (st /= 0) then
+        call refuse_records(error, run%output_dt, nmax, history_bytes(nmax, n, r%dsys%has_line) + &
+          merge(8.0_dp*11*nmax, 0.0_dp, r%extras))
+        return
+      end if
     end if
     r%active = r%plan%initial()
     r%auto%active = r%active

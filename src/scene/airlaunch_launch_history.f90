@@ -16,7 +16,7 @@ module airlaunch_launch_history
   use airlaunch_clearance, only: clearance_geometry, clearance, segment_distance
   implicit none
   private
-  public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones
+  public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones, history_bytes
   public :: handle_launch_event, rocket_pitch_rate
   public :: write_milestones, event_or_minus, clearance_geometry_of
 
@@ -81,21 +81,34 @@ module airlaunch_launch_history
 contains
 
   !> Room for nmax samples of a line with n segments (`has_line` false: no
-  !> line, nothing of it is allocated).
-  subroutine history_init(self, nmax, n, has_line)
+  !> line, nothing of it is allocated); `stat` nonzero: the memory could not
+  !> be had (nothing is left allocated).
+  subroutine history_init(self, nmax, n, has_line, stat)
     class(launch_history), intent(inout) :: self
     integer, intent(in) :: nmax, n
-    logical, intent(in), optional :: has_line
+    logical, intent(in) :: has_line
+    integer, intent(out) :: stat
     self%nrec = 0
-    self%has_line = .true.
-    if (present(has_line)) self%has_line = has_line
+    self%has_line = has_line
     allocate(self%time(nmax), self%phase(nmax), self%ac_pos(3, nmax), self%ac_eul(3, nmax), self%ac_alpha(nmax), &
       self%ac_q(nmax), self%elev(nmax), self%load_factor(nmax), self%rk_pos(3, nmax), self%rk_vel(3, nmax), &
       self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%cforce(6, nmax), self%normal(nmax), &
-      self%friction(nmax), self%lock(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax))
-    if (self%has_line) allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), &
-      self%nodes(3, 0:n, nmax))
+      self%friction(nmax), self%lock(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax), &
+      stat=stat)
+    if (stat /= 0 .or. .not. self%has_line) return
+    allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), self%nodes(3, 0:n, nmax), stat=stat)
+    if (stat /= 0) deallocate(self%time, self%phase, self%ac_pos, self%ac_eul, self%ac_alpha, self%ac_q, self%elev, &
+      self%load_factor, self%rk_pos, self%rk_vel, self%rk_eul, self%rk_rate, self%rk_elev, self%cforce, self%normal, &
+      self%friction, self%lock, self%clearance, self%residual, self%edge_clearance)
   end subroutine history_init
+
+  !> Memory of nmax samples [bytes] (history_init; 8-byte reals and integers
+  !> alike, an upper bound).
+  pure real(dp) function history_bytes(nmax, n, has_line) result(bytes)
+    integer, intent(in) :: nmax, n
+    logical, intent(in) :: has_line
+    bytes = 8.0_dp*real(nmax, dp)*(35.0_dp + merge(5.0_dp + 3.0_dp*(n + 1), 0.0_dp, has_line))
+  end function history_bytes
 
   !> The outputs of the rigid part of `sep` (evaluated at time t) and of the
   !> loads source `iloads`.

@@ -3,7 +3,7 @@
 !> the output contract (docs/output.md) and the milestones.
 module airlaunch_launch_scene
   use airlaunch_kinds, only: dp, pi, g0, rad2deg, deg2rad
-  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_error, only: error_type, fatal_error, refuse_records
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_gust, only: gust_field, make_gust
@@ -24,7 +24,7 @@ module airlaunch_launch_scene
   use airlaunch_launch_system, only: launch_system, launch_nroots, rigid_size, launch_pitch_root, launch_clearance_root, &
     launch_gust_root, launch_break_root
   use airlaunch_launch_history, only: launch_result, launch_sample, launch_history, sample_launch, &
-    record_milestones, write_milestones, event_or_minus, handle_launch_event, clearance_geometry_of
+    record_milestones, write_milestones, event_or_minus, handle_launch_event, clearance_geometry_of, history_bytes
   use airlaunch_coupling_choice, only: coupling_plan, auto_settings, coupling_direct, coupling_rigidized, &
     coupling_index
   implicit none

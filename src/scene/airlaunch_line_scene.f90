@@ -15,7 +15,7 @@
 !> (written so far, with status = "failed", if the run fails).
 module airlaunch_line_scene
   use airlaunch_kinds, only: dp, rad2deg
-  use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_error, only: error_type, fatal_error, refuse_records
   use airlaunch_strings, only: str
   use airlaunch_namelist
   use airlaunch_run_config, only: run_config, echo_namelist_unit
@@ -146,7 +146,7 @@ contains
     class(line_scene), intent(inout) :: self               !< scene (re-initialised)
     type(line_scene_config), intent(in) :: cfg             !< inputs
     type(error_type), allocatable, intent(inout) :: error  !< set on bad input
-    integer :: n, n_max, k
+    integer :: n, n_max, k, st
     real(dp) :: xa(3), xb(3), va(3), vb(3), sep, strain
     type(line_scheme_options) :: opts
 
@@ -242,9 +242,16 @@ contains
 
     n_max = ceiling(cfg%t_end/cfg%output_interval - 1.0e-9_dp) + 1
     allocate(self%time(n_max), self%tip(3, n_max), self%tip_velocity(3, n_max), &
-      self%end_tension(2, n_max), self%end_force(3, 2, n_max), self%energy(3, n_max), self%rigid(n_max))
-    if (cfg%record_nodes) allocate(self%nodes(3, 0:n, n_max))
-    if (cfg%record_tensions) allocate(self%tensions(n, n_max))
+      self%end_tension(2, n_max), self%end_force(3, 2, n_max), self%energy(3, n_max), self%rigid(n_max), stat=st)
+    if (st == 0 .and. cfg%record_nodes) allocate(self%nodes(3, 0:n, n_max), stat=st)
+    if (st == 0 .and. cfg%record_tensions) allocate(self%tensions(n, n_max), stat=st)
+    if (st /= 0) then
+      ! (a record: 18 reals, the equivalent rigid body, 3 per node, 1 per segment)
+      call refuse_records(error, cfg%output_interval, n_max, real(n_max, dp)*(8.0_dp*18 + &
+        storage_size(self%rigid)/8.0_dp + merge(24.0_dp*(n + 1), 0.0_dp, cfg%record_nodes) + &
+        merge(8.0_dp*n, 0.0_dp, cfg%record_tensions)))
+      return
+    end if
     self%n_out = 0
     self%ready = .true.
   end subroutine scene_init

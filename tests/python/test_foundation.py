@@ -308,6 +308,30 @@ def test_an_older_output_that_cannot_be_removed_is_an_input_error(airlaunch_exe,
         assert sorted(p.name for p in sticky.iterdir()) == ["r.nc"]
 
 
+@pytest.mark.parametrize("example, edits, records, limit_mb", [
+    ("airlaunch_paper.nml", [(r"^  output_dt = 0.02 ", "  output_dt = 1.5e-6 ")], 10000002, 1024),
+    ("line_pendulum.nml", [(r"^  output_dt = 0.005 ", "  output_dt = 1.0e-6 ")], 6000001, 1024),
+    ("drop_demo.nml", [(r"^  output_dt = 0.1 ", "  output_dt = 6.1e-6 ")], 9836068, 300),
+], ids=["airlaunch", "line", "drop"])
+def test_more_records_than_memory_is_an_input_error(airlaunch_exe, tmp_path, example, edits, records, limit_mb):
+    """An output cadence whose records (allocated before the run) do not fit
+    in memory, here under an address-space limit (the records need 243 GB,
+    5.6 GB and 630 MB; the program itself ~150 MB): one line naming
+    output_dt, the record count and the memory, exit 2 (before the
+    twenty-sixth session: exit 1 and a compiler backtrace)."""
+    import resource
+    nml = nml_variant(tmp_path, edits=edits, base=ROOT / "input" / example)
+    out = tmp_path / "big.nc"
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (limit_mb << 20, limit_mb << 20))
+    res = subprocess.run([str(airlaunch_exe), str(nml), "--output", str(out)], capture_output=True, text=True,
+                         timeout=120, preexec_fn=limit)
+    line = assert_input_error(res, "&run: output_dt = ", out)
+    assert f"is not allowed here: the trajectory's {records} records need " in line
+    assert "more than can be allocated (raise output_dt, or set trajectory = .false.)" in line
+
+
 def test_resolved_input_records_the_settings_used(airlaunch_exe, tmp_path):
     """The input echoed into the file is the one the run used: with --output
     the file's own name, and for the line scene the line scheme's default
