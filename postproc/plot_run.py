@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """Draw the figure of one airlaunch run: plot_run.py OUTPUT.nc [FIGURE.png].
 
-The figure depends on the scene recorded in the file's `scene` attribute.
+The figure depends on the scene recorded in the file's `scene` attribute
+(airlaunch, line, drop); FIGURE.png defaults to OUTPUT.png beside the output.
+A file it cannot draw is one line on stderr and exit status 2.
 Scenes register a drawing function in PLOTTERS.
 """
+import pathlib
 import sys
 
 import matplotlib
@@ -106,23 +109,55 @@ def plot_line(ds, fig):
 PLOTTERS = {"drop": plot_drop, "airlaunch": plot_airlaunch, "line": plot_line}
 
 
+def fail(message):
+    """One line on stderr, exit status 2 (the project's rule for bad input)."""
+    print(f"plot_run: error: {message}", file=sys.stderr)
+    return 2
+
+
+def default_figure(path):
+    """OUTPUT.png beside OUTPUT.nc (the extension of the file name only)."""
+    p = pathlib.Path(path)
+    return str(p.with_suffix(".png")) if p.suffix else str(p) + ".png"
+
+
 def main(argv):
-    if len(argv) < 2:
-        print(__doc__.strip(), file=sys.stderr)
-        return 2
-    path = argv[1]
-    out = argv[2] if len(argv) > 2 else path.rsplit(".", 1)[0] + ".png"
-    with xr.open_dataset(path) as ds:
+    args = argv[1:]
+    if any(a in ("-h", "--help") for a in args):
+        print(__doc__.strip())
+        return 0
+    if not 1 <= len(args) <= 2 or any(a.startswith("-") for a in args):
+        return fail("usage: plot_run.py OUTPUT.nc [FIGURE.png] (see --help)")
+    path = args[0]
+    out = args[1] if len(args) > 1 else default_figure(path)
+    if not pathlib.Path(path).is_file():
+        return fail(f"{path}: no such file (give the netCDF output of an airlaunch run)")
+    out_dir = pathlib.Path(out).resolve().parent
+    if not out_dir.is_dir():
+        return fail(f"{out}: its directory {out_dir} does not exist")
+    try:
+        ds = xr.open_dataset(path, engine="netcdf4")
+    except Exception as exc:   # noqa: BLE001 - any unreadable file is the user's to hear about in one line
+        text = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        return fail(f"{path}: cannot read it as netCDF ({text})")
+    with ds:
         scene = ds.attrs.get("scene", "")
         plotter = PLOTTERS.get(scene)
         if plotter is None:
-            print(f"plot_run: no figure for scene '{scene}'", file=sys.stderr)
-            return 0
+            return fail(f"{path}: no figure for scene '{scene}' (the file's 'scene' attribute must be one of "
+                        f"{', '.join(PLOTTERS)}: is it an airlaunch output?)")
         fig = plt.figure(figsize=(16, 5) if scene == "airlaunch" else (11, 4.5))
-        plotter(ds, fig)
+        try:
+            plotter(ds, fig)
+        except KeyError as exc:
+            return fail(f"{path}: variable {exc} is missing (an output written with trajectory = .false., or "
+                        "not of this version of airlaunch?)")
         fig.suptitle(f"{ds.attrs.get('title', scene)} ({ds.attrs.get('status', '')})")
         fig.tight_layout()
-        fig.savefig(out, dpi=110)
+        try:
+            fig.savefig(out, dpi=110)
+        except OSError as exc:
+            return fail(f"{out}: cannot write the figure ({exc.strerror or exc})")
     return 0
 
 

@@ -148,6 +148,41 @@ def test_plot_script_draws_the_demo_figure(airlaunch_exe, tmp_path):
     assert fig.stat().st_size > 10000
 
 
+def test_plot_script_names_what_it_cannot_draw_in_one_line(airlaunch_exe, tmp_path):
+    """plot_run.py: a missing file, a file that is not netCDF, a netCDF file
+    without a scene, an unwritable figure and bad arguments each give one line
+    and exit 2 (before the twenty-sixth session: Python tracebacks of 15-41
+    lines, exit 1, and exit 0 without a figure for an unknown scene); the
+    default figure is OUTPUT.png beside the output, whatever dots the
+    directories have."""
+    nml, out = drop_nml(tmp_path)
+    assert run_airlaunch(airlaunch_exe, nml).returncode == 0
+    text = tmp_path / "text.nc"
+    text.write_text("not netCDF\n")
+    bare = tmp_path / "bare.nc"
+    xr.Dataset({"x": ("t", np.zeros(2))}).to_netcdf(bare)
+    dotted = tmp_path / "dir.x"
+    dotted.mkdir()
+    (dotted / "run").write_bytes(out.read_bytes())
+
+    def plot(*args):
+        return subprocess.run([sys.executable, str(ROOT / "postproc" / "plot_run.py"), *map(str, args)],
+                              capture_output=True, text=True, timeout=120)
+    for args, fragment in [((tmp_path / "missing.nc",), "missing.nc: no such file"),
+                           ((text,), "text.nc: cannot read it as netCDF"),
+                           ((bare,), "bare.nc: no figure for scene ''"),
+                           ((out, tmp_path / "nodir" / "f.png"), "f.png: its directory"),
+                           ((), "usage: plot_run.py OUTPUT.nc [FIGURE.png]"),
+                           ((out, "a.png", "b.png"), "usage: plot_run.py OUTPUT.nc [FIGURE.png]")]:
+        res = plot(*args)
+        assert res.returncode == 2, (args, res.stderr)
+        assert res.stderr.count("\n") == 1 and fragment in res.stderr, (args, res.stderr)
+    assert plot("--help").returncode == 0
+    res = plot(dotted / "run")
+    assert res.returncode == 0, res.stderr
+    assert (dotted / "run.png").stat().st_size > 10000
+
+
 def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
     """The output directory is checked before the run (not found missing after
     it, with HDF5's error stack on stderr): one line naming the value and where
