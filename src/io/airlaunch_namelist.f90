@@ -394,6 +394,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer :: i, j
     logical :: known, is_list
+    character(len=:), allocatable :: first
     do i = 1, size(self%items)
       if (self%items(i)%group /= lower(group)) cycle
       known = .false.
@@ -415,12 +416,20 @@ contains
         is_list = vars(j)%kind == "real_list" .or. vars(j)%kind == "integer_list"
       end do
       ! Fortran's namelist read keeps the last of two assignments without a word:
-      ! a value written twice is an error, not a silent choice.
+      ! a value written twice is an error, not a silent choice — also an
+      ! element a whole vector or a range assigns too (`b_position = 1, 2, 3`
+      ! and `b_position(2) = 5`, in either order; lists: check_list_order).
       do j = 1, i - 1
         associate(a => self%items(j), b => self%items(i))
-          if (a%group_number == b%group_number .and. a%name == b%name .and. a%index == b%index) then
+          if (a%group_number == b%group_number .and. a%name == b%name .and. &
+            (a%index == b%index .or. (.not. is_list .and. spans_overlap(a, b)))) then
+            if (a%index == b%index) then
+              first = a%value
+            else
+              first = a%name // a%index // " = " // a%value
+            end if
             call fatal_error(error, self%where(b) // "'" // b%name // b%index // "' = " // b%value // &
-              " is assigned a second time (first at line " // str(a%line) // ": " // a%value // &
+              " is assigned a second time (first at line " // str(a%line) // ": " // first // &
               "); a namelist would keep the last value silently, so give it once")
             return
           end if
@@ -892,6 +901,46 @@ contains
 
   !> Number of values of a list, repeat counts included ("3*0.0" and "2*" are 3
   !> and 2 values).
+  !> The elements two assignments of one vector set overlap: the whole vector
+  !> sets 1..(its values), `x(k) = ...` k onwards, `x(k:m)` k..m (an index of
+  !> another form: no overlap known; the exact comparison applies).
+  logical function spans_overlap(a, b)
+    type(nml_assignment), intent(in) :: a, b   !< two assignments of one variable
+    integer :: lo(2), hi(2)
+    call element_span(a, lo(1), hi(1))
+    call element_span(b, lo(2), hi(2))
+    spans_overlap = all(lo >= 1) .and. max(lo(1), lo(2)) <= min(hi(1), hi(2))
+  end function spans_overlap
+
+  !> The elements [lo, hi] an assignment sets (lo = -1: an index of another form).
+  subroutine element_span(item, lo, hi)
+    type(nml_assignment), intent(in) :: item   !< an assignment (index normalised: no blanks)
+    integer, intent(out) :: lo, hi
+    integer :: colon, ios1, ios2, n
+    character(len=:), allocatable :: inner
+    n = max(1, count_values(item%value))
+    lo = -1
+    hi = -1
+    if (len(item%index) == 0) then
+      lo = 1
+      hi = n
+      return
+    end if
+    if (len(item%index) < 3 .or. len(item%index) > 24) return
+    inner = item%index(2:len(item%index)-1)
+    if (verify(inner, "+-0123456789:") /= 0) return
+    colon = index(inner, ":")
+    if (colon == 0) then
+      read(inner, *, iostat=ios1) lo
+      if (ios1 /= 0) lo = -1
+      hi = lo + n - 1
+    else if (colon > 1 .and. colon < len(inner)) then
+      read(inner(1:colon-1), *, iostat=ios1) lo
+      read(inner(colon+1:), *, iostat=ios2) hi
+      if (ios1 /= 0 .or. ios2 /= 0) lo = -1
+    end if
+  end subroutine element_span
+
   integer function count_values(v) result(n)
     character(len=*), intent(in) :: v
     integer :: first, last, star, k, ios

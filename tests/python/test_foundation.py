@@ -126,6 +126,20 @@ def test_vector_elements_once_each(airlaunch_exe, tmp_path):
     assert len(res.stderr.strip().splitlines()) == 1, res.stderr
     assert f"{bad}:25: &line_scene: 'b_position(1)' = 70.0 is assigned a second time (first at line 24: 80.0)" \
         in res.stderr, res.stderr
+    # an element the whole vector (or a range) sets too, in either order (before the twenty-sixth
+    # session accepted: the later assignment won silently)
+    for text, second, first in [
+            ("b_position = 80.0, 0.0, 0.0\n  b_position(2) = -1.0", "'b_position(2)' = -1.0",
+             "b_position = 80.0, 0.0, 0.0"),
+            ("b_position(2) = -1.0\n  b_position = 80.0, 0.0, 0.0", "'b_position' = 80.0, 0.0, 0.0",
+             "b_position(2) = -1.0"),
+            ("b_position(1:2) = 80.0, 0.0\n  b_position(2:3) = -1.0, 0.0", "'b_position(2:3)' = -1.0, 0.0",
+             "b_position(1:2) = 80.0, 0.0")]:
+        bad = write(tmp_path / "overlap.nml", base.replace("b_position = 80.0, 0.0, 0.0", text))
+        res = run_airlaunch(airlaunch_exe, bad)
+        assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+        assert f"{bad}:25: &line_scene: {second} is assigned a second time (first at line 24: {first})" \
+            in res.stderr, res.stderr
 
 
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):
