@@ -191,7 +191,7 @@ contains
       edge_note(r%edge_pull_time) // &
       separation_note(r) // &
       "first rocket pitch maximum: " // pitch_max_note(r) // nl // &
-      "minimum rocket-empennage clearance: " // clearance_note(r%min_clearance) // nl // &
+      "minimum rocket-empennage clearance after separation: " // clearance_note(r%min_clearance) // nl // &
       tension_note(r) // &
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
       "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
@@ -259,7 +259,10 @@ contains
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s
     s = at(r%pitch_max_time) // ", pitch " // fx(r%pitch_max_deg, 2) // &
-      " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg)"
+      " deg (nose elevation " // fx(r%nose_elevation_at_max_deg, 2) // " deg"
+    ! the Euler pitch cannot exceed 90 deg: its maximum there is the nose passing the vertical
+    if (r%pitch_max_deg > 89.99d0) s = s // ": the nose passes the vertical, where the Euler pitch peaks"
+    s = s // ")"
     if (r%pitch_max_time < 0.0d0) s = "not reached"
   end function pitch_max_note
 
