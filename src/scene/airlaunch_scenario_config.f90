@@ -1026,8 +1026,10 @@ contains
           str(r%length - r%cg_from_nose) // " m aft of its CG, would be outside the bay: need l0 >= " // &
           str(r%length - r%cg_from_nose) // " m)")
       else if (nose_ahead > b%length) then
-        call fatal_error(error, f%path // ": &bay: the rocket does not fit the bay: its nose is " // &
-          str(nose_ahead) // " m ahead of the ramp edge, the bay is length = " // str(b%length) // " m")
+        call fatal_error(error, f%path // ": &bay: l0 = " // str(b%l0) // " is not allowed (the rocket does not " // &
+          "fit the bay: its nose, " // str(r%cg_from_nose) // " m ahead of its CG, would be " // str(nose_ahead) // &
+          " m ahead of the ramp edge, the bay is length = " // str(b%length) // " m: need l0 <= " // &
+          str(b%length - r%cg_from_nose) // " m, or a longer bay)")
       else if (r%diameter > min(b%width, b%height)) then
         call fatal_error(error, f%path // ": &rocket: diameter = " // str(r%diameter) // &
           " is not allowed (the bay is " // str(b%width) // " m wide and " // str(b%height) // " m high)")
