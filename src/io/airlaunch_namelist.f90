@@ -270,6 +270,20 @@ contains
             end if
             i = i + j + 1
           case ("/")
+            ! `output = /tmp/run.nc`: an unquoted path, whose / would end the group
+            if (vstart > 0 .and. i < n) then
+              if (len_trim(text(vstart:i-1)) == 0 .and. text(i+1:i+1) /= " ") then
+                j = i
+                do while (j < n)
+                  if (text(j+1:j+1) == " " .or. text(j+1:j+1) == ",") exit
+                  j = j + 1
+                end do
+                call fatal_error(error, self%path // ":" // str(line_of(i)) // ": &" // group // ": '" // &
+                  item%name // item%index // "' = " // text(i:j) // " is not allowed: a string must be quoted ('" // &
+                  text(i:j) // "'); an unquoted / ends the group")
+                return
+              end if
+            end if
             if (vstart > 0) call close_item(i - 1)
             in_group = .false.
             vstart = 0

@@ -142,6 +142,18 @@ def test_vector_elements_once_each(airlaunch_exe, tmp_path):
             in res.stderr, res.stderr
 
 
+def test_an_unquoted_path_is_named_as_such(airlaunch_exe, tmp_path):
+    """`output = /tmp/x.nc`: the / of an unquoted path would end the group; the
+    error names the variable and the quoting (before the twenty-sixth session:
+    'text outside a namelist group: tmp/x.nc ...')."""
+    out = tmp_path / "drop.nc"
+    nml = write(tmp_path / "unquoted.nml", f"&run scene = 'drop', t_end = 30.0, output = {out} /\n"
+                                           "&store mass = 28000.0, drag_area = 10.0 /\n")
+    res = run_airlaunch(airlaunch_exe, nml)
+    assert_input_error(res, f"unquoted.nml:1: &run: 'output' = {out} is not allowed: a string must be quoted "
+                            f"('{out}'); an unquoted / ends the group", out)
+
+
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):
     nml = write(tmp_path / "g.nml", "&run scene='drop' /\n&stor mass=1.0 /\n")
     res = run_airlaunch(airlaunch_exe, nml)
