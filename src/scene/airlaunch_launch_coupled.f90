@@ -1293,9 +1293,9 @@ contains
     call w%add_text_att("/", "line_inner_scheme", trim(r%ropt%inner_scheme), werr)
     if (r%ropt%inner_scheme == "marching" .and. associated(r%cpl%line)) &
       call w%add_real_att("/", "line_inner_dt_s", r%cpl%marcher%dt, werr)
-    call w%add_real_att("/", "refreshes", real(r%n_refresh, dp), werr)
-    call w%add_real_att("/", "guarded_mass_refreshes", real(r%n_guard_mass, dp), werr)
-    call w%add_real_att("/", "guarded_inertia_refreshes", real(r%n_guard_inertia, dp), werr)
+    call w%add_int_att("/", "refreshes", [r%n_refresh], werr)
+    call w%add_int_att("/", "guarded_mass_refreshes", [r%n_guard_mass], werr)
+    call w%add_int_att("/", "guarded_inertia_refreshes", [r%n_guard_inertia], werr)
     ! NaN when no record came from the rigidized engine ('auto' that never switched)
     call w%add_real_att("/", "min_rigid_line_tension_N", merge(r%min_rigid_tension, &
       ieee_value(1.0_dp, ieee_quiet_nan), r%min_rigid_tension < huge(1.0_dp)), werr)
@@ -1340,7 +1340,7 @@ contains
       call w%add_real_att("/", "auto_dwell_s", r%plan%auto%dwell, werr)
       call w%add_real_att("/", "auto_min_steps", r%plan%auto%min_steps, werr)
     end if
-    call w%add_real_att("/", "coupling_switches", real(r%switches, dp), werr)
+    call w%add_int_att("/", "coupling_switches", [r%switches], werr)
     if (r%switches > 0) call w%add_text_att("/", "coupling_switch_log", r%switch_log, werr)
   end subroutine write_choice_attributes
 end submodule airlaunch_launch_coupled

@@ -1077,7 +1077,7 @@ contains
     call w%add_text_att("/", "mass_matrix", trim(scene%cfg%line%mass), error)
     call w%add_real_att("/", "initial_strain", scene%initial_strain, error)
     call w%add_real_att("/", "wall_time_s", scene%wall_time, error)
-    call w%add_real_att("/", "steps", real(scene%stats%steps, dp), error)
+    call w%add_int_att("/", "steps", [int(min(scene%stats%steps, int(huge(1), kind(scene%stats%steps))))], error)
     if (scene%peak_tension_time >= 0.0_dp) then
       call w%add_real_att("/", "peak_tension_N", scene%peak_tension, error)
       call w%add_real_att("/", "peak_tension_time_s", scene%peak_tension_time, error)
