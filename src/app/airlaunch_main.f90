@@ -30,7 +30,7 @@ program airlaunch
   character(len=:), allocatable :: path, echo, summary, output_override, check_note
   character(len=1024) :: arg
   integer :: i, nargs, n_run_echo, n_arg
-  logical :: written, check_only
+  logical :: written, kept, check_only
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   nargs = command_argument_count()
@@ -127,8 +127,13 @@ program airlaunch
     write(error_unit, '(a)') "airlaunch: error: " // error%message
     if (allocated(summary)) write(error_unit, '(a)') summary
     if (run%trajectory) then
+      ! (a .part left: the writer could not rename it, and kept it)
+      inquire(file=trim(run%output) // ".part", exist=kept)
       inquire(file=trim(run%output), exist=written)
-      if (written) then
+      if (kept) then
+        write(error_unit, '(a)') "airlaunch: output kept as " // trim(run%output) // ".part (it could not " // &
+          "be renamed)"
+      else if (written) then
         write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
       else
         write(error_unit, '(a)') "airlaunch: no output written (the run failed before its first record)"

@@ -191,14 +191,11 @@ contains
       call fatal_error(error, self%tmp_path // ": cannot close the output file")
       return
     end if
-    if (c_rename(self%tmp_path // c_null_char, self%path // c_null_char) /= 0) then
-      call fatal_error(error, self%path // ": cannot rename " // self%tmp_path // " to it")
-      block   ! no .part left behind: the run reports the failure, the file is not its result
-        integer :: unit, ios
-        open(newunit=unit, file=self%tmp_path, status="old", iostat=ios)
-        if (ios == 0) close(unit, status="delete")
-      end block
-    end if
+    ! a failed rename keeps the complete file under its .part name (the
+    ! result is not lost; the program names it)
+    if (c_rename(self%tmp_path // c_null_char, self%path // c_null_char) /= 0) &
+      call fatal_error(error, self%path // ": cannot rename " // self%tmp_path // " to it; the complete " // &
+        "output is kept as " // self%tmp_path)
   end subroutine nc_commit
 
   !> End of writing: commit the file if every write succeeded (error not

@@ -594,6 +594,31 @@ def test_a_file_without_groups_is_named_as_such(airlaunch_exe, tmp_path):
         "path of a namelist scenario file)", res.stderr
 
 
+def test_an_output_that_cannot_be_renamed_is_kept_as_part(airlaunch_exe, tmp_path):
+    """A directory appears under the output's name during the run (after the
+    checks): the final rename fails, and the complete output is kept as
+    OUTPUT.part, named on stderr (before the twenty-sixth session it was
+    deleted, and the program said 'no output written').  The line pendulum
+    over 60 s: 2-4 s of integration, the directory made after 0.5 s."""
+    import time
+    nml = nml_variant(tmp_path, edits=[(r"^  t_end = 6.0 ", "  t_end = 60.0 ")], base=ROOT / "input" /
+                      "line_pendulum.nml")
+    out = tmp_path / "p.nc"
+    proc = subprocess.Popen([str(airlaunch_exe), str(nml), "--output", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    if proc.poll() is not None:
+        pytest.skip("the run ended within 0.5 s: no time to make the directory")
+    out.mkdir()
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 3, stderr
+    lines = stderr.strip().splitlines()
+    assert f"cannot rename {out}.part to it; the complete output is kept as {out}.part" in lines[0], stderr
+    assert lines[-1] == f"airlaunch: output kept as {out}.part (it could not be renamed)"
+    with xr.open_dataset(f"{out}.part") as ds:
+        assert ds.attrs["status"] == "completed" and float(ds["time"].values[-1]) == 60.0
+
+
 def test_a_run_failing_before_its_first_record_leaves_no_old_file(airlaunch_exe, tmp_path):
     """An aircraft of 1e30 kg cannot be trimmed (Case 0): the run fails before
     writing anything. An older file under the same name (here a placeholder)
