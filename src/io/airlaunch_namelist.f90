@@ -144,6 +144,8 @@ contains
       call read_line(unit, buf, ios)
       if (ios /= 0 .or. pos >= nchar) exit
       lineno = lineno + 1
+      ! a UTF-8 byte-order mark (some Windows editors write one) reads as blanks
+      if (lineno == 1 .and. buf(1:3) == achar(239) // achar(187) // achar(191)) buf(1:3) = "   "
       lt = stripped_length(buf)
       ! tabs scan as blanks, other control characters as '?' (messages stay one line)
       do k = 1, lt

@@ -154,6 +154,19 @@ def test_an_unquoted_path_is_named_as_such(airlaunch_exe, tmp_path):
                             f"('{out}'); an unquoted / ends the group", out)
 
 
+def test_a_byte_order_mark_is_read_as_blanks(airlaunch_exe, tmp_path):
+    """A UTF-8 byte-order mark (some Windows editors write one) before the
+    first group: the file runs as without it (before the twenty-sixth
+    session: 'text outside a namelist group' quoting the invisible mark)."""
+    nml, out = drop_nml(tmp_path, t_end=1.0)
+    marked = tmp_path / "marked.nml"
+    marked.write_bytes(b"\xef\xbb\xbf" + nml.read_bytes().lstrip())
+    res = run_airlaunch(airlaunch_exe, marked)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert float(ds["time"].values[-1]) == 1.0
+
+
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):
     nml = write(tmp_path / "g.nml", "&run scene='drop' /\n&stor mass=1.0 /\n")
     res = run_airlaunch(airlaunch_exe, nml)
