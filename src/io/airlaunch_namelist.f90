@@ -685,7 +685,11 @@ contains
         case ("integer")
           read(v, *, iostat=ios) k
           if (ios == 0) ios = merge(0, 1, is_number(v) .and. verify(trim(v), "+-0123456789") == 0)
-          expected = "an integer in [" // str(-huge(1)) // ", " // str(huge(1)) // "]"
+          if (is_number(v) .and. verify(trim(v), "+-0123456789") /= 0) then
+            expected = "an integer (a whole number: no decimal point or exponent)"
+          else
+            expected = "an integer in [" // str(-huge(1)) // ", " // str(huge(1)) // "]"
+          end if
         case ("logical")
           read(v, *, iostat=ios) l
           expected = ".true. or .false."

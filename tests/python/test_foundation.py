@@ -167,6 +167,19 @@ def test_a_byte_order_mark_is_read_as_blanks(airlaunch_exe, tmp_path):
         assert float(ds["time"].values[-1]) == 1.0
 
 
+def test_a_fractional_integer_is_named_as_such(airlaunch_exe, tmp_path):
+    """n_seg = 15.5: 'not an integer (a whole number ...)', not the range of
+    32-bit integers, which is kept for a whole number beyond it."""
+    for value, fragment in [("15.5", "is not an integer (a whole number: no decimal point or exponent)"),
+                            ("1e3", "is not an integer (a whole number: no decimal point or exponent)"),
+                            ("99999999999", "is not an integer in [-2147483647, 2147483647]")]:
+        out = tmp_path / "l.nc"
+        nml = write(tmp_path / "frac.nml", f"&run scene = 'line', t_end = 1.0, output = '{out}' /\n"
+                                           f"&line length = 60.0, n_seg = {value}, ea = 2.0e6, "
+                                           "mass_per_length = 0.5 /\n&line_scene a_kind = 'fixed' /\n")
+        assert_input_error(run_airlaunch(airlaunch_exe, nml), f"&line: variable 'n_seg' = {value} {fragment}", out)
+
+
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):
     nml = write(tmp_path / "g.nml", "&run scene='drop' /\n&stor mass=1.0 /\n")
     res = run_airlaunch(airlaunch_exe, nml)
