@@ -265,9 +265,15 @@ contains
           case ("'", '"')
             quote = text(i:i)
             j = index(text(i+1:), quote)
+            ! a string ends on its own line (a missing closing quote would
+            ! otherwise be found lines later, at the next quote)
+            if (j > 0) then
+              if (line_of(i + j) /= line_of(i)) j = 0
+            end if
             if (j == 0) then
               call fatal_error(error, self%path // ":" // str(line_of(i)) // ": &" // group // &
-                ": unterminated string " // text(i:min(n, i+20)))
+                ": unterminated string " // trim(text(i:min(n, i+39, line_end(i)))) // " (a quoted value must " // &
+                "end with its " // quote // " on the same line)")
               return
             end if
             i = i + j + 1
@@ -351,6 +357,16 @@ contains
           " is not closed (end it with /)")
       end if
     end subroutine scan
+
+    !> The last character of the line that holds character i.
+    pure integer function line_end(i) result(e)
+      integer, intent(in) :: i
+      e = i
+      do while (e < n)
+        if (line_of(e + 1) /= line_of(i)) exit
+        e = e + 1
+      end do
+    end function line_end
 
     subroutine close_item(last)
       integer, intent(in) :: last

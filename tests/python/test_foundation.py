@@ -180,6 +180,17 @@ def test_a_fractional_integer_is_named_as_such(airlaunch_exe, tmp_path):
         assert_input_error(run_airlaunch(airlaunch_exe, nml), f"&line: variable 'n_seg' = {value} {fragment}", out)
 
 
+def test_a_missing_closing_quote_is_found_on_its_line(airlaunch_exe, tmp_path):
+    """`scene = 'drop` without its closing quote: named at its own line, as the
+    sweep definitions' reader does (before the twenty-sixth session the next
+    quote, lines later, closed it and the error came from there)."""
+    out = tmp_path / "x.nc"
+    nml = write(tmp_path / "quote.nml", f"&run\n  scene = 'drop\n  t_end = 1.0\n  output = '{out}'\n/\n"
+                                        "&store mass = 1.0, drag_area = 1.0 /\n")
+    assert_input_error(run_airlaunch(airlaunch_exe, nml), "quote.nml:2: &run: unterminated string 'drop (a quoted "
+                       "value must end with its ' on the same line)", out)
+
+
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):
     nml = write(tmp_path / "g.nml", "&run scene='drop' /\n&stor mass=1.0 /\n")
     res = run_airlaunch(airlaunch_exe, nml)
