@@ -704,6 +704,16 @@ def parse_definition(text, path="<sweep>"):
     if t_end < 0:
         raise DefinitionError(f"{where}t_end = {t_end:g} is not allowed (must be > 0 s, or 0 for the "
                               "base scenario's)")
+    # &sweep t_end sets run%t_end for every case: not also an &input or &fixed (airlaunch-sweep alike)
+    if t_end > 0:
+        for i, s in enumerate(inputs):
+            if s.name == "run%t_end":
+                raise DefinitionError(f"{path}: &input #{i + 1} 'run%t_end': run%t_end is also set by &sweep "
+                                      "t_end (vary it here and leave &sweep t_end out, or fix it there)")
+        for i, (n, _) in enumerate(fixed):
+            if n == "run%t_end":
+                raise DefinitionError(f"{path}: &fixed #{i + 1} 'run%t_end': run%t_end is also set by &sweep "
+                                      "t_end (give it once: &sweep t_end)")
     keep_failed = sweep.get("keep_failed", False)
     if not isinstance(keep_failed, bool):
         raise DefinitionError(f"{where}keep_failed = {keep_failed!r} is not .true. or .false.")

@@ -133,7 +133,28 @@ contains
     call read_fixed(f, def, n_fixed, error)
     if (allocated(error)) return
     call read_sweep_group(f, def, error)
+    if (.not. allocated(error)) call check_t_end_once(def, error)
   end subroutine read_sweep_definition
+
+  !> &sweep t_end > 0 sets run%t_end for every case: an &input or &fixed of
+  !> run%t_end beside it would assign it twice in every case's namelist
+  !> (each case invalid input).
+  subroutine check_t_end_once(def, error)
+    type(sweep_definition), intent(in) :: def             !< the sweep
+    type(error_type), allocatable, intent(inout) :: error !< set if both set it
+    integer :: k
+    if (.not. (def%t_end > 0.0_dp)) return
+    do k = 1, size(def%inputs)
+      if (def%inputs(k)%name == "run%t_end") call fatal_error(error, def%path // ":" // str(def%inputs(k)%line) // &
+        ": &input #" // str(k) // " 'run%t_end': run%t_end is also set by &sweep t_end = " // str(def%t_end) // &
+        " (vary it here and leave &sweep t_end out, or fix it there)")
+    end do
+    do k = 1, size(def%fixed)
+      if (def%fixed(k)%name == "run%t_end") call fatal_error(error, def%path // ":" // str(def%fixed(k)%line) // &
+        ": &fixed #" // str(k) // " 'run%t_end': run%t_end is also set by &sweep t_end = " // str(def%t_end) // &
+        " (give it once: &sweep t_end)")
+    end do
+  end subroutine check_t_end_once
 
   !> The &fixed groups: name = 'group%variable', value = 'namelist text'.
   subroutine read_fixed(f, def, n_fixed, error)

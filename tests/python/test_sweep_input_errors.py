@@ -626,3 +626,22 @@ def test_indexed_list_elements_in_order_are_read_alike(tmp_path, values):
     if SWEEP_EXE.exists():
         res = run_sweep(d, tmp_path, None, "--check")
         assert res.returncode == 0 and "matches the definition" in res.stdout, res.stdout + res.stderr
+
+
+@pytest.mark.parametrize("kind", ["input", "fixed"])
+def test_t_end_of_the_sweep_and_of_an_input_or_fixed(tmp_path, kind):
+    """&sweep t_end > 0 sets run%t_end in every case: an &input or &fixed of
+    run%t_end beside it is refused by both steps before any case (before the
+    twenty-sixth session --check passed it and every case was invalid input:
+    't_end' assigned a second time)."""
+    if kind == "input":
+        d = definition(tmp_path, inputs=ONE_INPUT + "&input name = 'run%t_end', distribution = 'uniform', "
+                                                    "lower = 3.0, upper = 6.0 /\n")
+        words = ("&input #2 'run%t_end': run%t_end is also set by &sweep t_end", "leave &sweep t_end out")
+    else:
+        d = definition(tmp_path, fixed="&fixed name = 'run%t_end', value = '5.0' /")
+        words = ("&fixed #1 'run%t_end': run%t_end is also set by &sweep t_end", "give it once")
+    assert_error(table(tmp_path, d), *words, tmp_path=tmp_path)
+    assert_check_refuses(tmp_path, d)
+    res = run_sweep(d, tmp_path, None, "--check")
+    assert words[0] in res.stderr, res.stderr
