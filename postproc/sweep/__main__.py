@@ -38,6 +38,39 @@ def cmd_table(args) -> int:
     return 0
 
 
+def fnv1a(data: bytes) -> str:
+    """FNV-1a 64 of the bytes, as airlaunch-sweep writes it (16 hex digits)."""
+    h = 0xcbf29ce484222325
+    for b in data:
+        h = ((h ^ b) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return f"{h:016X}"
+
+
+def check_summary_settings(defn, summary, where) -> None:
+    """Raise DefinitionError if the base scenario's text, the &fixed settings
+    or &sweep t_end changed since the summary was made (summaries written
+    before the twenty-sixth session lack the first two: not checked)."""
+    rerun = "the definition changed since the sweep ran: run airlaunch-sweep to evaluate it as it is now"
+    recorded = summary.attrs.get("base_text_fnv1a")
+    if isinstance(recorded, str):
+        try:
+            now = fnv1a(pathlib.Path(defn.base).read_bytes())
+        except OSError:
+            now = None
+        if now is not None and now != recorded.strip():
+            raise DefinitionError(f"{where} (the base scenario {defn.base} is not the text the sweep ran): {rerun}")
+    recorded = summary.attrs.get("fixed")
+    if isinstance(recorded, str):
+        now = "\n".join(f"{name} = {value}" for name, value in defn.fixed)
+        if now != recorded.strip():
+            raise DefinitionError(f"{where} (its &fixed settings are not those the sweep ran: "
+                                  f"{recorded.strip() or 'none'!r} then, {now or 'none'!r} now): {rerun}")
+    t_end = summary.attrs.get("t_end_s")
+    if defn.t_end > 0 and t_end is not None and float(t_end) != defn.t_end:
+        raise DefinitionError(f"{where} (&sweep t_end = {defn.t_end:g} s, the sweep ran {float(t_end):g} s): "
+                              f"{rerun}")
+
+
 def check_summary_belongs(defn, summary, summary_path) -> None:
     """Raise DefinitionError unless the summary is that of the definition's
     current table: same design, seed and case count as the definition, and the
@@ -47,7 +80,7 @@ def check_summary_belongs(defn, summary, summary_path) -> None:
     refused, not evaluated."""
     import numpy as np
 
-    from .table import make_table, open_netcdf
+    from .table import check_table, make_table, open_netcdf
 
     where = f"{summary_path}: the summary is not that of {defn.path}"
     again = "a summary left by an earlier sweep? run airlaunch-sweep to make this sweep's"
@@ -62,8 +95,11 @@ def check_summary_belongs(defn, summary, summary_path) -> None:
     n = summary.sizes.get("case")
     if n != defn.n_cases:
         raise DefinitionError(f"{where} (it has {n} cases, the definition {defn.n_cases}): {again}")
+    check_summary_settings(defn, summary, where)
     table_path = defn.table_path
     if table_path.is_file():
+        # the table is the definition's as it is now (a changed distribution, say)
+        check_table(defn)
         table = open_netcdf(table_path, "case table", "run the table step again")
         source = str(table_path)
     else:

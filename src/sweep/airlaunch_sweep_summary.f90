@@ -15,6 +15,7 @@ module airlaunch_sweep_summary
   use airlaunch_sweep_table, only: case_table
   use airlaunch_sweep_case, only: base_scenario
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
+  use airlaunch_sweep_journal, only: fnv1a
   implicit none
   private
   public :: write_summary
@@ -101,6 +102,9 @@ contains
     call w%add_text_att("/", "inputs", input_list(def), error)
     call w%add_text_att("/", "base", def%base, error)
     call w%add_text_att("/", "base_namelist", base%echo, error)
+    ! what the envelope and verify steps check against the definition as it is now
+    call w%add_text_att("/", "base_text_fnv1a", fnv1a(base%text), error)
+    call w%add_text_att("/", "fixed", fixed_text(def), error)
     call w%add_text_att("/", "scene", trim(base%scene), error)
     call w%add_real_att("/", "t_end_s", merge(def%t_end, base%t_end, def%t_end > 0.0_dp), error)
     call w%add_text_att("/", "table", def%table_path(), error)
@@ -116,6 +120,18 @@ contains
     end if
     call w%commit(error)
   end subroutine write_summary
+
+  !> The definition's &fixed, one "name = value" per line ('' for none).
+  function fixed_text(def) result(s)
+    type(sweep_definition), intent(in) :: def   !< the sweep
+    character(len=:), allocatable :: s
+    integer :: k
+    s = ""
+    do k = 1, size(def%fixed)
+      if (k > 1) s = s // new_line("a")
+      s = s // def%fixed(k)%name // " = " // def%fixed(k)%value
+    end do
+  end function fixed_text
 
   !> Space-separated names of the varied inputs.
   function input_list(def) result(s)

@@ -645,3 +645,40 @@ def test_t_end_of_the_sweep_and_of_an_input_or_fixed(tmp_path, kind):
     assert_check_refuses(tmp_path, d)
     res = run_sweep(d, tmp_path, None, "--check")
     assert words[0] in res.stderr, res.stderr
+
+
+@pytest.mark.parametrize("edit,words", [
+    ("fixed", ["its &fixed settings are not those the sweep ran: 'line%n_seg = 10' then, 'line%n_seg = 12' now"]),
+    ("t_end", ["&sweep t_end = 5 s, the sweep ran 4 s"]),
+    ("base", ["is not the text the sweep ran"]),
+    ("distribution", ["out/table.nc: the values of bay%release_time are not those that",
+                      "(definition changed since the table was made?)"]),
+], ids=["fixed", "t_end", "base text", "distribution without a new table"])
+def test_envelope_and_verify_refuse_a_summary_of_an_edited_definition(tmp_path, edit, words):
+    """A finished sweep whose definition (or base scenario) was then edited:
+    the envelope and verify steps refuse its summary in one line instead of
+    evaluating (or verifying, against the new settings) the old cases (before
+    the twenty-sixth session only the design, seed, case count and the input
+    values against table.nc were compared)."""
+    base = tmp_path / "base.nml"
+    base.write_text(PAPER.read_text())
+    d = definition(tmp_path, text=lambda t: t.replace(str(PAPER), str(base)))
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1.5 /\n")
+    assert table(tmp_path, d).returncode == 0
+    res = run_sweep(d, tmp_path, None)
+    assert res.returncode == 0, res.stderr
+    res = run_python(["envelope", d, "--criteria", crit, "--no-figures"], tmp_path)
+    assert res.returncode == 0, res.stderr
+    text = d.read_text()
+    if edit == "fixed":
+        d.write_text(text.replace("value = '10'", "value = '12'"))
+    elif edit == "t_end":
+        d.write_text(text.replace("t_end = 4.0", "t_end = 5.0"))
+    elif edit == "base":
+        base.write_text(base.read_text() + "! edited after the sweep\n")
+    else:
+        d.write_text(text.replace("upper = 1.0", "upper = 1.2"))
+    for step in (["envelope", d, "--criteria", crit, "--no-figures"], ["verify", d, "--criteria", crit]):
+        res = run_python(step, tmp_path)
+        assert_error(res, *words)
