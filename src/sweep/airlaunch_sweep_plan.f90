@@ -91,6 +91,7 @@ contains
     logical :: keep(size(rows))
     real(dp) :: key(size(rows)), sgn
     integer :: m, k, j, best
+    logical :: clearance
     keep = .false.
     if (def%keep_failed) keep = rows%status == status_failed
     do k = 1, size(def%keep_ids)
@@ -99,11 +100,19 @@ contains
     if (def%keep_worst > 0) then
       m = metrics%index(def%worst_by)
       ! smaller clearances are worse; larger loads, excursions and speeds are worse
-      sgn = merge(1.0_dp, -1.0_dp, def%worst_by == "min_clearance_m" .or. def%worst_by == "min_line_clearance_m")
+      clearance = def%worst_by == "min_clearance_m" .or. def%worst_by == "min_line_clearance_m"
+      sgn = merge(1.0_dp, -1.0_dp, clearance)
       do k = 1, size(rows)
         key(k) = huge(1.0_dp)
-        if (rows(k)%status == status_ok .and. rows(k)%metrics(m) == rows(k)%metrics(m)) &
+        if (rows(k)%status /= status_ok) cycle
+        if (rows(k)%metrics(m) == rows(k)%metrics(m)) then
           key(k) = sgn*rows(k)%metrics(m)
+        else if (clearance) then
+          ! a clearance never reached (the rocket never separated): the worst,
+          ! as the envelope ranks it (its margin NaN fails); a NaN load or
+          ! speed is no event (no break: no recoil) and is not kept
+          key(k) = -huge(1.0_dp)
+        end if
       end do
       do j = 1, min(def%keep_worst, size(rows))
         best = minloc(key, dim=1)
