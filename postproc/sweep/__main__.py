@@ -229,6 +229,9 @@ def cmd_verify(args) -> int:
         bad = [i for i in ids if not 0 <= i < n]
         if bad:
             raise DefinitionError(f"--ids {args.ids}: case {bad[0]} is not in 0 ... {n - 1}")
+        twice = [i for k, i in enumerate(ids) if i in ids[:k]]
+        if twice:
+            raise DefinitionError(f"--ids {args.ids}: case {twice[0]} is given twice (give each case once)")
     else:
         ids = list(nearest_the_boundary(env, args.cases))
     if not ids:   # not an error: the sweep has no case with a margin on every criterion

@@ -83,6 +83,11 @@ def refined_segment(j: int, n: int, factor: int, at_last_end: bool = False) -> i
     return (j - 1) * factor + (factor + 1) // 2
 
 
+def segment_factor(n: int, segments: int) -> int:
+    """The factor n_seg is multiplied by: `segments`, capped at MAX_SEGMENTS."""
+    return max(1, min(segments, MAX_SEGMENTS // n))
+
+
 def refine_namelist(resolved: str, segments: int, tolerance: float) -> tuple:
     """The resolved namelist of a case (``airlaunch --check``'s output) with
     `segments` times the line's segments (at most MAX_SEGMENTS) and the
@@ -97,7 +102,7 @@ def refine_namelist(resolved: str, segments: int, tolerance: float) -> tuple:
     n_text = _get(text, "LINE", "N_SEG")
     if n_text is not None and segments != 1:
         n = int(n_text)
-        factor = max(1, min(segments, MAX_SEGMENTS // n))
+        factor = segment_factor(n, segments)
         if factor > 1:
             text = _set(text, "LINE", "N_SEG", str(n * factor))
             changes.append(f"line%n_seg {n} -> {n * factor}")
@@ -157,14 +162,16 @@ def rerun_case(case_id, text, exe, work: pathlib.Path, segments, tolerance, time
     out = work / f"case_{case_id:06d}.nc"
     res = _run([str(exe), str(case_nml), "--check", "--output", str(out)], None, timeout)
     if res.returncode != 0:
-        return "invalid_input", res.stderr.strip(), out, []
+        return "invalid_input", res.stderr.strip(), out, [], 1
     resolved = res.stdout.split("\n", 1)[1]   # without the leading comment line
     text, changes = refine_namelist(resolved, segments, tolerance)
+    n_text = _get(resolved, "LINE", "N_SEG")
+    factor = segment_factor(int(n_text), segments) if n_text is not None else 1
     refined = work / f"case_{case_id:06d}_refined.nml"
     refined.write_text(text)
     res = _run([str(exe), str(refined), "--output", str(out)], None, timeout)
     status = "ok" if res.returncode == 0 else ("failed" if res.returncode == 3 else "error")
-    return status, res.stderr.strip().splitlines()[-1] if res.returncode else "", out, changes
+    return status, res.stderr.strip().splitlines()[-1] if res.returncode else "", out, changes, factor
 
 
 def attributes(path) -> dict:
@@ -215,9 +222,12 @@ def verify(env, criteria, scene, ids, definition, sweep_exe, exe, work, segments
     ds["refined_status"] = (("case",), np.array([r[0] for r in runs]))
     ds["refined_message"] = (("case",), np.array([r[1] for r in runs]))
     ds["criterion_units"] = (("criterion",), np.array([c.units for c in criteria]))
+    ds["segments_factor"] = (("case",), np.array([r[4] for r in runs], dtype=np.int32),
+                             {"long_name": "the factor n_seg was multiplied by (--segments, capped at "
+                                           f"{MAX_SEGMENTS} segments; 1: no line)", "units": "1"})
     changes = next((r[3] for r in runs if r[3]), [])
     ds.attrs.update({"title": "airlaunch sweep verification: the cases nearest the boundary, refined",
-                     "segments_factor": np.int32(segments), "tolerance_factor": float(tolerance),
+                     "segments_factor_asked": np.int32(segments), "tolerance_factor": float(tolerance),
                      "refinement": "; ".join(changes)})
     return ds
 

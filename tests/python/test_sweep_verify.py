@@ -16,7 +16,7 @@ import xarray as xr
 from test_sweep_support import (AIRLAUNCH_EXE, ENV, PAPER, ROOT, make_table, run_example_sweep, run_python, run_sweep,
                                 small_definition)
 
-from postproc.sweep.verify import refine_namelist, refined_segment
+from postproc.sweep.verify import refine_namelist, refined_segment, segment_factor
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +50,7 @@ def test_unrefined_rerun_is_the_summary_row(paper_sweep):
     assert res.returncode == 0, res.stdout + res.stderr
     with xr.open_dataset(tmp / "out" / "verify.nc") as ds:
         assert list(ds["refined_status"].values) == ["ok"] * 6
+        assert list(ds["segments_factor"].values) == [1] * 6 and ds.attrs["segments_factor_asked"] == 1
         assert_same_margins(ds)
         clearance = ds["margin_sweep"].sel(criterion="clearance").values
         firing = ds["margin_sweep"].sel(criterion="firing_attitude").values
@@ -147,6 +148,7 @@ def test_refined_segment_covers_the_same_stretch_of_line(n, k):
 @pytest.mark.parametrize("args, match", [
     (["--ids", "0,99"], "--ids 0,99: case 99 is not in 0 ... 5"),
     (["--ids", "a"], "not a comma-separated list"),
+    (["--ids", "1,1"], "--ids 1,1: case 1 is given twice (give each case once)"),
     (["--segments", "0"], "is not a positive integer"),
     (["--tolerance", "0.5"], "is not a factor >= 1"),
 ])
@@ -155,3 +157,13 @@ def test_bad_arguments_are_one_line(paper_sweep, args, match):
     res = verify(tmp, definition, *args)
     assert res.returncode == 2 and match in res.stderr, res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_segment_factor_is_capped_at_1000_segments():
+    """--segments 1000 on 15 segments multiplies them by 66 (990 segments), and
+    verify.nc records that factor per case (it recorded the 1000 asked for)."""
+    assert segment_factor(15, 1000) == 66 and segment_factor(15, 4) == 4 and segment_factor(1000, 4) == 1
+    for n in (1, 7, 15, 60, 999):
+        for k in (1, 2, 4, 100, 1000):
+            f = segment_factor(n, k)
+            assert 1 <= f <= k and (n * f <= 1000 or f == 1)
