@@ -132,6 +132,10 @@ def sensitivity(env: xr.Dataset) -> xr.Dataset:
     ok = env["status"].values == 0
     x = np.column_stack([np.asarray(env[name].values, dtype=float)[ok] for name in inputs])
     n = int(ok.sum())
+    # an input constant over the computed cases (e.g. its other values all
+    # invalid input) explains nothing: left out, its values NaN, the others kept
+    varies = np.array([n > 0 and np.ptp(x[:, j]) > 0 for j in range(len(inputs))], dtype=bool)
+    k = int(varies.sum())
     shape = (len(criteria), len(inputs))
     spearman, prcc, srrc = np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, np.nan)
     r2 = np.full(len(criteria), np.nan)
@@ -139,10 +143,10 @@ def sensitivity(env: xr.Dataset) -> xr.Dataset:
         # 'all': the smallest relative margin (-inf where a metric is NaN); the others: the margin
         var = "relative_margin" if c == "all" else "margin"
         y = np.asarray(env[var].sel(criterion=c).values, dtype=float)[ok]
-        if n >= len(inputs) + 2:   # the regressions need a residual degree of freedom
-            spearman[i], prcc[i] = rank_correlations(x, y)
-            srrc[i], r2[i] = rank_regression(x, y)
-    low, high = fisher_interval(prcc, n, len(inputs) - 1)
+        if k >= 1 and n >= k + 2:   # the regressions need a residual degree of freedom
+            spearman[i, varies], prcc[i, varies] = rank_correlations(x[:, varies], y)
+            srrc[i, varies], r2[i] = rank_regression(x[:, varies], y)
+    low, high = fisher_interval(prcc, n, k - 1)
     ds = xr.Dataset(coords={"criterion": env["criterion"], "input": ("input", np.array(inputs))})
     ds["spearman"] = (("criterion", "input"), spearman,
                       {"long_name": "Spearman rank correlation of the margin with the input (cases computed; "
@@ -193,7 +197,8 @@ def drivers_table(env: xr.Dataset) -> str:
             lines.append(f"  {str(c):16s} (none: the margin does not vary over the computed cases, or they are too few)")
             continue
         sig = significant(env, c)
-        cells = [f"{env['input'].values[j]!s} {srrc[j]:+.2f}" + ("" if sig[j] else " (not significant)")
+        cells = [f"{env['input'].values[j]!s} " + ("(constant over the computed cases)" if np.isnan(srrc[j]) else
+                                                   f"{srrc[j]:+.2f}" + ("" if sig[j] else " (not significant)"))
                  for j in by_importance(env, c)]
         r2 = float(env["rank_r2"].sel(criterion=c))
         lines.append(f"  {str(c):16s} R^2 {r2:.2f}: " + ", ".join(cells))

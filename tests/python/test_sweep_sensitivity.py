@@ -163,3 +163,27 @@ def test_too_few_computed_cases_give_nan_not_an_error(n_ok):
     for var in ("srrc", "prcc", "spearman", "rank_r2"):   # 2 inputs: 4 cases at least
         assert np.isnan(env[var].values).all(), var
     assert "(none: the margin does not vary" in drivers_table(env)
+
+
+def test_an_input_constant_over_the_computed_cases_is_left_out():
+    """b takes one value in every computed case (its other value only in cases
+    that did not compute): it is left out, and a's coefficients are those of
+    the one-input regression, whose SRRC is Spearman's correlation (SciPy) and
+    whose R^2 its square (before the twenty-sixth session every input's
+    values were NaN and the drivers line said the margin did not vary)."""
+    rng = np.random.default_rng(11)
+    n = 40
+    a = rng.random(n)
+    b = np.where(np.arange(n) % 4 == 0, 0.0, 11.0)
+    status = np.where(b == 0.0, 2, 0).astype(np.int32)    # b = 0: invalid input, not computed
+    clearance = 1.0 + 2.0 * a + 0.3 * rng.standard_normal(n)
+    env = evaluate(synthetic_summary(a, b, clearance, status=status), parse_criteria(CRITERIA))
+    ok = status == 0
+    rho = st.spearmanr(a[ok], clearance[ok]).statistic
+    srrc = env["srrc"].sel(criterion="clearance")
+    assert float(srrc.sel(input="a")) == pytest.approx(rho, abs=1e-12)
+    assert float(env["rank_r2"].sel(criterion="clearance")) == pytest.approx(rho**2, abs=1e-12)
+    assert float(env["spearman"].sel(criterion="clearance", input="a")) == pytest.approx(rho, abs=1e-12)
+    for var in ("srrc", "prcc", "spearman", "prcc_low"):
+        assert np.isnan(float(env[var].sel(criterion="clearance", input="b"))), var
+    assert "b (constant over the computed cases)" in drivers_table(env)
