@@ -14,6 +14,7 @@ module airlaunch_namelist
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
+  use airlaunch_path, only: path_kind, kind_other
   implicit none
   private
   public :: nml_file, nml_var, nml_assignment, unset_real, unset_int
@@ -107,8 +108,12 @@ contains
       call fatal_error(error, path // ": is a directory (give the path of a namelist scenario file)")
       return
     end if
-    ! size 0: an empty file, or a device or pipe that reading would never end
-    ! (/dev/zero) or wait on (a FIFO)
+    ! a device or pipe that reading would never end (/dev/zero) or wait on (a FIFO)
+    if (path_kind(path) == kind_other) then
+      call fatal_error(error, path // ": not a regular file (a device, FIFO or socket: give the path of a " // &
+        "namelist file)")
+      return
+    end if
     inquire(file=path, size=nbytes)
     if (nbytes == 0) then
       call fatal_error(error, path // no_group)

@@ -1,31 +1,14 @@
 !> The &run group, common to every scene: which scene, how long, how often to
 !> write, where, and the integrator's tolerances.
 module airlaunch_run_config
-  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_namelist
+  use airlaunch_path, only: path_kind, same_file, process_id, kind_directory, kind_other
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory, path_kind
-
-  !> What a path names (airlaunch_path_kind.c).
-  integer, parameter, public :: kind_missing = 0, kind_regular = 1, kind_directory = 2, kind_other = 3
-
-  interface
-    integer(c_int) function c_path_kind(path) bind(c, name="airlaunch_path_kind")
-      import :: c_int, c_char
-      character(kind=c_char), intent(in) :: path(*)
-    end function c_path_kind
-    integer(c_int) function c_same_file(a, b) bind(c, name="airlaunch_same_file")
-      import :: c_int, c_char
-      character(kind=c_char), intent(in) :: a(*), b(*)
-    end function c_same_file
-    integer(c_int) function process_id() bind(c, name="airlaunch_io_process_id")
-      import :: c_int
-    end function process_id
-  end interface
+  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -201,24 +184,6 @@ contains
     close(u, status="delete")
   end subroutine require_output_directory
 
-  !> What `path` names (kind_missing, kind_regular, kind_directory, kind_other).
-  integer function path_kind(path)
-    character(len=*), intent(in) :: path   !< a file name
-    path_kind = int(c_path_kind(c_string(path)))
-  end function path_kind
-
-  !> Both paths name the same existing file.
-  logical function same_file(a, b)
-    character(len=*), intent(in) :: a, b   !< file names
-    same_file = c_same_file(c_string(a), c_string(b)) /= 0
-  end function same_file
-
-  !> A NUL-terminated copy of `s` for C.
-  pure function c_string(s) result(c)
-    character(len=*), intent(in) :: s
-    character(kind=c_char, len=:), allocatable :: c
-    c = trim(s) // c_null_char
-  end function c_string
 
   !> Append the text written to scratch unit `u` to `echo`, and close `u`.
   subroutine echo_namelist_unit(u, echo)

@@ -83,20 +83,25 @@ def test_definition_limits_are_one_line_errors(tmp_path, change, words):
 
 def test_definition_that_is_not_a_regular_file(tmp_path):
     """/dev/zero was read for ever and a FIFO waited for a writer (hangs); a
-    directory said 'no namelist group'. Each is one line at once; so is a base
-    scenario that is a device."""
+    directory said 'no namelist group'. Each is one line at once, naming what
+    it is (since the twenty-sixth session: 'not a regular file', where both
+    said 'no namelist group in the file'); so is a base scenario that is a
+    device or a FIFO."""
     import os
     fifo = tmp_path / "fifo.nml"
     os.mkfifo(fifo)
-    for path, words in (("/dev/zero", "/dev/zero: no namelist group in the file"),
-                        (fifo, f"{fifo}: no namelist group in the file"),
+    regular = "not a regular file (a device, FIFO or socket: give the path of a namelist file)"
+    for path, words in (("/dev/zero", f"/dev/zero: {regular}"),
+                        (fifo, f"{fifo}: {regular}"),
                         (tmp_path, f"{tmp_path}: is a directory")):
         line = _one_line(run_sweep(path, tmp_path, None, "--check", timeout=30))
         assert words in line, line
     definition = small_definition(tmp_path / "d.nml", n_cases=4)
-    definition.write_text(definition.read_text().replace("base = '", "base = '/dev/zero' ! '"))
-    line = _one_line(_check(definition, tmp_path))
-    assert "/dev/zero: no namelist group in the file" in line, line
+    text = definition.read_text()
+    for base in ("/dev/zero", fifo):
+        definition.write_text(text.replace("base = '", f"base = '{base}' ! '"))
+        line = _one_line(_check(definition, tmp_path))
+        assert f"{base}: {regular}" in line, line
 
 
 @pytest.mark.parametrize("change,words", [
