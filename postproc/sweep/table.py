@@ -100,7 +100,14 @@ def input_attrs(spec: InputSpec) -> dict:
 
 def make_table(defn: SweepDefinition) -> xr.Dataset:
     """The case table of a definition as an xarray Dataset over dimension `case`."""
-    values = draw_values(defn)
+    with np.errstate(over="ignore", invalid="ignore"):   # named below instead
+        values = draw_values(defn)
+    for j, s in enumerate(defn.inputs):
+        bad = ~np.isfinite(values[:, j])
+        if bad.any():
+            raise DefinitionError(f"{defn.path}: &input #{j + 1} '{s.name}': the {s.distribution} distribution "
+                                  f"drew {float(values[bad, j][0])!r} for case {int(np.argmax(bad))} (its parameters are "
+                                  "beyond what double precision spans: narrow them)")
     if values.shape[0] != defn.n_cases:
         raise DefinitionError(f"{defn.path}: the design gave {values.shape[0]} cases, "
                               f"n_cases = {defn.n_cases}")

@@ -703,3 +703,14 @@ def test_keep_worst_ranks_a_clearance_never_reached_worst(tmp_path):
     want = sorted(never + [k for _, k in finite[:4 - len(never)]])
     kept = sorted(int(p.stem.split("_")[1]) for p in (tmp_path / "out" / "trajectories").glob("case_*.nc"))
     assert kept == want
+
+
+def test_a_distribution_beyond_double_precision_is_refused_by_the_table_step(tmp_path):
+    """uniform over [-1.7e308, 1.7e308]: its width overflows and the draws are
+    infinite; the table step refuses in one line and writes no table (before
+    the twenty-sixth session it wrote Infinity values with a SciPy warning and
+    exit 0, and airlaunch-sweep --check refused the table later)."""
+    d = definition(tmp_path, inputs="&input name = 'bay%release_time', distribution = 'uniform', "
+                                    "lower = -1.7e308, upper = 1.7e308 /\n")
+    assert_error(table(tmp_path, d), "&input #1 'bay%release_time': the uniform distribution drew inf for case",
+                 "beyond what double precision spans", tmp_path=tmp_path)
