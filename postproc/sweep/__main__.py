@@ -240,6 +240,9 @@ def cmd_verify(args) -> int:
         return 0
     exe_dir = pathlib.Path(args.exe_dir)
     out_dir = pathlib.Path(defn.output_dir)
+    # an earlier verification's reruns (other cases, other settings) go: verify/ holds this one's only
+    for old in (out_dir / "verify").glob("case_*"):
+        old.unlink()
     ds = verify(env, criteria, base_scene(defn.base) or "airlaunch", ids, defn.path, exe_dir / "airlaunch-sweep",
                 exe_dir / "airlaunch", out_dir / "verify", segments=args.segments, tolerance=args.tolerance,
                 jobs=args.jobs)

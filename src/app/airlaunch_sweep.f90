@@ -255,9 +255,10 @@ contains
       ! a summary exists only once every case has its row: one present now is
       ! an earlier sweep's, and so is the envelope made from it.  They go
       ! before any case runs, so a run killed now leaves neither behind for
-      ! the envelope step to take as this sweep's.
+      ! the envelope step to take as this sweep's (nor the verification of its cases).
       call delete_file(s%def%summary_path())
       call delete_file(s%def%envelope_path())
+      call delete_file(s%def%verify_path())
     end if
     if (n_resumed > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": resuming: " // str(n_resumed) // &
       " of " // str(s%table%n_cases) // " cases already in the journal"

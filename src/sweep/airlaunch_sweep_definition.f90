@@ -84,6 +84,7 @@ module airlaunch_sweep_definition
     procedure :: table_path => def_table_path
     procedure :: summary_path => def_summary_path
     procedure :: envelope_path => def_envelope_path
+    procedure :: verify_path => def_verify_path
     procedure :: journal_dir => def_journal_dir
     procedure :: work_dir => def_work_dir
     procedure :: trajectory_dir => def_trajectory_dir
@@ -554,6 +555,13 @@ contains
     character(len=:), allocatable :: p
     p = self%output_dir // "/envelope.nc"
   end function def_envelope_path
+
+  !> OUTPUT_DIR/verify.nc (written by python -m postproc.sweep verify).
+  function def_verify_path(self) result(p)
+    class(sweep_definition), intent(in) :: self
+    character(len=:), allocatable :: p
+    p = self%output_dir // "/verify.nc"
+  end function def_verify_path
 
   !> OUTPUT_DIR/journal: one append-only file of finished rows per rank.
   function def_journal_dir(self) result(p)

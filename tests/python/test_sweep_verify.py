@@ -167,3 +167,19 @@ def test_segment_factor_is_capped_at_1000_segments():
         for k in (1, 2, 4, 100, 1000):
             f = segment_factor(n, k)
             assert 1 <= f <= k and (n * f <= 1000 or f == 1)
+
+
+def test_verify_keeps_its_own_reruns_and_a_new_sweep_drops_it(paper_sweep):
+    """verify/ holds the last verification's reruns only, and verify.nc goes
+    with the summary when the sweep's cases run again (--restart): before the
+    twenty-sixth session both stayed beside the new sweep."""
+    tmp, definition = paper_sweep
+    for ids in ("0", "1"):
+        res = verify(tmp, definition, "--ids", ids, "--segments", "1", "--tolerance", "1")
+        assert res.returncode == 0, res.stdout + res.stderr
+        names = sorted(p.name for p in (tmp / "out" / "verify").iterdir())
+        assert names and all(n.startswith(f"case_{int(ids):06d}") for n in names), names
+    assert (tmp / "out" / "verify.nc").is_file()
+    res = run_sweep(definition, tmp, None, "--restart")
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert not (tmp / "out" / "verify.nc").exists()
