@@ -623,9 +623,11 @@ def test_a_file_without_groups_is_named_as_such(airlaunch_exe, tmp_path):
         assert res.returncode == 2
         assert res.stderr.strip() == f"airlaunch: error: {nml}: no namelist group in the file (a group starts " \
             "with &name and ends with /, e.g. &run ... /)", res.stderr
-    # a device was read for ever (/dev/zero), a directory said 'no namelist group'
+    # a device was read for ever (/dev/zero), a directory said 'no namelist group'; since the
+    # twenty-sixth session a device says what it is (it said 'no namelist group')
     res = run_airlaunch(airlaunch_exe, "/dev/zero")
-    assert res.returncode == 2 and res.stderr.startswith("airlaunch: error: /dev/zero: no namelist group"), res.stderr
+    assert res.returncode == 2 and res.stderr.strip() == "airlaunch: error: /dev/zero: not a regular file (a " \
+        "device, FIFO or socket: give the path of a namelist file)", res.stderr
     res = run_airlaunch(airlaunch_exe, tmp_path)
     assert res.returncode == 2 and res.stderr.strip() == f"airlaunch: error: {tmp_path}: is a directory (give the " \
         "path of a namelist scenario file)", res.stderr
