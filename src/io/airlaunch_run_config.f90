@@ -8,7 +8,8 @@ module airlaunch_run_config
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory
+  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory, &
+    refuse_records
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -119,6 +120,22 @@ contains
     write(u, nml=run)
     call echo_namelist_unit(u, text)
   end function run_echo
+
+  !> The trajectory's records could not be allocated: an input error naming
+  !> &run output_dt, the record count and the memory they need.
+  subroutine refuse_records(error, output_dt, records, bytes)
+    type(error_type), allocatable, intent(inout) :: error  !< error to raise
+    real(dp), intent(in) :: output_dt             !< &run output_dt [s]
+    integer, intent(in) :: records                         !< records asked for
+    real(dp), intent(in) :: bytes                 !< their memory [bytes]
+    character(len=64) :: a, b, c
+    write(a, '(es10.3)') output_dt
+    write(b, '(i0)') records
+    write(c, '(i0)') nint(min(bytes/1.0e6_dp, 1.0e15_dp), kind=8)
+    call fatal_error(error, "&run: output_dt = " // trim(adjustl(a)) // " is not allowed here: the trajectory's " // &
+      trim(b) // " records need " // trim(c) // " MB, more than can be allocated (raise output_dt, or set " // &
+      "trajectory = .false.)", input=.true.)
+  end subroutine refuse_records
 
   !> The output file must be one that can be created: not a directory nor a
   !> device, FIFO or socket (which the run would replace or block on), not the

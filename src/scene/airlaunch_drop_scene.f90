@@ -7,13 +7,13 @@
 !> parabola), and is a quick first look at a free-falling cargo.
 module airlaunch_drop_scene
   use airlaunch_kinds, only: dp, g0
-  use airlaunch_error, only: error_type, fatal_error, refuse_records
+  use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state, isa_min_altitude, isa_max_altitude
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options
   use airlaunch_namelist
-  use airlaunch_run_config, only: run_config, echo_namelist_unit
+  use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   implicit none

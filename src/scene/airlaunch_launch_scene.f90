@@ -3,14 +3,14 @@
 !> the output contract (docs/output.md) and the milestones.
 module airlaunch_launch_scene
   use airlaunch_kinds, only: dp, pi, g0, rad2deg, deg2rad
-  use airlaunch_error, only: error_type, fatal_error, refuse_records
+  use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_gust, only: gust_field, make_gust
   use airlaunch_rotation, only: quat_from_euler
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
   use airlaunch_linalg, only: solve_banded
-  use airlaunch_run_config, only: run_config
+  use airlaunch_run_config, only: run_config, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_scenario_config, only: scenario_config, line_config, refuse_reached_strength

@@ -15,10 +15,10 @@
 !> (written so far, with status = "failed", if the run fails).
 module airlaunch_line_scene
   use airlaunch_kinds, only: dp, rad2deg
-  use airlaunch_error, only: error_type, fatal_error, refuse_records
+  use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_namelist
-  use airlaunch_run_config, only: run_config, echo_namelist_unit
+  use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_parachute, only: parachute
