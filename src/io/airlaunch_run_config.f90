@@ -125,9 +125,9 @@ contains
   !> &run output_dt, the record count and the memory they need.
   subroutine refuse_records(error, output_dt, records, bytes)
     type(error_type), allocatable, intent(inout) :: error  !< error to raise
-    real(dp), intent(in) :: output_dt             !< &run output_dt [s]
+    real(dp), intent(in) :: output_dt                      !< &run output_dt [s]
     integer, intent(in) :: records                         !< records asked for
-    real(dp), intent(in) :: bytes                 !< their memory [bytes]
+    real(dp), intent(in) :: bytes                          !< their memory [bytes]
     character(len=64) :: a, b, c
     write(a, '(es10.3)') output_dt
     write(b, '(i0)') records
@@ -200,7 +200,6 @@ contains
     end if
     close(u, status="delete")
   end subroutine require_output_directory
-
 
   !> Append the text written to scratch unit `u` to `echo`, and close `u`.
   subroutine echo_namelist_unit(u, echo)

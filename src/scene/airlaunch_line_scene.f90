@@ -78,7 +78,7 @@ module airlaunch_line_scene
     integer :: line_breaks = 0                 !< segments parted in all
     real(dp) :: deploy_speed = -1.0_dp         !< air speed at the canopy's deployment [m/s]
     real(dp) :: final_tip_speed = -1.0_dp      !< speed of node N (end b) at the last record [m/s]
-    !> largest node speed change within 2 L/c of the first break (records and the window's end) [m/s]
+    !> largest node speed change within 2 L/c of the first break (its samples and records) [m/s]
     real(dp) :: recoil_speed = -1.0_dp
     real(dp) :: end_time = 0.0_dp              !< time the integration reached [s]
     type(line_scheme_stats) :: stats           !< integrator work
