@@ -50,29 +50,30 @@ UNTRACKED = (
 )
 
 
-def _setting(defn, group, var):
-    """The value of group%var for every case of a sweep (&fixed, else the
-    base; None where neither sets it or the base cannot be read)."""
+def _setting(defn, base, group, var):
+    """(value, where it is set) of group%var for every case of a sweep: its
+    &fixed, else the base (`base`: the parsed base, None if unreadable);
+    value None where neither sets it."""
     name = f"{group}%{var}"
     for fixed_name, text in defn.fixed:
         if fixed_name == name:
             try:
-                return f90nml.reads(f"&x v = {text} /\n")["x"]["v"]
+                return f90nml.reads(f"&x v = {text} /\n")["x"]["v"], f"&fixed '{name}'"
             except Exception:   # noqa: BLE001 - airlaunch-sweep names an unreadable value
-                return None
-    try:
-        nml = f90nml.reads(read_namelist_text(defn.base, "the base scenario"))
-    except Exception:   # noqa: BLE001 - any unreadable base is airlaunch-sweep's to report
-        return None
-    group_vars = nml.get(group)
-    return group_vars.get(var) if hasattr(group_vars, "get") else None
+                return None, None
+    group_vars = base.get(group) if base is not None else None
+    return (group_vars.get(var) if hasattr(group_vars, "get") else None), f"the base scenario {defn.base}"
 
 
 def check_tracked(criteria, defn, path):
     """Refuse in one line a criterion whose metric the sweep's base (with its
     &fixed) never computes: its margin would be NaN, and fail, in every case."""
+    try:
+        base = f90nml.reads(read_namelist_text(defn.base, "the base scenario"))
+    except Exception:   # noqa: BLE001 - any unreadable base is airlaunch-sweep's to report
+        base = None
     for group, var, off, names, why in UNTRACKED:
-        value = _setting(defn, group, var)
+        value, source = _setting(defn, base, group, var)
         if isinstance(value, str):
             value = value.strip().lower()
         if value is None or value != off or isinstance(value, bool) != isinstance(off, bool):
@@ -80,8 +81,6 @@ def check_tracked(criteria, defn, path):
         for c in criteria:
             if c.name in names:
                 shown = show(off) if not isinstance(off, bool) else (".true." if off else ".false.")
-                source = (f"&fixed '{group}%{var}'" if any(n == f"{group}%{var}" for n, _ in defn.fixed)
-                          else f"the base scenario {defn.base}")
                 raise DefinitionError(f"{path}: &criteria: {', '.join(sorted(c.limits))} is not allowed for this "
                                       f"sweep: {source} sets &{group} {var} = {shown} ({why}: every case's "
                                       f"margin would be NaN, failing; leave the criterion out or change {var})")

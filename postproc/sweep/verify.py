@@ -93,8 +93,9 @@ def refine_namelist(resolved: str, segments: int, tolerance: float) -> tuple:
     `segments` times the line's segments (at most MAX_SEGMENTS) and the
     tolerances divided by `tolerance`: &run rtol and atol, &line inner_rtol
     (when set) and inner_dt (when set: divided by the segment factor, as the
-    marching scheme's stability limit).  Returns (text, what changed)."""
-    text, changes = resolved, []
+    marching scheme's stability limit).  Returns (text, what changed, the
+    segment factor applied: 1 without a line)."""
+    text, changes, factor = resolved, [], 1
     for var in ("RTOL", "ATOL"):
         old = float(_get(text, "RUN", var).replace("D", "E").replace("d", "e"))
         text = _set(text, "RUN", var, repr(old / tolerance))
@@ -116,7 +117,7 @@ def refine_namelist(resolved: str, segments: int, tolerance: float) -> tuple:
     inner = _get(text, "LINE", "INNER_RTOL")
     if inner is not None and float(inner) > 0.0:
         text = _set(text, "LINE", "INNER_RTOL", repr(float(inner) / tolerance))
-    return text, changes
+    return text, changes, factor
 
 
 #: Summary variables whose single-run attribute is −1 when the event did not
@@ -164,9 +165,7 @@ def rerun_case(case_id, text, exe, work: pathlib.Path, segments, tolerance, time
     if res.returncode != 0:
         return "invalid_input", res.stderr.strip(), out, [], 1
     resolved = res.stdout.split("\n", 1)[1]   # without the leading comment line
-    text, changes = refine_namelist(resolved, segments, tolerance)
-    n_text = _get(resolved, "LINE", "N_SEG")
-    factor = segment_factor(int(n_text), segments) if n_text is not None else 1
+    text, changes, factor = refine_namelist(resolved, segments, tolerance)
     refined = work / f"case_{case_id:06d}_refined.nml"
     refined.write_text(text)
     res = _run([str(exe), str(refined), "--output", str(out)], None, timeout)

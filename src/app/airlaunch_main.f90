@@ -155,30 +155,22 @@ contains
   subroutine prepare_output_file()
     type(error_type), allocatable :: out_error
     integer :: u, ios
+    character(len=:), allocatable :: what   ! where the output's name came from, for messages
     ! the resolved input records the settings the run uses (--output, a scene's defaults)
     echo = run_echo(run) // echo(n_run_echo + 1:)
     if (.not. run%trajectory .and. check_only) call print_resolved_input()
     if (.not. run%trajectory) return
-    if (len(output_override) > 0) then
-      call require_output_directory("--output", run%output, out_error, input=path)
-    else
-      call require_output_directory(path // ": &run: output", run%output, out_error, input=path)
-    end if
+    what = path // ": &run: output"
+    if (len(output_override) > 0) what = "--output"
+    call require_output_directory(what, run%output, out_error, input=path)
     if (allocated(out_error)) call fail_input(out_error%message)
     if (check_only) call print_resolved_input()
     ! (a regular file or nothing: require_output_directory refused anything else)
     open(newunit=u, file=trim(run%output), status="old", action="read", iostat=ios)
     if (ios == 0) close(u, status="delete", iostat=ios)
     inquire(file=trim(run%output), exist=written)
-    if (written) then
-      if (len(output_override) > 0) then
-        call fail_input("--output = '" // trim(run%output) // "' is not allowed: an older file of that " // &
-          "name cannot be removed (no permission; remove it or choose another path)")
-      else
-        call fail_input(path // ": &run: output = '" // trim(run%output) // "' is not allowed: an older " // &
-          "file of that name cannot be removed (no permission; remove it or choose another path)")
-      end if
-    end if
+    if (written) call fail_input(what // " = '" // trim(run%output) // "' is not allowed: an older file of " // &
+      "that name cannot be removed (no permission; remove it or choose another path)")
   end subroutine prepare_output_file
 
   !> The milestones of an air-launch run, one per line.

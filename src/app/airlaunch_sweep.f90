@@ -21,7 +21,8 @@ program airlaunch_sweep
   use airlaunch_strings, only: str
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file, process_id
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file
+  use airlaunch_path, only: process_id
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal

@@ -1,6 +1,7 @@
 !> What a path names, which Fortran's inquire cannot tell: a regular file, a
 !> directory or something else (a device, FIFO, socket), and whether two
-!> paths name one file (airlaunch_path_kind.c, POSIX stat).
+!> paths name one file (airlaunch_path_kind.c, POSIX stat); and this
+!> process's id (getpid), to name files of its own.
 module airlaunch_path
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
   implicit none
@@ -19,9 +20,9 @@ module airlaunch_path
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: a(*), b(*)
     end function c_same_file
-    integer(c_int) function process_id() bind(c, name="airlaunch_io_process_id")
+    integer(c_int) function c_getpid() bind(c, name="getpid")   ! pid_t is an int on Linux
       import :: c_int
-    end function process_id
+    end function c_getpid
   end interface
 
 contains
@@ -37,6 +38,11 @@ contains
     character(len=*), intent(in) :: a, b   !< file names
     same_file = c_same_file(c_string(a), c_string(b)) /= 0
   end function same_file
+
+  !> This process's id (names a file of its own).
+  integer function process_id()
+    process_id = int(c_getpid())
+  end function process_id
 
   !> A NUL-terminated copy of `s` for C.
   pure function c_string(s) result(c)

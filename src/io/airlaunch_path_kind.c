@@ -21,8 +21,3 @@ int airlaunch_same_file(const char *a, const char *b) {
   if (stat(a, &sa) != 0 || stat(b, &sb) != 0) return 0;
   return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
-
-#include <unistd.h>
-
-/* This process's id (names a probe file of its own). */
-int airlaunch_io_process_id(void) { return (int)getpid(); }

@@ -82,7 +82,7 @@ contains
 
   !> Room for nmax samples of a line with n segments (`has_line` false: no
   !> line, nothing of it is allocated); `stat` nonzero: the memory could not
-  !> be had (nothing is left allocated).
+  !> be had (the run is refused; what was allocated goes with the history).
   subroutine history_init(self, nmax, n, has_line, stat)
     class(launch_history), intent(inout) :: self
     integer, intent(in) :: nmax, n
@@ -97,9 +97,6 @@ contains
       stat=stat)
     if (stat /= 0 .or. .not. self%has_line) return
     allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), self%nodes(3, 0:n, nmax), stat=stat)
-    if (stat /= 0) deallocate(self%time, self%phase, self%ac_pos, self%ac_eul, self%ac_alpha, self%ac_q, self%elev, &
-      self%load_factor, self%rk_pos, self%rk_vel, self%rk_eul, self%rk_rate, self%rk_elev, self%cforce, self%normal, &
-      self%friction, self%lock, self%clearance, self%residual, self%edge_clearance)
   end subroutine history_init
 
   !> Memory of nmax samples [bytes] (history_init; 8-byte reals and integers

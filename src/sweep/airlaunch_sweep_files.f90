@@ -10,7 +10,7 @@ module airlaunch_sweep_files
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
-  public :: open_for_writing, write_bytes, close_file, remove_case_files, lock_file, process_id
+  public :: open_for_writing, write_bytes, close_file, remove_case_files, lock_file
 
   !> Length of the C library's message buffer.
   integer, parameter :: msg_len = 256
@@ -38,9 +38,6 @@ module airlaunch_sweep_files
       integer(c_long), value :: n
       character(kind=c_char), intent(inout) :: msg(*)
     end function c_file_write
-    integer(c_int) function c_getpid() bind(C, name="getpid")   ! pid_t is an int on Linux
-      import :: c_int
-    end function c_getpid
     integer(c_int) function c_remove_case_files(dir) bind(C, name="airlaunch_remove_case_files")
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: dir(*)
@@ -200,11 +197,6 @@ contains
     character(len=*), intent(in) :: path
     inquire(file=path // "/.", exist=dir_exists)
   end function dir_exists
-
-  !> This process's id (to name scratch files that concurrent processes must not share).
-  integer function process_id()
-    process_id = int(c_getpid())
-  end function process_id
 
   !> Delete a file if it exists.
   subroutine delete_file(path)

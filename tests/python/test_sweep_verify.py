@@ -117,12 +117,12 @@ def test_refined_namelist_read_back_by_the_scenario_reader(tmp_path, segment):
     text = PAPER.read_text().replace("&line", f"&line\n  break_time = 5.0, break_segment = {segment}", 1)
     base = tmp_path / "base.nml"
     base.write_text(text)
-    refined, changes = refine_namelist(resolved(base, tmp_path), 4, 100.0)
+    refined, changes, factor = refine_namelist(resolved(base, tmp_path), 4, 100.0)
     out = tmp_path / "refined.nml"
     out.write_text(refined)
     back = resolved(out, tmp_path)   # the reader accepts it, and says what it holds
     flat = back.replace(" ", "")
-    assert "N_SEG=60," in flat
+    assert "N_SEG=60," in flat and factor == 4
     assert f"BREAK_SEGMENT={refined_segment(segment, 15, 4)}," in flat
     import f90nml
     nml = f90nml.reads(back)
