@@ -100,6 +100,7 @@ module airlaunch_separation
     procedure :: state_size => sep_state_size
     procedure :: pack_state => sep_pack_state
     procedure :: load_state => sep_load_state
+    procedure :: evaluate_joint => sep_evaluate_joint
     procedure :: start => sep_start
     procedure :: evaluate => sep_evaluate
     procedure :: rhs => sep_rhs
@@ -225,6 +226,15 @@ contains
     call self%bodies(0)%unpack(y(1:body_state_size))
     call self%chain%load_bodies(y(body_state_size+1:), self%bodies(1:))
   end subroutine sep_load_state
+
+  !> The joint's kinematics and residuals at state y alone (self%js as
+  !> `evaluate` leaves them, without the loads and the accelerations).
+  subroutine sep_evaluate_joint(self, y)
+    class(separation_system), intent(inout) :: self   !< the scene
+    real(dp), intent(in) :: y(:)                      !< state
+    call self%load_state(y)
+    call self%joint%evaluate(self%phase, self%bodies(0), self%bodies(1), self%js)
+  end subroutine sep_evaluate_joint
 
   !> Begin at time t in `phase` from state y: check the state against the joint
   !> geometry, capture the constraint references, evaluate once (so a singular

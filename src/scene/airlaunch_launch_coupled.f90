@@ -28,6 +28,7 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   use airlaunch_rigidized_coupling, only: rigidized_chain, rigidized_line
   use airlaunch_step_maxima, only: maxima_observer
   use airlaunch_peak_search, only: peak_tracker
+  use airlaunch_clearance, only: clearance
   use airlaunch_rotation, only: dcm_to_euler
   implicit none
 
@@ -917,6 +918,9 @@ contains
   end subroutine record_now
 
   !> Sample the direct system at the solver's time (outputs and milestones).
+  !> Without the trajectory output only what the record's milestones need is
+  !> computed (the bodies and the joint: no loads, no line forces), the same
+  !> values as the full record's, so that a sweep's row is the single run's.
   subroutine direct_record(r, run, cfg, res)
     type(coupled_run), intent(inout) :: r
     type(run_config), intent(in) :: run
@@ -928,17 +932,19 @@ contains
     type(launch_sample) :: smp
     t = r%dsolver%t
     associate(s => r%dsys, y => r%dsolver%y)
+      res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(y(7:10)) - 1.0_dp), &
+        abs(norm2(y(20:23)) - 1.0_dp))
+      if (.not. run%trajectory) then
+        call s%to_absolute(t, y)
+        call s%sep%evaluate_joint(s%yabs(1:rigid_size))
+        if (record_milestones(res, clearance(s%clr, s%sep%bodies(0), s%sep%bodies(1)), s%sep)) &
+          r%last_record_of_extremum = t
+        return
+      end if
       call s%prepare(t, y, status)
       call s%sep%evaluate(t, s%yabs(1:rigid_size), eval_error)
       smp = sample_launch(cfg, s%sep, s%iloads)
-      if (s%has_line) then
-        if (record_milestones(res, t, smp, s%sep, s%tension, s%line_clearance())) r%last_record_of_extremum = t
-      else
-        if (record_milestones(res, t, smp, s%sep)) r%last_record_of_extremum = t
-      end if
-      res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(y(7:10)) - 1.0_dp), &
-        abs(norm2(y(20:23)) - 1.0_dp))
-      if (.not. run%trajectory) return
+      if (record_milestones(res, smp%clearance, s%sep)) r%last_record_of_extremum = t
       if (s%has_line) then
         call r%hist%append(t, smp, s%sep, s%x, s%tension, s%x(:, s%line%n))
       else
@@ -949,7 +955,9 @@ contains
   end subroutine direct_record
 
   !> Sample the rigidized coupling at time t (outputs and milestones): the
-  !> chain's state y (relative frame), the line's from its sub-stepping solver at t.
+  !> chain's state y (relative frame), the line's from its sub-stepping solver
+  !> at t (without the trajectory output: the milestones' part alone, as
+  !> direct_record).
   subroutine rigidized_record(r, run, cfg, res, t, y, err)
     type(coupled_run), intent(inout) :: r
     type(run_config), intent(in) :: run
@@ -962,23 +970,28 @@ contains
     type(error_type), allocatable :: eval_error
     type(launch_sample) :: smp
     if (allocated(err)) return
-    call r%cpl%line_state(r%xl, r%vl, r%ten)
-    call r%cpl%chain%prepare(t, y)
-    call r%cpl%chain%sep%evaluate(t, r%cpl%chain%yabs, eval_error)
-    associate(sp => r%cpl%chain%sep, b1 => r%cpl%chain%sep%bodies(1), b3 => r%cpl%chain%sep%bodies(3))
+    do j = 0, 3   ! aircraft, rocket, line body, parachute
+      o = merge(7 + 13*j, 27 + 7*(j - 2), j < 2)
+      res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(y(o:o+3)) - 1.0_dp))
+    end do
+    associate(c => r%cpl%chain, sp => r%cpl%chain%sep, b1 => r%cpl%chain%sep%bodies(1), &
+        b3 => r%cpl%chain%sep%bodies(3))
+      call c%prepare(t, y)
+      if (.not. run%trajectory) then
+        call sp%evaluate_joint(c%yabs)
+        if (record_milestones(res, clearance(c%clr, sp%bodies(0), b1), sp)) r%last_record_of_extremum = t
+        return
+      end if
+      call r%cpl%line_state(r%xl, r%vl, r%ten)
+      call sp%evaluate(t, c%yabs, eval_error)
       smp = sample_launch(cfg, sp, 2)
-      if (record_milestones(res, t, smp, sp, r%ten)) r%last_record_of_extremum = t
-      do j = 0, 3   ! aircraft, rocket, line body, parachute
-        o = merge(7 + 13*j, 27 + 7*(j - 2), j < 2)
-        res%max_quaternion_norm_error = max(res%max_quaternion_norm_error, abs(norm2(y(o:o+3)) - 1.0_dp))
-      end do
+      if (record_milestones(res, smp%clearance, sp)) r%last_record_of_extremum = t
       ! the rigidized model's own quantities
-      frig = r%cpl%chain%line_force()
+      frig = c%line_force()
       axis = b3%r - b1%point_position(sp%tie_down)
       r%min_rigid_tension = min(r%min_rigid_tension, dot_product(frig, axis)/norm2(axis))
       mm = norm2(r%xl(:, r%dsys%line%n) - b3%r)
       r%max_mismatch = max(r%max_mismatch, mm)
-      if (.not. run%trajectory) return
       call r%hist%append(t, smp, sp, r%xl, r%ten, b3%r)
       call record_extras(r, r%xl, r%vl, frig, mm)
     end associate
@@ -1046,13 +1059,13 @@ contains
     end if
   end subroutine finish_observers
 
-  !> The maxima into the milestones: the larger of the trackers' (every step,
-  !> refined between steps) and the records' (the same function of the state:
-  !> they can only tie; a record wins a tie at rounding level).  The peak
-  !> tension's time is the first time the steps' tension came within the band
-  !> (rtol) of it: on a plateau (the steady tow before release) the place of
-  !> the largest value is round-off and integrator noise; a record's time
-  !> (which moves with the output cadence) only if the steps never came that near.
+  !> The maxima into the milestones: the trackers' (every step, refined
+  !> between steps; the output records do not take them, so that they are the
+  !> same with and without the trajectory; `res` holds its initial values
+  !> here: 0, huge).  The peak tension's time is the first time the steps'
+  !> tension came within the band (rtol) of it: on a plateau (the steady tow
+  !> before release) the place of the largest value is round-off and
+  !> integrator noise.
   subroutine take_maxima(r, res)
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(inout) :: res

@@ -205,39 +205,23 @@ contains
     end subroutine take_clearance
   end subroutine handle_launch_event
 
-  !> Update the running milestones with a sample; true if any extremum moved
-  !> (for &run stop_when_final).  `tension` absent: the scene has no line.
-  logical function record_milestones(res, t, s, sep, tension, line_gap) result(changed)
+  !> The milestones an output record takes (the same with and without the
+  !> trajectory output, which computes more of the record): the rocket's
+  !> clearance after separation (besides its events: at the run's end it may
+  !> still be falling) and the cut joint's position residual before it (`sep`:
+  !> bodies loaded and joint evaluated at the record's time).  The safety
+  !> maxima (peak tension, line clearance, the aircraft's excursions) are the
+  !> step trackers' alone (launch_coupled's take_maxima).  True if the
+  !> clearance fell (for &run stop_when_final).
+  logical function record_milestones(res, clearance_now, sep) result(changed)
     type(launch_result), intent(inout) :: res
-    real(dp), intent(in) :: t
-    type(launch_sample), intent(in) :: s
+    real(dp), intent(in) :: clearance_now   !< rocket surface to the empennage point [m]
     type(separation_system), intent(in) :: sep
-    real(dp), intent(in), optional :: tension(:)
-    real(dp), intent(in), optional :: line_gap   !< the line's clearance from the empennage point [m]
-    real(dp) :: dtheta, dn
     changed = .false.
-    if (sep%phase == phase_free .and. s%clearance < res%min_clearance) then
-      res%min_clearance = s%clearance
+    if (sep%phase == phase_free .and. clearance_now < res%min_clearance) then
+      res%min_clearance = clearance_now
       changed = .true.
     end if
-    if (present(tension)) then
-      if (maxval(tension) > res%peak_tension) then
-        res%peak_tension = maxval(tension)
-        res%peak_tension_time = t
-        changed = .true.
-      end if
-    end if
-    if (present(line_gap)) then
-      if (line_gap < res%min_line_clearance) then
-        res%min_line_clearance = line_gap
-        changed = .true.
-      end if
-    end if
-    dtheta = abs(s%aircraft_euler(2)*rad2deg - res%trim_alpha_deg)
-    dn = abs(s%load_factor - 1.0_dp)
-    if (dtheta > res%max_aircraft_pitch_excursion_deg .or. dn > res%max_load_factor_excursion) changed = .true.
-    res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, dtheta)
-    res%max_load_factor_excursion = max(res%max_load_factor_excursion, dn)
     if (sep%phase /= phase_free) res%max_constraint_residual = max(res%max_constraint_residual, &
       sep%js%res_position)
   end function record_milestones
