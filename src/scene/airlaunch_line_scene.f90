@@ -914,7 +914,7 @@ contains
       merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records)" // &
       peak_note(scene) // nl // break_note(scene) // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
-      str(scene%rigid(m)%m_rigid) // " kg, theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
+      str(scene%rigid(m)%m_rigid) // " kg" // m_rigid_note(scene%rigid(m)) // ", theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
     if (allocated(run_error)) then
       if (allocated(error)) deallocate(error)
@@ -997,6 +997,28 @@ contains
         str(scene%time(scene%n_out)) // " s), "
     end if
   end function end_note
+
+  !> What the printed m_rigid is against the line's own mass: the line mass
+  !> itself when the centre does not move (the guard), else their ratio, with a
+  !> word when it is large: Eq. (31) divides by |V_rigid|^2, so a deforming
+  !> line whose centre moves slowly against its nodes has a huge m_rigid
+  !> (docs/line.md §3).
+  function m_rigid_note(q) result(s)
+    type(rigid_equivalent), intent(in) :: q
+    character(len=:), allocatable :: s
+    real(dp) :: ratio
+    character(len=32) :: buf
+    if (q%m_fallback) then
+      s = " (the line mass: the centre does not move, |V_rigid| ~ 0)"
+      return
+    end if
+    ratio = q%m_rigid/q%line_mass
+    write (buf, "(f0.3)") ratio
+    if (buf(1:1) == ".") buf = "0" // buf
+    s = " (" // trim(buf) // " x the line mass"
+    if (ratio > 10.0_dp) s = s // "; Eq. (31) is ill-conditioned here: the centre moves slowly against the nodes"
+    s = s // ")"
+  end function m_rigid_note
 
   !> Write the records of `scene` as netCDF-4 (docs/line.md, "Output").
   subroutine write_output(scene, path, echo, run_error, error)

@@ -290,3 +290,35 @@ def test_marching_steps_do_not_depend_on_the_output_times(airlaunch_exe, tmp_pat
     np.testing.assert_array_equal(a["line_node_position"].values[-1], b["line_node_position"].values[-1])
     a.close()
     b.close()
+
+
+M_RIGID = re.compile(r"m_rigid (\S+) kg \((?:(\S+) x the line mass(; Eq\. \(31\) is ill-conditioned[^)]*)?|(the line mass: "
+                     r"the centre does not move)[^)]*)\)")
+
+
+@pytest.mark.parametrize("name,t_end,line_mass", [("line_pendulum", None, 2.0e-3), ("line_pendulum", 3.045, 2.0e-3),
+                                                   ("line_catenary", None, 100.0)])
+def test_printed_m_rigid_is_set_against_the_line_mass(airlaunch_exe, tmp_path, name, t_end, line_mass):
+    """The summary's m_rigid (Eq. (31)) comes with its ratio to the line's own
+    mass (length x mass_per_length of the input: pendulum 2 m x 1 g/m, catenary
+    100 m x 1 kg/m), to the printed rounding (3 decimals), and with a warning
+    where the ratio exceeds 10: Eq. (31) divides by |V_rigid|^2, so the pendulum at
+    its turning point (t = 3.045 s, the end mass at rest, the light line still
+    ringing) reports ~2e4 times the line mass.  The catenary, settled, has a
+    centre at rest: the guard's line mass, said so."""
+    base = ROOT / "input" / f"{name}.nml"
+    nml = nml_variant(tmp_path, name, base=base,
+                      edits=[(r"^  t_end = 6.0 .*$", f"  t_end = {t_end}")] if t_end else [])
+    res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "out.nc")
+    assert res.returncode == 0, res.stderr
+    m = M_RIGID.search(res.stdout)
+    assert m, res.stdout
+    m_rigid = float(m.group(1))
+    if name == "line_catenary":
+        assert m.group(4) and m_rigid == pytest.approx(line_mass, rel=1e-12)
+        return
+    ratio = float(m.group(2))
+    assert ratio == pytest.approx(m_rigid / line_mass, abs=5e-4 + 1e-8 * ratio)
+    assert bool(m.group(3)) == (ratio > 10.0), (ratio, m.group(0))
+    if t_end:
+        assert ratio > 1e3, m.group(0)
