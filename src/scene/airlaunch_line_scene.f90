@@ -1014,8 +1014,8 @@ contains
     end if
     ratio = q%m_rigid/q%line_mass
     write (buf, "(f0.3)") ratio
-    if (buf(1:1) == ".") buf = "0" // buf
-    s = " (" // trim(buf) // " x the line mass"
+    s = " (" // merge("0", " ", buf(1:1) == ".")
+    s = trim(s) // trim(buf) // " x the line mass"
     if (ratio > 10.0_dp) s = s // "; Eq. (31) is ill-conditioned here: the centre moves slowly against the nodes"
     s = s // ")"
   end function m_rigid_note
