@@ -33,6 +33,9 @@ module airlaunch_launch_loads
     logical :: line_on = .true.                     !< false: the scene has no line
     type(gust_field) :: gust                        !< the &gust (inactive by default)
     logical :: penetration = .false.                !< the bodies read the gust along them, not at the CG only
+    !> the aircraft's lift builds up in the gust over this chord (Küssner,
+    !> airlaunch_gust); 0: at once (quasi-steady)
+    real(dp) :: kussner_chord = 0.0_dp
     ! --- set by the scene before each evaluation
     integer :: phase = 0                            !< current Case
     real(dp) :: line_force(3) = 0.0_dp              !< line end force on the rocket, earth [N]
@@ -62,11 +65,12 @@ contains
           return
         end if
         e = dcm_to_euler(b0%c)
-        v_air = air_relative_velocity(self%gust, b0%r, b0%v)
+        v_air = air_relative_velocity(self%gust, b0%r, b0%v, self%kussner_chord)
         v_body = matmul(transpose(b0%c), v_air)
         if (self%penetration .and. self%gust%active) then
           ! the empennage's air, without the rotation's part (Cm_q, Cn_r hold it)
-          v_air = air_relative_velocity(self%gust, b0%point_position(self%aircraft%tail_point), b0%v)
+          v_air = air_relative_velocity(self%gust, b0%point_position(self%aircraft%tail_point), b0%v, &
+            self%kussner_chord)
           self%aircraft_out = aircraft_aero_eval(self%aircraft, air%density, v_body, &
             b0%w, e(2), v_tail=matmul(transpose(b0%c), v_air))
         else

@@ -197,6 +197,7 @@ contains
       loads%gust = gust
       ! in still air nothing reads a gust: no stations to visit
       loads%penetration = cfg%gust%penetration .and. gust%active
+      if (cfg%gust%kussner .and. gust%active) loads%kussner_chord = cfg%aircraft%aero%chord
       loads%aircraft%tail_point = [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp]
       sys%gust_watch = gust%active
       sys%gust_back = gust%x_front + 2*gust%gradient

@@ -145,6 +145,9 @@ module airlaunch_scenario_config
     !> each station of the bodies reads the gust where it is (the rocket's
     !> strips, fins and nose, the aircraft's empennage); false: at the CG
     logical :: penetration = .true.
+    !> the aircraft's lift builds up over the chords it flies into the gust
+    !> (Küssner's function, Jones' approximation); false: at once
+    logical :: kussner = .false.
   end type gust_config
 
   !> Everything the air-launch scene reads.
@@ -532,15 +535,16 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: vertical, lateral, gradient_length, hit_time
-    logical :: penetration
+    logical :: penetration, kussner
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
-    namelist /gust/ vertical, lateral, gradient_length, hit_time, penetration
-    type(nml_var), parameter :: vars(5) = [nml_var("vertical", "real"), nml_var("lateral", "real"), &
-      nml_var("gradient_length", "real"), nml_var("hit_time", "real"), nml_var("penetration", "logical")]
+    namelist /gust/ vertical, lateral, gradient_length, hit_time, penetration, kussner
+    type(nml_var), parameter :: vars(6) = [nml_var("vertical", "real"), nml_var("lateral", "real"), &
+      nml_var("gradient_length", "real"), nml_var("hit_time", "real"), nml_var("penetration", "logical"), &
+      nml_var("kussner", "logical")]
     vertical = c%vertical; lateral = c%lateral; gradient_length = c%gradient_length; hit_time = c%hit_time
-    penetration = c%penetration
+    penetration = c%penetration; kussner = c%kussner
     call open_group(f, "gust", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -558,7 +562,7 @@ contains
     call require_range(f, "gust", "gradient_length", gradient_length, 1.0_dp, 1.0e5_dp, "m", error)
     call require_nonnegative(f, "gust", "hit_time", hit_time, "s", error)
     if (allocated(error)) return
-    c = gust_config(vertical, lateral, gradient_length, hit_time, penetration)
+    c = gust_config(vertical, lateral, gradient_length, hit_time, penetration, kussner)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=gust)
     call echo_namelist_unit(u, echo)

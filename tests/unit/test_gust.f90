@@ -55,6 +55,44 @@ program test_gust
   slope = norm2(wp - wm)/2.0e-3_dp
   call check_close(slope, pi*norm2(u)/(2*h), "largest slope pi |U| / (2H) at s = H/2", rel=1.0e-8_dp)
 
+  call section("Küssner's lift build-up: the closed form against Duhamel's integral by quadrature")
+  ! w_K(s) = integral_0^min(s, 2H) w'(s') psi(2 (s - s')/c) ds', psi Jones'
+  ! approximation 1 - exp(-0.13 sigma)/2 - exp(-sigma)/2, written here from its
+  ! definition; composite Simpson over 20 000 intervals (error ~1e-15 |U|);
+  ! tolerance 1e-11 |U|, the closed form's rounding
+  block
+    real(dp), parameter :: chord = 6.0_dp
+    real(dp) :: stations(6), wk(3), ref(3), top, ds, sp, f
+    integer :: j, i
+    integer, parameter :: n = 20000
+    stations = [h/3, h, 1.7_dp*h, 2*h, 2*h + 3*chord, 2*h + 40*chord]
+    do j = 1, size(stations)
+      s = stations(j)
+      top = min(s, 2*h)
+      ds = top/n
+      ref = 0.0_dp
+      do i = 0, n
+        sp = i*ds
+        f = merge(1.0_dp, merge(4.0_dp, 2.0_dp, mod(i, 2) == 1), i == 0 .or. i == n)
+        ref = ref + f*(0.5_dp*pi/h*sin(pi*sp/h))*psi(2*(s - sp)/chord)*u
+      end do
+      ref = ref*ds/3
+      wk = lagged_gust_velocity(g, [x0 + s, 4.0_dp, -2.0_dp], chord)
+      call check_close(norm2(wk - ref), 0.0_dp, "w_K at s = " // trim(ftoa(s/h)) // " H", abs=1.0e-11_dp*norm2(u))
+    end do
+    ! it lags: below the gust on its way up, above it after its peak, and still
+    ! there (decaying) behind the gust
+    call check(norm2(lagged_gust_velocity(g, [x0 + h/3, 0.0_dp, 0.0_dp], chord)) < &
+      norm2(gust_velocity(g, [x0 + h/3, 0.0_dp, 0.0_dp])), "below the gust on its way up")
+    wk = lagged_gust_velocity(g, [x0 + 2*h + chord, 0.0_dp, 0.0_dp], chord)
+    call check(dot_product(wk, u) > 0.0_dp .and. all(gust_velocity(g, [x0 + 2*h + chord, 0.0_dp, 0.0_dp]) == 0.0_dp), &
+      "behind the gust: still the gust's sign, where the gust is 0")
+    call check(all(lagged_gust_velocity(g, [x0 - 1.0e-9_dp, 0.0_dp, 0.0_dp], chord) == 0.0_dp), "zero before the front")
+    ! a chord 1e-6 of the gust's: the quasi-steady gust, to O(c/H)
+    wk = lagged_gust_velocity(g, [x0 + h/3, 0.0_dp, 0.0_dp], 1.0e-6_dp*h)
+    call check_close(norm2(wk - u/4), 0.0_dp, "a vanishing chord: the gust itself", abs=1.0e-5_dp*norm2(u))
+  end block
+
   call section("the line's drag in the gust = with the gust's velocity as its wind")
   block
     type(line_model) :: a, b
@@ -187,4 +225,19 @@ program test_gust
   end block
 
   call finish()
+contains
+
+  !> Jones' approximation of Küssner's function at sigma half-chords travelled.
+  pure real(dp) function psi(sigma)
+    real(dp), intent(in) :: sigma
+    psi = 1.0_dp - 0.5_dp*exp(-0.13_dp*sigma) - 0.5_dp*exp(-sigma)
+  end function psi
+
+  !> A short decimal text of x.
+  function ftoa(x) result(t)
+    real(dp), intent(in) :: x
+    character(len=16) :: t
+    write (t, "(f8.3)") x
+    t = adjustl(t)
+  end function ftoa
 end program test_gust
