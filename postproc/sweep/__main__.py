@@ -1,6 +1,6 @@
 """Command line of the sweep post-processing (run from the repository root):
 
-    python -m postproc.sweep table SWEEP.nml [--check]
+    python -m postproc.sweep table SWEEP.nml [--check] [--exe-dir DIR]
     python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures] [--check]
     python -m postproc.sweep verify SWEEP.nml [--cases K | --ids I,J,...] [--segments F] [--tolerance F] [--jobs J]
 
@@ -18,19 +18,30 @@ from .definition import DefinitionError, check_base, read_definition
 
 
 def cmd_table(args) -> int:
-    """Draw the case table (or check an existing one against the definition)."""
-    from .table import check_table, output_dir_error, write_table
+    """Draw the case table (or check an existing one against the definition);
+    either way, refuse what airlaunch-sweep --check refuses, with its message."""
+    from .table import check_table, check_with_sweep, make_table, output_dir_error, write_atomic
 
     defn = read_definition(args.definition)
     check_base(defn)
+    sweep_exe = pathlib.Path(args.exe_dir) / "airlaunch-sweep"
     if args.check:
         check_table(defn)
+        check_with_sweep(defn, sweep_exe)
         print(f"table: {defn.table_path} is the table of {defn.path}")
         return 0
+    table, path = make_table(defn), defn.table_path
     try:
-        path = write_table(defn)
+        # the table this step replaces goes first: airlaunch-sweep --check then
+        # judges the definition alone, and one it refuses is left no table
+        path.unlink(missing_ok=True)
+    except OSError as exc:
+        raise output_dir_error(defn, path, exc) from None
+    check_with_sweep(defn, sweep_exe)
+    try:
+        write_atomic(table, path)
     except (OSError, RuntimeError) as exc:   # netCDF4 reports some write errors as RuntimeError
-        raise output_dir_error(defn, defn.table_path, exc) from None
+        raise output_dir_error(defn, path, exc) from None
     print(f"table: {path} ({defn.n_cases} cases, {len(defn.inputs)} inputs, design {defn.design}, "
           f"seed {defn.seed})")
     if defn.design == "sobol" and defn.n_cases & (defn.n_cases - 1):
@@ -164,15 +175,28 @@ def load_summary(defn, summary_arg, criteria, criteria_path):
     return summary, summary_path
 
 
+def warn_stale_figures(defn) -> None:
+    """One line on stderr if OUTPUT_DIR/figures/ no longer shows the sweep's
+    envelope and summary (the envelope step removes or redraws them)."""
+    from .stamp import stale_figures
+
+    why = stale_figures(defn.figure_dir, defn.envelope_path)
+    if why:
+        print(f"sweep: warning: {defn.figure_dir} is stale: {why}; run the envelope step to draw it again",
+              file=sys.stderr)
+
+
 def cmd_envelope(args) -> int:
     """Evaluate the criteria on the summary; write the envelope and the figures."""
     from .envelope import evaluate, worst_case_table
+    from .stamp import STAMP, remove_figures, stale_figures, write_stamp
     from .table import output_dir_error, write_atomic
 
     defn = read_definition(args.definition)
     criteria, criteria_path = read_criteria_for(defn, args)
     if args.check:
         print(f"envelope: criteria {criteria_path} ({len(criteria)} criteria) for {defn.path}")
+        warn_stale_figures(defn)
         return 0
     summary, summary_path = load_summary(defn, args.summary, criteria, criteria_path)
     env = evaluate(summary, criteria)
@@ -200,10 +224,18 @@ def cmd_envelope(args) -> int:
         from .figures import draw_all
 
         try:
+            # the record goes first, so figures cut short are not taken as this envelope's
+            (defn.figure_dir / STAMP).unlink(missing_ok=True)
             paths = draw_all(env, defn.figure_dir)
+            write_stamp(defn.figure_dir, out, summary_path, summary.attrs.get("created", ""))
         except OSError as exc:
             raise output_dir_error(defn, getattr(exc, "filename", None) or defn.figure_dir, exc) from None
-        print(f"figures: {defn.figure_dir} ({', '.join(p.name for p in paths.values())})")
+        print(f"figures: {defn.figure_dir} ({', '.join(p.name for p in paths.values())}, drawn from {out})")
+    else:
+        why = stale_figures(defn.figure_dir, out)
+        if why:
+            remove_figures(defn.figure_dir)
+            print(f"figures: removed those of {defn.figure_dir}: {why}")
     print("worst cases:")
     print(worst_case_table(env, 10), end="")
     return 0
@@ -237,6 +269,7 @@ def cmd_verify(args) -> int:
     if not ids:   # not an error: the sweep has no case with a margin on every criterion
         print("verify: no computed case has a finite margin on every criterion (an event never came in any "
               "case): nothing near the boundary to verify; choose cases with --ids")
+        warn_stale_figures(defn)
         return 0
     exe_dir = pathlib.Path(args.exe_dir)
     out_dir = pathlib.Path(defn.output_dir)
@@ -267,6 +300,7 @@ def cmd_verify(args) -> int:
         ds["relative_difference"].values).any() else float("nan")
     print(f"verify: {flips} of {len(ids)} case(s) change pass/fail at the refined settings; "
           f"{not_run} refined run(s) did not complete; largest |difference| {worst:.3g} of a criterion's scale")
+    warn_stale_figures(defn)
     return 0
 
 
@@ -297,6 +331,11 @@ def _factor(text):
     return value
 
 
+def _exe_dir_option(parser, help_text):
+    parser.add_argument("--exe-dir", default=str(pathlib.Path(__file__).resolve().parents[2] / "build" / "release" /
+                                                 "bin"), help=help_text)
+
+
 def main(argv=None) -> int:
     """Parse the command line and run one step; bad input is one line and status 2."""
     parser = OneLineParser(prog="python -m postproc.sweep", description=__doc__,
@@ -305,6 +344,7 @@ def main(argv=None) -> int:
     p = sub.add_parser("table", help="draw the case table of a sweep definition")
     p.add_argument("definition")
     p.add_argument("--check", action="store_true", help="check that the existing table is the definition's")
+    _exe_dir_option(p, "where airlaunch-sweep is, which checks the definition (default build/release/bin)")
     p.set_defaults(func=cmd_table)
     p = sub.add_parser("envelope", help="safety envelope and figures from the summary")
     p.add_argument("definition")
@@ -326,8 +366,7 @@ def main(argv=None) -> int:
     p.add_argument("--tolerance", type=_factor, default=100.0,
                    help="rtol and atol divided by this (default 100)")
     p.add_argument("--jobs", type=_positive_int, default=2, help="cases run at once (default 2)")
-    p.add_argument("--exe-dir", default=str(pathlib.Path(__file__).resolve().parents[2] / "build" / "release" / "bin"),
-                   help="where airlaunch and airlaunch-sweep are (default build/release/bin)")
+    _exe_dir_option(p, "where airlaunch and airlaunch-sweep are (default build/release/bin)")
     p.set_defaults(func=cmd_verify)
     args = parser.parse_args(argv)
     try:

@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 
 from .envelope import envelope_name, pass_probability_map, worst_case_table  # noqa: E402
 from .sensitivity import by_importance, significant  # noqa: E402
+from .stamp import FIGURE_FILES  # noqa: E402
 
 PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
 
@@ -215,9 +216,7 @@ def draw_all(env, figure_dir):
     """Every figure of the envelope into figure_dir; returns the paths."""
     d = pathlib.Path(figure_dir)
     d.mkdir(parents=True, exist_ok=True)
-    paths = {"passfail_map": d / "passfail_map.png", "margins": d / "margins.png",
-             "probability": d / "probability.png", "worst_cases": d / "worst_cases.png",
-             "worst_cases_md": d / "worst_cases.md", "sensitivity": d / "sensitivity.png"}
+    paths = {key: d / name for key, name in FIGURE_FILES.items()}
     passfail_map(env, paths["passfail_map"])
     margins(env, paths["margins"])
     probability(env, paths["probability"])

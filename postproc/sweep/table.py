@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 import pathlib
+import subprocess
 import warnings
 
 import numpy as np
@@ -186,6 +187,28 @@ def open_netcdf(path, what, hint):
 def write_table(defn: SweepDefinition, path=None) -> pathlib.Path:
     """Draw the table of `defn` and write it (default: OUTPUT_DIR/table.nc)."""
     return write_atomic(make_table(defn), path or defn.table_path)
+
+
+def check_with_sweep(defn: SweepDefinition, sweep_exe) -> None:
+    """Raise DefinitionError with airlaunch-sweep's own message if
+    `airlaunch-sweep DEFINITION --check` refuses the definition: the base
+    scenario (its scene, its text), every varied and fixed name and value
+    against the scenario readers, worst_by, output_dir and, if
+    OUTPUT_DIR/table.nc exists, the table.  Those checks need the scenario
+    readers, so they are the Fortran program's, not repeated here."""
+    try:
+        res = subprocess.run([str(sweep_exe), str(defn.path), "--check"], capture_output=True, text=True,
+                             errors="replace", check=False)
+    except OSError as exc:
+        raise DefinitionError(f"{sweep_exe}: cannot run airlaunch-sweep to check {defn.path} "
+                              f"({exc.strerror or exc}; build it with scripts/setup release, or give --exe-dir)"
+                              ) from None
+    if res.returncode != 0:
+        lines = res.stderr.strip().splitlines() or [f"airlaunch-sweep --check ended with exit status "
+                                                    f"{res.returncode} and no message"]
+        prefix = "airlaunch-sweep: error: "
+        line = next((x for x in lines if x.startswith(prefix)), lines[-1])
+        raise DefinitionError(line.removeprefix(prefix))
 
 
 def check_table(defn: SweepDefinition, path=None) -> None:

@@ -523,7 +523,8 @@ def test_null_value_in_the_definition(tmp_path, value, words):
 
 def test_null_fixed_value_is_refused_by_the_check(tmp_path):
     """`&fixed value = ','` puts a null value into every case's namelist: the check
-    step names it (the table step does not read the base scenario's variables)."""
+    step names it, reading the base scenario's variables (the table step asks
+    it: section 14)."""
     d = definition(tmp_path, fixed="&fixed name = 'run%max_steps', value = ',' /")
     if not SWEEP_EXE.exists():
         pytest.skip("airlaunch-sweep not built")
@@ -714,3 +715,79 @@ def test_a_distribution_beyond_double_precision_is_refused_by_the_table_step(tmp
                                     "lower = -1.7e308, upper = 1.7e308 /\n")
     assert_error(table(tmp_path, d), "&input #1 'bay%release_time': the uniform distribution drew inf for case",
                  "beyond what double precision spans", tmp_path=tmp_path)
+
+
+# 14. what airlaunch-sweep --check refuses, the table step refuses first ------
+
+REAL_INPUT = "&input name = '{}', distribution = 'uniform', lower = 0.4, upper = 1.0 /\n"
+CHECK_REFUSALS = {   # what the definition is given (small_definition's keywords), what the check says
+    "unknown variable": ({"inputs": REAL_INPUT.format("bay%release_tme")}, "unknown variable 'release_tme'"),
+    "unknown group": ({"inputs": REAL_INPUT.format("nosuch%release_time")}, "unknown group &nosuch"),
+    "integer input drawn as reals": ({"inputs": "&input name = 'line%n_seg', distribution = 'uniform', "
+                                                "lower = 8, upper = 12 /\n", "fixed": ""},
+                                     "line%n_seg is an integer"),
+    "fixed value of the wrong type": ({"fixed": "&fixed name = 'line%n_seg', value = \"'ten'\" /"},
+                                      "'n_seg' = 'ten' is not an integer"),
+    "null fixed value": ({"fixed": "&fixed name = 'run%max_steps', value = ',' /"}, "'max_steps' has no value"),
+    "base of the drop scene": ({"base": "drop_demo.nml"}, "scene = 'drop' cannot be swept"),
+}
+
+
+def refused_definition(tmp_path, case, name="d.nml"):
+    """The definition of CHECK_REFUSALS[case] (one uniform input, 6 cases, output_dir 'out')."""
+    kw = dict(CHECK_REFUSALS[case][0])
+    base = kw.pop("base", None)
+    return definition(tmp_path, name=name, **kw,
+                      text=base and (lambda t: t.replace(str(PAPER), str(PAPER.parent / base))))
+
+
+def check_message(tmp_path, d, case):
+    """The line airlaunch-sweep --check refuses d with (without its program's prefix)."""
+    res = run_sweep(d, tmp_path, None, "--check")
+    assert res.returncode == 2, res.stdout + res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("airlaunch-sweep: error: "), lines
+    assert CHECK_REFUSALS[case][1] in lines[0], lines[0]
+    return lines[0].removeprefix("airlaunch-sweep: error: ")
+
+
+def files_under(path):
+    return {str(p.relative_to(path)) for p in pathlib.Path(path).rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize("case", list(CHECK_REFUSALS))
+def test_table_step_refuses_what_the_check_refuses(tmp_path, case):
+    """Names the base scenario does not have, a value of the wrong type, a base
+    the sweep cannot run: the table step wrote table.nc (exit 0) and only the
+    check step refused the definition.  The table step now asks airlaunch-sweep
+    --check before it writes: the check's line, exit 2, no table.nc and no
+    file but the check's own scratch namelist (work/check_rank0.nml)."""
+    d = refused_definition(tmp_path, case)
+    line = assert_error(table(tmp_path, d), tmp_path=tmp_path)
+    assert files_under(tmp_path / "out") <= {"work/check_rank0.nml"}, files_under(tmp_path / "out")
+    assert line == "sweep: error: " + check_message(tmp_path, d, case)
+
+
+@pytest.mark.parametrize("case", ["unknown variable", "fixed value of the wrong type"])
+def test_a_refused_definition_keeps_no_earlier_table(tmp_path, case):
+    """A valid definition's table, then a definition the check refuses with the
+    same output_dir: the table step refuses it and leaves no table (the earlier
+    one, which it replaces, goes first); table --check refuses the definition
+    with the check's line even where the table is still the one it draws (the
+    &fixed settings do not change the draw)."""
+    d = refused_definition(tmp_path, case)
+    message = check_message(tmp_path, d, case)
+    assert table(tmp_path, definition(tmp_path, name="ok.nml")).returncode == 0
+    assert (tmp_path / "out" / "table.nc").is_file()
+    if case == "fixed value of the wrong type":
+        line = assert_error(table(tmp_path, d, "--check"))   # before: "table: out/table.nc is the table of d.nml"
+        assert line == "sweep: error: " + message
+        assert (tmp_path / "out" / "table.nc").is_file()     # a check removes nothing
+    line = assert_error(table(tmp_path, d), tmp_path=tmp_path)
+    assert line == "sweep: error: " + message
+
+
+def test_table_step_without_airlaunch_sweep_is_one_line(tmp_path):
+    d = definition(tmp_path)
+    assert_error(table(tmp_path, d, "--exe-dir", tmp_path / "nowhere"), "nowhere/airlaunch-sweep",
+                 "cannot run airlaunch-sweep to check", "give --exe-dir", tmp_path=tmp_path)

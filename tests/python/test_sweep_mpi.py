@@ -4,6 +4,7 @@ exactly once, identical to an uninterrupted run; failed and invalid cases are
 recorded with their message while the sweep goes on, and every case is the
 single run `airlaunch` gives for the same namelist; the whole chain runs from
 scripts/sweep."""
+import hashlib
 import os
 import re
 import signal
@@ -15,7 +16,7 @@ import pytest
 import xarray as xr
 
 from test_sweep_support import (AIRLAUNCH_EXE, ENV, ROOT, SWEEP_EXE, assert_same_summary, journal_rows,
-                                make_table, mpirun, run_sweep, small_definition)
+                                make_table, mpirun, run_python, run_sweep, small_definition)
 
 N_CASES = 40
 
@@ -234,6 +235,49 @@ def test_restart_removes_the_old_summary_and_envelope_before_any_case(tmp_path, 
     assert len(journal_rows(out / "journal")[0]) < 400, "the kill came too late"
     assert not (out / "summary.nc").exists()
     assert not (out / "envelope.nc").exists()
+
+
+def test_figures_of_an_earlier_summary_are_known_stale(tmp_path, exes):
+    """`--restart` makes the summary again and removes envelope.nc, but
+    figures/ stayed, showing the earlier summary with nothing to say so.  The
+    envelope step now records in figures/drawn_from.txt the envelope and the
+    summary it drew them from (their SHA-256); envelope --check and verify warn
+    (one line on stderr, exit 0) while the figures are not those of the files
+    beside them, envelope --no-figures removes them, the envelope step redraws."""
+    crit = f"criteria = '{ROOT}/input/criteria_paper.nml'"
+    d = small_definition(tmp_path / "s.nml", n_cases=4, extra_sweep=crit)
+    out, figures = tmp_path / "out", tmp_path / "out" / "figures"
+
+    def step(*args):
+        res = run_python(list(args), tmp_path)
+        assert res.returncode == 0, res.stdout + res.stderr
+        return res
+
+    def assert_drawn_from_the_files_beside_them():
+        stamp = dict(line.split(" = ", 1) for line in (figures / "drawn_from.txt").read_text().splitlines()
+                     if not line.startswith("#"))
+        for name in ("envelope", "summary"):
+            assert stamp[f"{name}_sha256"] == hashlib.sha256((out / f"{name}.nc").read_bytes()).hexdigest(), name
+        assert not step("envelope", d, "--check").stderr
+
+    step("table", d)
+    assert run_sweep(d, tmp_path).returncode == 0
+    step("envelope", d)
+    assert (figures / "passfail_map.png").is_file()
+    assert_drawn_from_the_files_beside_them()
+    # the cases run again at another setting: a new summary; airlaunch-sweep removes envelope.nc, not figures/
+    d = small_definition(tmp_path / "s.nml", n_cases=4, extra_sweep=crit,
+                         fixed="&fixed name = 'line%n_seg', value = '12' /")
+    assert run_sweep(d, tmp_path, None, "--restart").returncode == 0
+    assert not (out / "envelope.nc").exists() and (figures / "passfail_map.png").is_file()
+    for args in (("envelope", d, "--check"), ("verify", d, "--cases", "1")):
+        lines = step(*args).stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("sweep: warning: out/figures is stale: "), lines
+        assert "envelope.nc, which they were drawn from, is gone" in lines[0]
+    res = step("envelope", d, "--no-figures")   # a new envelope.nc, the old one's figures removed
+    assert "figures: removed those of" in res.stdout and not figures.exists()
+    step("envelope", d)
+    assert_drawn_from_the_files_beside_them()
 
 
 @pytest.mark.parametrize("criteria,words", [

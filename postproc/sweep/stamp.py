@@ -1,0 +1,94 @@
+"""Which envelope and summary the figures of OUTPUT_DIR/figures/ show.
+
+The envelope step draws the figures from the envelope it has just written and
+then writes ``figures/drawn_from.txt``: the SHA-256 of that envelope.nc and of
+the summary it was evaluated from.  airlaunch-sweep removes summary.nc and
+envelope.nc when the sweep's cases run again (``--restart``, a resume) but not
+the figures, which then show the earlier summary.  Figures are current only
+while drawn_from.txt names the envelope.nc beside them and the summary (where
+that file still is): ``stale_figures`` says why they are not.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import pathlib
+
+#: The files the envelope step draws into figures/ (figures.draw_all), by key.
+FIGURE_FILES = {"passfail_map": "passfail_map.png", "margins": "margins.png", "probability": "probability.png",
+                "worst_cases": "worst_cases.png", "worst_cases_md": "worst_cases.md",
+                "sensitivity": "sensitivity.png"}
+#: The record of what they were drawn from, written after them.
+STAMP = "drawn_from.txt"
+
+
+def sha256(path) -> str:
+    """SHA-256 of a file's bytes (hex)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def write_stamp(figure_dir, envelope_path, summary_path, summary_created="") -> pathlib.Path:
+    """Record (atomically) the envelope and summary the figures were just drawn from."""
+    stamp = pathlib.Path(figure_dir) / STAMP
+    text = ("# the envelope step drew the figures of this directory from these files "
+            "(docs/sweep.md, 'Figures and the summary they show')\n"
+            f"envelope = {pathlib.Path(envelope_path).resolve()}\n"
+            f"envelope_sha256 = {sha256(envelope_path)}\n"
+            f"summary = {pathlib.Path(summary_path).resolve()}\n"
+            f"summary_sha256 = {sha256(summary_path)}\n"
+            f"summary_created = {summary_created}\n")
+    tmp = stamp.with_name(STAMP + ".part")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, stamp)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return stamp
+
+
+def read_stamp(figure_dir) -> dict:
+    """The record's entries ({} if there is none, or it cannot be read)."""
+    try:
+        lines = (pathlib.Path(figure_dir) / STAMP).read_text().splitlines()
+    except (OSError, UnicodeDecodeError):
+        return {}
+    pairs = (line.partition(" = ") for line in lines if not line.startswith("#"))
+    return {key: value for key, sep, value in pairs if sep}
+
+
+def stale_figures(figure_dir, envelope_path):
+    """Why the figures in figure_dir do not show envelope_path and its summary
+    as they are now (None: they do, or there are none)."""
+    d = pathlib.Path(figure_dir)
+    if not any((d / name).is_file() for name in FIGURE_FILES.values()):
+        return None
+    stamp = read_stamp(d)
+    if not {"envelope_sha256", "summary", "summary_sha256"} <= stamp.keys():
+        return (f"{d / STAMP} is missing or incomplete (drawing them was cut short, or they are older than the "
+                "record): not known to show this sweep's envelope")
+    envelope = pathlib.Path(envelope_path)
+    if not envelope.is_file():
+        return (f"{envelope}, which they were drawn from, is gone (airlaunch-sweep removes it when the sweep's "
+                "cases run again)")
+    if sha256(envelope) != stamp["envelope_sha256"]:
+        return f"{envelope} was made again since they were drawn"
+    summary = pathlib.Path(stamp["summary"])
+    if summary.is_file() and sha256(summary) != stamp["summary_sha256"]:
+        return f"{summary} was made again since they were drawn"
+    return None
+
+
+def remove_figures(figure_dir) -> None:
+    """Remove the envelope step's figures and their record (other files stay)."""
+    d = pathlib.Path(figure_dir)
+    for name in (STAMP, *FIGURE_FILES.values()):
+        (d / name).unlink(missing_ok=True)
+    try:
+        d.rmdir()
+    except OSError:   # not empty (files of the user's), or already gone
+        pass
