@@ -3,9 +3,12 @@
 
 The figure depends on the scene recorded in the file's `scene` attribute
 (airlaunch, line, drop); FIGURE.png defaults to OUTPUT.png beside the output.
-A file it cannot draw is one line on stderr and exit status 2.
+A file it cannot draw, or a figure it cannot write (e.g. a full disk), is one
+line on stderr and exit status 2; the figure appears under its name only when
+written whole (an older figure of that name is then replaced, else left alone).
 Scenes register a drawing function in PLOTTERS.
 """
+import os
 import pathlib
 import sys
 
@@ -154,10 +157,32 @@ def main(argv):
                         "not of this version of airlaunch?)")
         fig.suptitle(f"{ds.attrs.get('title', scene)} ({ds.attrs.get('status', '')})")
         fig.tight_layout()
+        return save_figure(fig, out)
+
+
+def save_figure(fig, out):
+    """Write `fig` to `out` whole or not at all: to a temporary file beside it
+    (.plot_run-PID.part), renamed to `out` once written and synced; on failure the
+    temporary is removed, `out` is left as it was, and the OS's reason is one line."""
+    target = pathlib.Path(out)
+    fmt = target.suffix[1:].lower() or matplotlib.rcParams["savefig.format"]
+    if fmt not in fig.canvas.get_supported_filetypes():
+        return fail(f"{out}: no figure format '{fmt}' (give a name ending in one of "
+                    f"{', '.join('.' + k for k in sorted(fig.canvas.get_supported_filetypes()))})")
+    temp = target.with_name(f".plot_run-{os.getpid()}.part")
+    try:
+        fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         try:
-            fig.savefig(out, dpi=110)
-        except OSError as exc:
-            return fail(f"{out}: cannot write the figure ({exc.strerror or exc})")
+            with os.fdopen(fd, "wb") as fh:
+                fig.savefig(fh, format=fmt, dpi=110)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(temp, target)
+        except BaseException:
+            temp.unlink(missing_ok=True)
+            raise
+    except OSError as exc:
+        return fail(f"{out}: cannot write the figure ({exc.strerror or exc})")
     return 0
 
 

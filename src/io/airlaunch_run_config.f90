@@ -218,26 +218,32 @@ contains
   end subroutine echo_namelist_unit
 
   !> Remove the blank padding the runtime writes inside quoted strings
-  !> ("drop      " -> "drop").
+  !> ("drop      " -> "drop"): only the blanks just before a string's closing
+  !> quote go.  A doubled quote ("") inside a string is one quote character of
+  !> the value, not the string's end: blanks before it are the value's own and
+  !> stay ("a ""b"" c" is written back as it was read).  Trailing blanks of a
+  !> value cannot be told from the padding of its character variable, which
+  !> Fortran does not distinguish either.
   pure function squeeze_string_padding(line) result(s)
     character(len=*), intent(in) :: line
     character(len=:), allocatable :: s
-    integer :: i, j
+    integer :: i, n
     logical :: in_string
     s = ""
     in_string = .false.
     i = 1
-    do while (i <= len(line))
+    n = len(line)
+    do while (i <= n)
       if (line(i:i) == '"') then
-        in_string = .not. in_string
-      else if (in_string .and. line(i:i) == " ") then
-        j = verify(line(i:), " ")
-        if (j > 0) then
-          if (line(i+j-1:i+j-1) == '"') then
-            i = i + j - 1
+        if (in_string .and. i < n) then
+          if (line(i+1:i+1) == '"') then    ! doubled quote: a quote of the value
+            s = s // '""'
+            i = i + 2
             cycle
           end if
         end if
+        if (in_string) s = trim(s)          ! closing quote: drop the padding before it
+        in_string = .not. in_string
       end if
       s = s // line(i:i)
       i = i + 1

@@ -1,6 +1,7 @@
 """Foundation end to end: the demo scene runs, its output opens in xarray with
 units on every variable and the resolved input echoed, and bad input gives one
 clear line and a nonzero status without leaving an output file."""
+import os
 import pathlib
 import re
 import subprocess
@@ -235,6 +236,7 @@ def test_plot_script_names_what_it_cannot_draw_in_one_line(airlaunch_exe, tmp_pa
                            ((text,), "text.nc: cannot read it as netCDF"),
                            ((bare,), "bare.nc: no figure for scene ''"),
                            ((out, tmp_path / "nodir" / "f.png"), "f.png: its directory"),
+                           ((out, tmp_path / "f.xyz"), "f.xyz: no figure format 'xyz' (give a name ending in one of"),
                            ((), "usage: plot_run.py OUTPUT.nc [FIGURE.png]"),
                            ((out, "a.png", "b.png"), "usage: plot_run.py OUTPUT.nc [FIGURE.png]")]:
         res = plot(*args)
@@ -244,6 +246,58 @@ def test_plot_script_names_what_it_cannot_draw_in_one_line(airlaunch_exe, tmp_pa
     res = plot(dotted / "run")
     assert res.returncode == 0, res.stderr
     assert (dotted / "run.png").stat().st_size > 10000
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 64 KiB tmpfs at tmp_path/disk (mount needs root: skipped without it),
+    unmounted at teardown."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    try:
+        res = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(disk)],
+                             capture_output=True, text=True, timeout=30)
+    except OSError as exc:
+        pytest.skip(f"no mount command ({exc.strerror})")
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here ({res.stderr.strip() or res.returncode})")
+    try:
+        yield disk
+    finally:
+        subprocess.run(["umount", str(disk)], check=True, timeout=30)
+
+
+def fill_disk(disk, leave=0):
+    """Fill `disk` with disk/fill until no block is left, then give `leave` bytes back."""
+    with open(disk / "fill", "wb", buffering=0) as fh:
+        try:
+            while True:
+                fh.write(b"\0" * 4096)
+        except OSError:
+            pass
+    size = (disk / "fill").stat().st_size
+    os.truncate(disk / "fill", max(size - leave, 0))
+
+
+@pytest.mark.parametrize("leave", [0, 16384])
+def test_plot_script_on_a_full_disk_leaves_no_figure(airlaunch_exe, tmp_path, small_disk, leave):
+    """plot_run.py with no room for the figure (a 64 KiB tmpfs, completely full
+    or with 16 KiB left for a figure of ~60 KiB): one line with the OS's reason,
+    exit 2, and neither a figure under its name (QA found a 0-byte or a 16 KiB
+    FIG.png left) nor the temporary it was written to; an
+    older figure of that name is left as it was."""
+    nml, out = drop_nml(tmp_path)
+    assert run_airlaunch(airlaunch_exe, nml).returncode == 0
+    old = small_disk / "old.png"
+    old.write_bytes(b"an older figure")
+    fill_disk(small_disk, leave)
+    for fig in (small_disk / "fig.png", old):
+        res = subprocess.run([sys.executable, str(ROOT / "postproc" / "plot_run.py"), str(out), str(fig)],
+                             capture_output=True, text=True, timeout=120)
+        assert res.returncode == 2, res.stderr
+        assert res.stderr == f"plot_run: error: {fig}: cannot write the figure (No space left on device)\n"
+    assert sorted(p.name for p in small_disk.iterdir()) == ["fill", "old.png"]
+    assert old.read_bytes() == b"an older figure"
 
 
 def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
@@ -481,6 +535,46 @@ def test_check_prints_the_resolved_input_without_running(airlaunch_exe, tmp_path
     res2 = run_airlaunch(airlaunch_exe, again, "--check")
     assert res2.returncode == 0, res2.stderr
     assert res2.stdout.splitlines()[1:] == res.stdout.splitlines()[1:]
+
+
+@pytest.mark.parametrize("value", ['a "b" c.nc', 'ünï\'cödé ""q"".nc', '  lead "x".nc', 'tail " .nc   ',
+                                   '"q" ".nc', "it's a \"\" .nc"])
+def test_a_string_value_round_trips_through_the_resolved_input(airlaunch_exe, tmp_path, value):
+    """A string value with blanks next to its quotes, apostrophes, non-ASCII
+    letters or leading blanks is echoed as it was given (QA found the echo
+    dropping the blank before a doubled quote:
+    output 'a "b" c.nc' was echoed "a""b"" c.nc", and the echo, run again,
+    wrote another file).  Trailing blanks are padding to Fortran, in the
+    value as in the file name.  The --check print run again prints the same,
+    the run writes the file named, and its input_namelist holds the value."""
+    quoted = '"' + value.rstrip().replace('"', '""') + '"'
+    nml = write(tmp_path / "s.nml", f"&run scene = 'drop', t_end = 0.5, output_dt = 0.05,\n"
+                                    f"  output = {quoted.ljust(len(quoted) + len(value) - len(value.rstrip()))} /\n"
+                                    "&store mass = 28000.0 /\n")
+    res = run_airlaunch(airlaunch_exe, nml, "--check", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert f" OUTPUT={quoted}," in res.stdout.splitlines(), res.stdout
+    again = write(tmp_path / "resolved.nml", res.stdout)
+    res2 = run_airlaunch(airlaunch_exe, again, "--check", cwd=tmp_path)
+    assert res2.returncode == 0, res2.stderr
+    assert res2.stdout.splitlines()[1:] == res.stdout.splitlines()[1:]
+    run = run_airlaunch(airlaunch_exe, again, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["s.nml", "resolved.nml", value.rstrip()])
+    with xr.open_dataset(tmp_path / value.rstrip()) as ds:
+        assert f" OUTPUT={quoted}," in ds.attrs["input_namelist"].splitlines()
+
+
+def test_an_output_option_with_quotes_is_echoed_as_given(airlaunch_exe, tmp_path):
+    """QA's case: --output 'a "b" c.nc' on the command line; the --check print,
+    run, writes `a "b" c.nc` (it wrote `a"b" c.nc`)."""
+    res = run_airlaunch(airlaunch_exe, ROOT / "input" / "drop_demo.nml", "-o", 'a "b" c.nc', "--check",
+                        cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert ' OUTPUT="a ""b"" c.nc",' in res.stdout.splitlines()
+    echo = write(tmp_path / "echo1.nml", res.stdout.replace("T_END=  60.", "T_END=  0.5"))
+    assert run_airlaunch(airlaunch_exe, echo, cwd=tmp_path).returncode == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['a "b" c.nc', "echo1.nml"]
 
 
 def test_check_reports_bad_input_like_a_run(airlaunch_exe, tmp_path):
