@@ -8,7 +8,13 @@
 !>
 !> Exit status 0 on success, 2 for bad input (one line on stderr naming file,
 !> group, variable, value and what is allowed), 3 for a numerical failure (the
-!> output written so far is kept, with status="failed").
+!> output written so far is kept, with status="failed"), 4 when the run
+!> completed but its output file could not be written (a full disk): the
+!> milestones are printed, nothing is left under the output's name.
+!>
+!> While it runs, the program holds a lock on OUTPUT.part.lock (removed at its
+!> end): a second run asked to write the same file is refused (exit 2) instead
+!> of both writing OUTPUT.part at once.
 program airlaunch
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use airlaunch_error, only: error_type
@@ -23,14 +29,17 @@ program airlaunch
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
   use airlaunch_strings, only: str
   use airlaunch_blas_threads, only: use_one_blas_thread
+  use airlaunch_path, only: file_lock, lock_held_elsewhere
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
   type(error_type), allocatable :: error
-  character(len=:), allocatable :: path, echo, summary, output_override, check_note
-  character(len=1024) :: arg
-  integer :: i, nargs, n_run_echo, n_arg
+  type(file_lock) :: output_lock
+  character(len=:), allocatable :: path, echo, summary, output_override, check_note, arg
+  integer :: i, nargs, n_run_echo
   logical :: written, kept, check_only
+  !> longest path the system takes (PATH_MAX less its NUL)
+  integer, parameter :: path_max = 4095
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   nargs = command_argument_count()
@@ -40,8 +49,8 @@ program airlaunch
   check_note = ""
   i = 1
   do while (i <= nargs)
-    call get_command_argument(i, arg)
-    select case (trim(arg))
+    arg = argument(i)
+    select case (arg)
     case ("-h", "--help")
       call usage()
       stop
@@ -55,15 +64,18 @@ program airlaunch
       if (len(output_override) > 0) call fail_input("--output given more than once (give one output file)")
       i = i + 1
       if (i > nargs) call fail_input("--output needs a file name")
-      call get_command_argument(i, arg, length=n_arg)
+      arg = argument(i)
       if (len_trim(arg) == 0) call fail_input("--output needs a file name (it is empty)")
-      if (n_arg > len(run%output)) call fail_input("--output is " // str(n_arg) // &
+      if (len(arg) > len(run%output)) call fail_input("--output is " // str(len(arg)) // &
         " characters long; at most " // str(len(run%output)) // " are allowed")
       output_override = trim(arg)
     case default
-      if (arg(1:1) == "-") call fail_input("unknown option " // trim(arg) // " (see airlaunch --help)")
+      if (len(arg) == 0) call fail_input("the scenario file's name is empty")
+      if (arg(1:1) == "-") call fail_input("unknown option " // arg // " (see airlaunch --help)")
       if (len(path) > 0) call fail_input("more than one scenario file given")
-      path = trim(arg)
+      if (len(arg) > path_max) call fail_input("the scenario file's name is " // str(len(arg)) // &
+        " characters long; the system takes at most " // str(path_max))
+      path = arg
     end select
     i = i + 1
   end do
@@ -124,6 +136,15 @@ program airlaunch
     if (error%input) call fail_input(path // ": " // error%message)
   end if
   if (allocated(error)) then
+    if (error%output) then
+      ! the run completed: its milestones stand; the file could not be written
+      if (allocated(summary)) write(output_unit, '(a)') summary
+      write(error_unit, '(a)') "airlaunch: error: " // error%message
+      write(error_unit, '(a)') "airlaunch: no output written (the run completed; writing " // trim(run%output) // &
+        " failed, and nothing is left under that name or " // trim(run%output) // ".part)"
+      call output_lock%release()
+      stop 4, quiet=.true.
+    end if
     write(error_unit, '(a)') "airlaunch: error: " // error%message
     if (allocated(summary)) write(error_unit, '(a)') summary
     if (run%trajectory) then
@@ -139,10 +160,12 @@ program airlaunch
         write(error_unit, '(a)') "airlaunch: no output written (the run failed before its first record)"
       end if
     end if
+    call output_lock%release()
     stop 3, quiet=.true.
   end if
   write(output_unit, '(a)') summary
   if (run%trajectory) write(output_unit, '(a)') "output: " // trim(run%output)
+  call output_lock%release()
 
 contains
 
@@ -165,6 +188,11 @@ contains
     call require_output_directory(what, run%output, out_error, input=path)
     if (allocated(out_error)) call fail_input(out_error%message)
     if (check_only) call print_resolved_input()
+    ! one writer of OUTPUT.part at a time (a file system without locks: no lock)
+    if (output_lock%acquire(trim(run%output) // ".part.lock") == lock_held_elsewhere) &
+      call fail_input(what // " = '" // trim(run%output) // "' is not allowed now: another airlaunch run is " // &
+        "running with this output (it holds " // trim(run%output) // ".part.lock); wait for it to end or choose " // &
+        "another path")
     ! (a regular file or nothing: require_output_directory refused anything else)
     open(newunit=u, file=trim(run%output), status="old", action="read", iostat=ios)
     if (ios == 0) close(u, status="delete", iostat=ios)
@@ -343,9 +371,20 @@ contains
     write(output_unit, '(a)') "  --check: validate the input and print it resolved (defaults included), without running"
   end subroutine usage
 
+  !> Command-line argument i, whole (any length).
+  function argument(i) result(a)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: a
+    integer :: n
+    call get_command_argument(i, length=n)
+    allocate(character(len=n) :: a)
+    if (n > 0) call get_command_argument(i, a)
+  end function argument
+
   subroutine fail_input(msg)
     character(len=*), intent(in) :: msg
     write(error_unit, '(a)') "airlaunch: error: " // msg
+    call output_lock%release()   ! (only a lock of this run's)
     stop 2, quiet=.true.
   end subroutine fail_input
 end program airlaunch

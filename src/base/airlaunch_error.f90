@@ -12,6 +12,9 @@ module airlaunch_error
     !> up, e.g. more trajectory records than memory holds): the program
     !> reports it as bad input (exit 2), not as a numerical failure
     logical :: input = .false.
+    !> the run's output file could not be written (a full disk, an I/O
+    !> error): the program reports it apart from a failure of the run itself
+    logical :: output = .false.
   end type error_type
 
 contains

@@ -16,6 +16,7 @@ module airlaunch_ncwrite
   use h5ds
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_path, only: free_bytes
   implicit none
   private
   public :: nc_writer
@@ -62,6 +63,11 @@ contains
     self%path = trim(path)
     self%tmp_path = trim(path) // ".part"
     allocate(self%dim_names(0), self%dim_sizes(0))
+    ! no HDF5 clean-up at the program's exit: every file is closed here
+    ! (commit or abort), and one whose close failed (a full disk) made HDF5's
+    ! exit handler crash (SIGSEGV, the program's last lines lost).  Only
+    ! possible before HDF5's first use in the process; later calls do nothing.
+    call h5dont_atexit_f(hdferr)
     call h5open_f(hdferr)
     ! library code never prints: HDF5's own error stack goes silent, its
     ! failures come back as error values with the file's name
@@ -73,7 +79,7 @@ contains
     call h5fcreate_f(self%tmp_path, H5F_ACC_TRUNC_F, self%fid, create_err, creation_prp=fcpl)
     call h5pclose_f(fcpl, hdferr)
     if (create_err /= 0) then
-      call fatal_error(error, self%tmp_path // ": cannot create the output file (directory missing or not writable?)")
+      call write_failure(self, error, "cannot create the output file (directory missing or not writable?)")
       self%fid = -1
     end if
   end subroutine nc_create
@@ -144,7 +150,7 @@ contains
     if (allocated(error)) return
     call h5ltmake_dataset_int_f(self%fid, name, 1, shape(data, kind=hsize_t), data, hdferr)
     if (hdferr /= 0) then
-      call fatal_error(error, self%tmp_path // ": cannot write variable " // name)
+      call write_failure(self, error, "cannot write variable " // name)
       return
     end if
     call finish_var(self, name, dims, shape(data, kind=hsize_t), units, long_name, error)
@@ -162,7 +168,7 @@ contains
     else
       call h5ltset_attribute_string_f(self%fid, var, name, value, hdferr)
     end if
-    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write attribute " // name // " of " // var)
+    if (hdferr /= 0) call write_failure(self, error, "cannot write attribute " // name // " of " // var)
   end subroutine nc_add_text_att
 
   !> A real attribute of a variable, or of the file if `var` is "/".
@@ -176,7 +182,7 @@ contains
     if (allocated(error)) return
     buf(1) = value
     call h5ltset_attribute_double_f(self%fid, var, name, buf, 1_size_t, hdferr)
-    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write attribute " // name // " of " // var)
+    if (hdferr /= 0) call write_failure(self, error, "cannot write attribute " // name // " of " // var)
   end subroutine nc_add_real_att
 
   !> Close the file and rename it to its final name.
@@ -188,7 +194,9 @@ contains
     call h5fclose_f(self%fid, hdferr)
     self%fid = -1
     if (hdferr /= 0) then
-      call fatal_error(error, self%tmp_path // ": cannot close the output file")
+      ! its last data did not reach the disk: an incomplete file, not kept
+      call write_failure(self, error, "cannot finish writing the output file, removed")
+      call delete_file(self%tmp_path)
       return
     end if
     ! a failed rename keeps the complete file under its .part name (the
@@ -213,13 +221,56 @@ contains
   !> Close and delete the temporary file (nothing is left under any name).
   subroutine nc_abort(self)
     class(nc_writer), intent(inout) :: self
-    integer :: hdferr, unit, ios
+    integer :: hdferr
     if (self%fid < 0) return
     call h5fclose_f(self%fid, hdferr)
     self%fid = -1
-    open(newunit=unit, file=self%tmp_path, status="old", iostat=ios)
-    if (ios == 0) close(unit, status="delete")
+    call delete_file(self%tmp_path)
   end subroutine nc_abort
+
+  !> Remove the file `path` if it is there.
+  subroutine delete_file(path)
+    character(len=*), intent(in) :: path
+    integer :: unit, ios
+    open(newunit=unit, file=path, status="old", iostat=ios)
+    if (ios == 0) close(unit, status="delete", iostat=ios)
+  end subroutine delete_file
+
+  !> A failed write to the file: the error names the file and what failed,
+  !> adds that its file system is full when it (nearly) is - HDF5 tells no
+  !> reason - and marks the error as the output's (error_type%output).
+  subroutine write_failure(self, error, what)
+    type(nc_writer), intent(in) :: self
+    type(error_type), allocatable, intent(inout) :: error
+    character(len=*), intent(in) :: what
+    real(dp) :: free
+    character(len=24) :: kb
+    character(len=:), allocatable :: note
+    note = ""
+    free = free_bytes(self%tmp_path)
+    if (free < 0.0_dp) free = free_bytes(parent_directory(self%tmp_path))
+    if (free >= 0.0_dp .and. free < 1048576.0_dp) then
+      write (kb, "(i0)") nint(free/1024.0_dp)
+      note = " (no space left on the device: " // trim(kb) // " kB free)"
+    end if
+    call fatal_error(error, self%tmp_path // ": " // what // note)
+    error%output = .true.
+  end subroutine write_failure
+
+  !> The directory part of `path` ("." if it has none).
+  pure function parent_directory(path) result(dir)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: dir
+    integer :: k
+    k = index(path, "/", back=.true.)
+    if (k == 0) then
+      dir = "."
+    else if (k == 1) then
+      dir = "/"
+    else
+      dir = path(1:k-1)
+    end if
+  end function parent_directory
 
   !> An integer dimension with its coordinate variable.
   subroutine nc_add_int_dim(self, name, values, units, long_name, error)
@@ -232,7 +283,7 @@ contains
     if (allocated(error)) return
     call h5ltmake_dataset_int_f(self%fid, name, 1, [size(values, kind=hsize_t)], values, hdferr)
     if (hdferr /= 0) then
-      call fatal_error(error, self%tmp_path // ": cannot write variable " // name)
+      call write_failure(self, error, "cannot write variable " // name)
       return
     end if
     call h5dopen_f(self%fid, name, did, hdferr)
@@ -253,7 +304,7 @@ contains
     integer :: hdferr
     if (allocated(error)) return
     call h5ltset_attribute_int_f(self%fid, var, name, values, size(values, kind=size_t), hdferr)
-    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write attribute " // name // " of " // var)
+    if (hdferr /= 0) call write_failure(self, error, "cannot write attribute " // name // " of " // var)
   end subroutine nc_add_int_att
 
   !> A variable-length string variable over dimension `dim` (netCDF NC_STRING).
@@ -297,7 +348,7 @@ contains
     call h5sclose_f(sid, hdferr)
     call h5tclose_f(tid, hdferr)
     if (e /= 0) then
-      call fatal_error(error, self%tmp_path // ": cannot write the string variable " // name)
+      call write_failure(self, error, "cannot write the string variable " // name)
       return
     end if
     call self%add_text_att(name, "long_name", long_name, error)
@@ -317,7 +368,7 @@ contains
       return
     end if
     call h5ltmake_dataset_double_f(self%fid, name, size(dims), dims, data, hdferr)
-    if (hdferr /= 0) call fatal_error(error, self%tmp_path // ": cannot write variable " // name)
+    if (hdferr /= 0) call write_failure(self, error, "cannot write variable " // name)
   end subroutine make_dataset
 
   !> Attach dimension scales and write units/long_name.

@@ -1,15 +1,30 @@
 !> What a path names, which Fortran's inquire cannot tell: a regular file, a
 !> directory or something else (a device, FIFO, socket), and whether two
-!> paths name one file (airlaunch_path_kind.c, POSIX stat); and this
-!> process's id (getpid), to name files of its own.
+!> paths name one file (airlaunch_path_kind.c, POSIX stat); the free space of
+!> its file system (statvfs); an exclusive lock on a file (fcntl), released
+!> with the process; and this process's id (getpid), to name files of its own.
 module airlaunch_path
-  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char, c_double
+  use airlaunch_kinds, only: dp
   implicit none
   private
   public :: path_kind, same_file, process_id, kind_missing, kind_regular, kind_directory, kind_other
+  public :: free_bytes, file_lock, lock_held_elsewhere, lock_unavailable
 
   !> What a path names (airlaunch_path_kind.c).
   integer, parameter :: kind_missing = 0, kind_regular = 1, kind_directory = 2, kind_other = 3
+  !> file_lock%acquire's outcomes other than success (airlaunch_lock_output).
+  integer, parameter :: lock_held_elsewhere = -1, lock_unavailable = -2
+
+  !> An exclusive lock on a lock file, held until `release` (or the process
+  !> ends), which also removes the file.
+  type :: file_lock
+    character(len=:), allocatable :: path
+    integer :: fd = -1
+  contains
+    procedure :: acquire => lock_acquire
+    procedure :: release => lock_release
+  end type file_lock
 
   interface
     integer(c_int) function c_path_kind(path) bind(c, name="airlaunch_path_kind")
@@ -23,6 +38,19 @@ module airlaunch_path
     integer(c_int) function c_getpid() bind(c, name="getpid")   ! pid_t is an int on Linux
       import :: c_int
     end function c_getpid
+    real(c_double) function c_free_bytes(path) bind(c, name="airlaunch_free_bytes")
+      import :: c_double, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function c_free_bytes
+    integer(c_int) function c_lock_file(path) bind(c, name="airlaunch_lock_output")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function c_lock_file
+    subroutine c_release_lock(path, fd) bind(c, name="airlaunch_release_output_lock")
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: fd
+    end subroutine c_release_lock
   end interface
 
 contains
@@ -43,6 +71,32 @@ contains
   integer function process_id()
     process_id = int(c_getpid())
   end function process_id
+
+  !> Free bytes on the file system that holds `path` (an existing file or
+  !> directory) for an unprivileged user; negative if it cannot be told.
+  real(dp) function free_bytes(path)
+    character(len=*), intent(in) :: path
+    free_bytes = real(c_free_bytes(c_string(path)), dp)
+  end function free_bytes
+
+  !> Lock the file `path` (made if missing): 0 when held, else
+  !> lock_held_elsewhere (another process holds it) or lock_unavailable
+  !> (no lock can be had there: the caller goes on without one).
+  integer function lock_acquire(self, path) result(status)
+    class(file_lock), intent(inout) :: self
+    character(len=*), intent(in) :: path
+    self%path = trim(path)
+    self%fd = int(c_lock_file(c_string(path)))
+    status = min(self%fd, 0)
+  end function lock_acquire
+
+  !> Remove the lock file and release the lock (nothing if none is held).
+  subroutine lock_release(self)
+    class(file_lock), intent(inout) :: self
+    if (self%fd < 0) return
+    call c_release_lock(c_string(self%path), int(self%fd, c_int))
+    self%fd = -1
+  end subroutine lock_release
 
   !> A NUL-terminated copy of `s` for C.
   pure function c_string(s) result(c)

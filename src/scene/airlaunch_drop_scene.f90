@@ -193,10 +193,15 @@ contains
     if (run%trajectory) call write_output()   ! trajectory = .false.: no file (input.md)
     summary = "release: altitude " // str(cfg%altitude) // " m, speed " // str(v0) // " m/s" // new_line("a")
     if (allocated(run_error)) then
-      call fatal_error(error, "drop scene: " // run_error%message)
-      ! the summary so far (output.md): the last record
-      summary = summary // "last record at t = " // str(time(n)) // " s, altitude " // str(pos(2, n)) // " m"
-      return
+      if (run_error%output) then
+        ! the run completed; its file could not be written (the writer's own message)
+        call move_alloc(run_error, error)
+      else
+        call fatal_error(error, "drop scene: " // run_error%message)
+        ! the summary so far (output.md): the last record
+        summary = summary // "last record at t = " // str(time(n)) // " s, altitude " // str(pos(2, n)) // " m"
+        return
+      end if
     end if
     if (t_impact >= 0.0_dp) then
       summary = summary // "fell " // str(cfg%fall_height) // " m at t = " // str(t_impact) // " s, " // &

@@ -1,0 +1,120 @@
+"""The single run's output file against what the machine does to it
+(twenty-seventh session, a QA pass):
+
+* two runs asked for the same output file: the second is refused (exit 2,
+  one line) while the first runs - before, both wrote OUTPUT.part at once and
+  a corrupt file with status "completed" could end under the final name;
+  the first completes untouched, and its lock file goes with it;
+* a lock file left by a killed run (no process holds it) does not block;
+* a full disk: exit 4 (not a crash in HDF5's exit handler, exit 139, with the
+  printed milestones lost), the milestones on stdout, one line naming the
+  file and the full disk, and nothing left under the output's name or .part;
+* a scenario path longer than 1024 characters is read whole (it was cut and
+  reported missing), and one beyond the system's 4095 gets its own line."""
+import os
+import re
+import shutil
+import subprocess
+import time
+
+import pytest
+import xarray as xr
+
+from conftest import ROOT, nml_variant, run_airlaunch
+
+PARACHUTE = ROOT / "input" / "line_parachute.nml"
+GRAVITY_DROP = ROOT / "input" / "airlaunch_gravity_drop.nml"
+
+
+def slow_line(tmp_path):
+    """The towed parachute line with 200 segments over 100 s: a few seconds."""
+    return nml_variant(tmp_path, "slow", base=PARACHUTE,
+                       edits=[(r"^  t_end = 5.0 .*$", "  t_end = 100.0"), (r"^  n_seg = 60\b.*$", "  n_seg = 200")])
+
+
+def test_a_second_run_on_the_same_output_is_refused_while_the_first_runs(airlaunch_exe, tmp_path):
+    out = tmp_path / "same.nc"
+    lock = tmp_path / "same.nc.part.lock"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    first = subprocess.Popen([str(airlaunch_exe), str(slow_line(tmp_path)), "--output", str(out)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while not lock.exists() and first.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert lock.exists(), "the first run holds no lock file"
+        second = run_airlaunch(airlaunch_exe, ROOT / "input" / "line_pendulum.nml", "--output", out)
+        assert first.poll() is None, "the first run ended before the second was tried: make it longer"
+        assert second.returncode == 2, second.stderr
+        lines = second.stderr.strip().splitlines()
+        assert len(lines) == 1 and "another airlaunch run is running with this output" in lines[0], lines
+        assert "same.nc.part.lock" in lines[0]
+    finally:
+        stdout, stderr = first.communicate(timeout=600)
+    assert first.returncode == 0, stderr
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "completed" and ds.attrs["scene"] == "line"
+        assert float(ds["time"].values[-1]) == pytest.approx(100.0)   # the first run's, whole
+        assert 201 in ds.sizes.values(), dict(ds.sizes)                 # its 200 segments' nodes
+    assert not lock.exists() and not (tmp_path / "same.nc.part").exists()
+
+
+def test_a_lock_file_nobody_holds_does_not_block(airlaunch_exe, tmp_path):
+    out = tmp_path / "o.nc"
+    (tmp_path / "o.nc.part.lock").write_text("")   # left by a run that was killed
+    res = run_airlaunch(airlaunch_exe, ROOT / "input" / "line_pendulum.nml", "--output", out)
+    assert res.returncode == 0, res.stderr
+    assert out.is_file() and not (tmp_path / "o.nc.part.lock").exists()
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 100 kB tmpfs (root only; skipped where mounting is not allowed)."""
+    d = tmp_path / "small"
+    d.mkdir()
+    if shutil.which("mount") is None or os.geteuid() != 0:
+        pytest.skip("needs root to mount a small tmpfs")
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=100k", "tmpfs", str(d)], capture_output=True, text=True)
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {res.stderr.strip()}")
+    yield d
+    subprocess.run(["umount", str(d)], check=False)
+
+
+@pytest.mark.parametrize("scenario", ["airlaunch_paper", "line_parachute", "airlaunch_gravity_drop", "drop_demo"])
+def test_a_full_disk_is_exit_4_with_the_milestones_and_nothing_left(airlaunch_exe, small_disk, scenario):
+    """100 kB hold none of these outputs (the drop demo's 3 records need 40 kB:
+    it is filled first).  The run completes; writing fails."""
+    if scenario == "drop_demo":
+        (small_disk / "filler").write_bytes(b"\0" * 90_000)
+    out = small_disk / "o.nc"
+    res = run_airlaunch(airlaunch_exe, ROOT / "input" / f"{scenario}.nml", "--output", out)
+    assert res.returncode == 4, (res.returncode, res.stderr)
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 2, err
+    assert err[0].startswith(f"airlaunch: error: {out}.part: cannot ") and "no space left on the device" in err[0], err
+    assert "the run completed" in err[1]
+    # the milestones, on stdout as after a good run (the scene's own summary lines)
+    assert re.search(r"(separation|fell|end of run at t|steps)", res.stdout), res.stdout
+    assert sorted(p.name for p in small_disk.iterdir() if p.name != "filler") == []
+
+
+def test_a_long_scenario_path_is_read_whole(airlaunch_exe, tmp_path):
+    """1 210 characters of directories (each 200): the scenario is found; at
+    4 200 the line says the system takes at most 4 095."""
+    d = tmp_path / "long"
+    depth = 0
+    while len(str(d)) < 1210:
+        d = d / ("d" * 200)
+        depth += 1
+    d.mkdir(parents=True)
+    nml = d / "s.nml"
+    shutil.copy(GRAVITY_DROP, nml)
+    res = run_airlaunch(airlaunch_exe, nml, "--check")
+    assert len(str(nml)) > 1024
+    assert res.returncode == 0, res.stderr
+    too_long = "x" * 4200 + ".nml"
+    res = run_airlaunch(airlaunch_exe, too_long)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "4204 characters long; the system takes at most 4095" in lines[0], lines
