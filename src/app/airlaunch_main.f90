@@ -29,7 +29,7 @@ program airlaunch
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
   use airlaunch_strings, only: str
   use airlaunch_blas_threads, only: use_one_blas_thread
-  use airlaunch_path, only: file_lock, lock_held_elsewhere
+  use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
@@ -42,6 +42,7 @@ program airlaunch
   integer, parameter :: path_max = 4095
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
+  call ignore_file_size_signal()   ! a file past ulimit -f is a failed write (exit 4), not SIGXFSZ
   nargs = command_argument_count()
   path = ""
   output_override = ""

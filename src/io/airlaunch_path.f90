@@ -9,7 +9,7 @@ module airlaunch_path
   implicit none
   private
   public :: path_kind, same_file, process_id, kind_missing, kind_regular, kind_directory, kind_other
-  public :: free_bytes, file_lock, lock_held_elsewhere, lock_unavailable
+  public :: free_bytes, file_lock, lock_held_elsewhere, lock_unavailable, ignore_file_size_signal
 
   !> What a path names (airlaunch_path_kind.c).
   integer, parameter :: kind_missing = 0, kind_regular = 1, kind_directory = 2, kind_other = 3
@@ -46,6 +46,9 @@ module airlaunch_path
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: path(*)
     end function c_lock_file
+    !> Past the file size limit a write fails (EFBIG) instead of killing the process (SIGXFSZ).
+    subroutine ignore_file_size_signal() bind(c, name="airlaunch_ignore_file_size_signal")
+    end subroutine ignore_file_size_signal
     subroutine c_release_lock(path, fd) bind(c, name="airlaunch_release_output_lock")
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: path(*)

@@ -6,6 +6,7 @@
  * write one output at once. */
 #define _GNU_SOURCE
 #include <errno.h>
+#include <signal.h>
 #include <fcntl.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -74,3 +75,8 @@ void airlaunch_release_output_lock(const char *path, int fd) {
   unlink(path);
   close(fd);
 }
+
+/* Past the process's file size limit (ulimit -f) a write fails with EFBIG
+ * instead of killing the process with SIGXFSZ: the writer then reports it
+ * like any failed write. */
+void airlaunch_ignore_file_size_signal(void) { signal(SIGXFSZ, SIG_IGN); }

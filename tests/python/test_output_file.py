@@ -9,6 +9,7 @@
 * a full disk: exit 4 (not a crash in HDF5's exit handler, exit 139, with the
   printed milestones lost), the milestones on stdout, one line naming the
   file and the full disk, and nothing left under the output's name or .part;
+* a file size limit (ulimit -f) is such a failed write, not a SIGXFSZ kill;
 * a scenario path longer than 1024 characters is read whole (it was cut and
   reported missing), and one beyond the system's 4095 gets its own line."""
 import os
@@ -118,3 +119,24 @@ def test_a_long_scenario_path_is_read_whole(airlaunch_exe, tmp_path):
     assert res.returncode == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "4204 characters long; the system takes at most 4095" in lines[0], lines
+
+
+def test_a_file_size_limit_is_a_failed_write_not_a_signal(airlaunch_exe, tmp_path):
+    """ulimit -f 200 (blocks of 1 kB: 200 kB), the paper scenario's 1.3 MB
+    output: SIGXFSZ killed the program (exit 153, a backtrace, the printed
+    lines lost, a .part left); now the write fails like on a full disk: exit 4,
+    the milestones on stdout, nothing left."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (200 * 1024, resource.RLIM_INFINITY))
+
+    out = tmp_path / "fx.nc"
+    res = subprocess.run([str(airlaunch_exe), str(ROOT / "input" / "airlaunch_paper.nml"), "--output", str(out)],
+                         capture_output=True, text=True, timeout=600, preexec_fn=limit,
+                         env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    assert res.returncode == 4, (res.returncode, res.stderr)
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 2 and err[0].startswith(f"airlaunch: error: {out}.part: cannot "), err
+    assert "separation" in res.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
