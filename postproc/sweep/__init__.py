@@ -12,6 +12,14 @@ Every module here is free of global state: functions take what they need and
 return new objects.
 """
 
-from .definition import DefinitionError, InputSpec, SweepDefinition, read_definition
-
 __all__ = ["DefinitionError", "InputSpec", "SweepDefinition", "read_definition"]
+
+
+def __getattr__(name):
+    """The names of __all__, imported when first used: ``python -m
+    postproc.sweep`` imports this package before its command line can take an
+    interrupt in one line (__main__.py), so the package itself imports nothing."""
+    if name in __all__:
+        from . import definition
+        return getattr(definition, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -4,17 +4,45 @@
     python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures] [--check]
     python -m postproc.sweep verify SWEEP.nml [--cases K | --ids I,J,...] [--segments F] [--tolerance F] [--jobs J]
 
-Exit status 0 on success, 2 for bad input (one line on stderr).
+Exit status 0 on success, 2 for bad input (one line on stderr), 130 when
+interrupted (SIGINT, Ctrl-C: one line, ``sweep: interrupted``), 143 on SIGTERM
+(``sweep: interrupted (SIGTERM)``); every file is written under a temporary
+name and renamed once whole, so none is left cut short under its final name.
 """
 from __future__ import annotations
 
-import argparse
-import pathlib
 import sys
 
-import numpy as np
+INTERRUPTED = 130
 
-from .definition import DefinitionError, check_base, read_definition
+
+class Terminated(BaseException):
+    """SIGTERM (kill, Slurm's time limit, scripts/sweep passing it on): the
+    step ends as on an interrupt, its temporary files removed."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
+def interrupted(exc=None) -> int:
+    """One line for an interrupt or SIGTERM (not a traceback); the exit status."""
+    if isinstance(exc, Terminated):
+        print("sweep: interrupted (SIGTERM)", file=sys.stderr)
+        return 128 + 15
+    print("sweep: interrupted", file=sys.stderr)
+    return INTERRUPTED
+
+
+try:   # an interrupt while the modules load is one line too (SIGTERM: its default, below)
+    import argparse
+    import pathlib
+
+    import numpy as np
+
+    from .definition import DefinitionError, check_base, read_definition
+except KeyboardInterrupt:
+    sys.exit(interrupted())
 
 
 def cmd_table(args) -> int:
@@ -229,7 +257,8 @@ def cmd_envelope(args) -> int:
             paths = draw_all(env, defn.figure_dir)
             write_stamp(defn.figure_dir, out, summary_path, summary.attrs.get("created", ""))
         except OSError as exc:
-            raise output_dir_error(defn, getattr(exc, "filename", None) or defn.figure_dir, exc) from None
+            # figures.write_atomic names the figure in every OSError it raises
+            raise output_dir_error(defn, getattr(exc, "filename", None) or defn.figure_dir / "?", exc) from None
         print(f"figures: {defn.figure_dir} ({', '.join(p.name for p in paths.values())}, drawn from {out})")
     else:
         why = stale_figures(defn.figure_dir, out)
@@ -368,13 +397,25 @@ def main(argv=None) -> int:
     p.add_argument("--jobs", type=_positive_int, default=2, help="cases run at once (default 2)")
     _exe_dir_option(p, "where airlaunch and airlaunch-sweep are (default build/release/bin)")
     p.set_defaults(func=cmd_verify)
-    args = parser.parse_args(argv)
     try:
+        args = parser.parse_args(argv)
         return args.func(args)
     except DefinitionError as exc:
         print(f"sweep: error: {exc}", file=sys.stderr)
         return 2
+    except (KeyboardInterrupt, Terminated) as exc:
+        return interrupted(exc)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        import signal
+        signal.signal(signal.SIGTERM, _terminate)
+        status = main()
+        # the step is done (its files renamed into place): an interrupt while
+        # the interpreter shuts down (SIGINT's default action again) would
+        # end it by the signal, silently, after the work
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    except (KeyboardInterrupt, Terminated) as exc:   # between main's return and here
+        status = interrupted(exc)
+    sys.exit(status)

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import itertools
+import os
 import pathlib
 
 import matplotlib
@@ -48,7 +49,7 @@ def clear_boundary(prob, contrast=0.15):
 def passfail_map(env, path, criterion="all"):
     """Pass/fail map with the boundary of the safe region for every pair of inputs."""
     fig = passfail_figure(env, criterion)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
 
 
@@ -128,7 +129,7 @@ def margins(env, path):
             ax.tick_params(labelsize=7)
     fig.suptitle("margins against each input (>= 0 passes; failed cases are not drawn)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
 
 
@@ -149,7 +150,7 @@ def probability(env, path):
     ax.set_xlim(0, 1.35)
     ax.set_xlabel(f"probability of success (95% Wilson interval), n = {env.sizes['case']} cases")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
 
 
@@ -188,14 +189,15 @@ def sensitivity(env, path):
                  f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
                  "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
 
 
 def worst_table(env, path_png, path_md, k=10):
     """The worst cases as Markdown and as a picture of the table."""
     text = worst_case_table(env, k)
-    pathlib.Path(path_md).write_text(text)
+    if path_md is not None:
+        pathlib.Path(path_md).write_text(text)
     rows = [line.strip("|").split("|") for line in text.strip().splitlines()]
     head, body = [c.strip() for c in rows[0]], [[c.strip() for c in r] for r in rows[2:]]
     fig, ax = plt.subplots(figsize=(min(2 + 1.3 * len(head), 24), 0.4 * len(body) + 1.2))
@@ -207,19 +209,51 @@ def worst_table(env, path_png, path_md, k=10):
         table.scale(1, 1.3)
     ax.set_title(f"the {len(body)} worst cases (smallest relative margin first)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path_png, dpi=110)
+    fig.savefig(path_png, dpi=110, format="png")
     plt.close(fig)
     return text
 
 
+def write_atomic(path, write):
+    """`write(tmp)` a file under PATH.part and rename it to `path`: a figure cut
+    short (a full disk, an interrupt) is never left under its final name.  An
+    OSError that names no file (matplotlib's savefig on a full disk) is
+    raised again naming `path`, with its reason."""
+    path = pathlib.Path(path)
+    tmp = path.with_name(path.name + ".part")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        if isinstance(exc, OSError) and not exc.filename:
+            raise OSError(exc.errno, exc.strerror or str(exc) or type(exc).__name__, str(path)) from exc
+        raise
+    return path
+
+
+def _png(draw, *args):
+    """A writer of write_atomic: draw(..., tmp) as PNG (tmp ends in .part, so
+    matplotlib cannot tell the format from the name)."""
+    def write(tmp):
+        draw(*args, tmp)
+    return write
+
+
 def draw_all(env, figure_dir):
-    """Every figure of the envelope into figure_dir; returns the paths."""
+    """Every figure of the envelope into figure_dir; returns the paths.  Each
+    is written under its name with .part and renamed once whole."""
     d = pathlib.Path(figure_dir)
     d.mkdir(parents=True, exist_ok=True)
     paths = {key: d / name for key, name in FIGURE_FILES.items()}
-    passfail_map(env, paths["passfail_map"])
-    margins(env, paths["margins"])
-    probability(env, paths["probability"])
-    worst_table(env, paths["worst_cases"], paths["worst_cases_md"])
-    sensitivity(env, paths["sensitivity"])
+    write_atomic(paths["passfail_map"], _png(passfail_map, env))
+    write_atomic(paths["margins"], _png(margins, env))
+    write_atomic(paths["probability"], _png(probability, env))
+    text = worst_case_table(env, 10)
+    write_atomic(paths["worst_cases_md"], lambda tmp: pathlib.Path(tmp).write_text(text))
+    write_atomic(paths["worst_cases"], lambda tmp: worst_table(env, tmp, None))
+    write_atomic(paths["sensitivity"], _png(sensitivity, env))
     return paths

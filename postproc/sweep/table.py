@@ -6,6 +6,7 @@ version: the version is recorded in the table).
 """
 from __future__ import annotations
 
+import errno
 import math
 import os
 import pathlib
@@ -156,16 +157,49 @@ def write_atomic(ds: xr.Dataset, path) -> pathlib.Path:
     return path
 
 
+#: Free space below which a write error without its own reason (netCDF's
+#: "NetCDF: HDF error") is put down to a full device.
+LOW_SPACE_BYTES = 1 << 20
+
+
+def free_space(path):
+    """Bytes free to an unprivileged user on the file system of `path` (or of
+    its nearest existing parent); None if it cannot be told."""
+    p = pathlib.Path(path).absolute()
+    for q in (p, *p.parents):
+        try:
+            st_ = os.statvfs(q)
+        except OSError:
+            continue
+        return st_.f_bavail * st_.f_frsize
+    return None
+
+
+def write_error_reason(target, exc) -> str:
+    """The reason a write of `target` failed, in words: the OS's (strerror),
+    else the first line of the message; a reason that does not say why
+    ("NetCDF: HDF error") gets the likely cause when the device is (nearly)
+    full."""
+    if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
+        return os.strerror(errno.ENOSPC)
+    why = getattr(exc, "strerror", None) or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+    free = free_space(pathlib.Path(target).parent)
+    if free is not None and free < LOW_SPACE_BYTES:
+        why += f" (likely: no space left on the device, {free} bytes free)"
+    return why
+
+
 def output_dir_error(defn: SweepDefinition, target, exc) -> DefinitionError:
-    """One-line error naming &sweep output_dir when `target` under it cannot be written."""
+    """One-line error naming &sweep output_dir when `target` under it cannot
+    be written: the file and the reason (write_error_reason)."""
     target = pathlib.Path(target)
     out = pathlib.Path(defn.output_dir)
-    why = f"cannot write {target}: {getattr(exc, 'strerror', None) or str(exc).splitlines()[0]}"
+    why = f"cannot write {target}: {write_error_reason(target, exc)}"
     try:
-        if target.is_dir():
-            why = f"{target} is a directory"
-        elif out.exists() and not out.is_dir():
+        if out.exists() and not out.is_dir():
             why = "it is an existing file, not a directory"
+        elif isinstance(exc, OSError) and exc.errno == errno.EISDIR and target.is_dir():
+            why = f"{target} is a directory"
     except OSError:
         pass
     return DefinitionError(f"{defn.path}: &sweep: output_dir = '{defn.output_dir}' is not usable: {why} "

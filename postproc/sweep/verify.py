@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import concurrent.futures
 import math
+import os
 import pathlib
 import re
 import subprocess
+import threading
 
 import numpy as np
 import xarray as xr
@@ -147,6 +149,56 @@ def _run(cmd, cwd, timeout):
     return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
 
 
+class Reruns:
+    """The refined runs in flight (run from worker threads), so that an
+    interrupt of the main thread ends them (stop) instead of waiting for
+    them, and starts no other."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._procs = set()
+        self._stopped = False
+
+    def run(self, cmd, cwd, timeout):
+        """subprocess.run(cmd) with its output captured, unless stopped."""
+        with self._lock:
+            if self._stopped:
+                raise RuntimeError("the verification was interrupted")
+            proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            self._procs.add(proc)
+        try:
+            out, err = proc.communicate(timeout=timeout)
+        except BaseException:
+            proc.kill()
+            proc.communicate()
+            raise
+        finally:
+            with self._lock:
+                self._procs.discard(proc)
+        return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+    def stop(self):
+        """End the runs in flight (SIGTERM) and start no other."""
+        with self._lock:
+            self._stopped = True
+            for proc in self._procs:
+                proc.terminate()
+
+
+def write_text_atomic(path, text):
+    """Write `text` under PATH.part and rename it: never a namelist cut short
+    under its final name."""
+    path = pathlib.Path(path)
+    tmp = path.with_name(path.name + ".part")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
 def case_namelist(case_id, definition, sweep_exe, timeout):
     """The namelist of one case (airlaunch-sweep --case-namelist)."""
     res = _run([str(sweep_exe), str(definition), "--case-namelist", str(case_id)], None, timeout)
@@ -155,20 +207,18 @@ def case_namelist(case_id, definition, sweep_exe, timeout):
     return res.stdout
 
 
-def rerun_case(case_id, text, exe, work: pathlib.Path, segments, tolerance, timeout):
+def rerun_case(case_id, text, exe, work: pathlib.Path, segments, tolerance, timeout, run=_run):
     """One case (its namelist `text`) at refined settings: (status, message,
     the output's path, changes)."""
-    case_nml = work / f"case_{case_id:06d}.nml"
-    case_nml.write_text(text)
+    case_nml = write_text_atomic(work / f"case_{case_id:06d}.nml", text)
     out = work / f"case_{case_id:06d}.nc"
-    res = _run([str(exe), str(case_nml), "--check", "--output", str(out)], None, timeout)
+    res = run([str(exe), str(case_nml), "--check", "--output", str(out)], None, timeout)
     if res.returncode != 0:
         return "invalid_input", res.stderr.strip(), out, [], 1
     resolved = res.stdout.split("\n", 1)[1]   # without the leading comment line
     text, changes, factor = refine_namelist(resolved, segments, tolerance)
-    refined = work / f"case_{case_id:06d}_refined.nml"
-    refined.write_text(text)
-    res = _run([str(exe), str(refined), "--output", str(out)], None, timeout)
+    refined = write_text_atomic(work / f"case_{case_id:06d}_refined.nml", text)
+    res = run([str(exe), str(refined), "--output", str(out)], None, timeout)
     status = "ok" if res.returncode == 0 else ("failed" if res.returncode == 3 else "error")
     return status, res.stderr.strip().splitlines()[-1] if res.returncode else "", out, changes, factor
 
@@ -189,9 +239,16 @@ def verify(env, criteria, scene, ids, definition, sweep_exe, exe, work, segments
     work = pathlib.Path(work)
     work.mkdir(parents=True, exist_ok=True)
     texts = [case_namelist(int(i), definition, sweep_exe, timeout) for i in ids]
-    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        runs = list(pool.map(lambda a: rerun_case(int(a[0]), a[1], exe, work, segments, tolerance, timeout),
-                             zip(ids, texts)))
+    reruns = Reruns()
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs))
+    try:
+        runs = list(pool.map(lambda a: rerun_case(int(a[0]), a[1], exe, work, segments, tolerance, timeout,
+                                                  reruns.run), zip(ids, texts)))
+    except BaseException:   # an interrupt: end the runs in flight, start no other
+        reruns.stop()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
     names = [c.name for c in criteria]
     metrics = sorted({m for c in criteria for m in c.metrics})
     attrs = [attributes(r[2]) if r[0] == "ok" else {} for r in runs]

@@ -378,7 +378,9 @@ contains
   !> the file exists afterwards.  A file error (the scratch namelist, or the
   !> trajectory file that the run began to write and could not finish) is
   !> returned in `file_error`; a case that fails before its first output
-  !> record (e.g. in the trim) writes no file and is no file error.
+  !> record (e.g. in the trim) writes no file and is no file error, but a
+  !> case that ran without error and left no file is one (so is a file name
+  !> longer than a run's output can hold).
   subroutine run_trajectory(def, base, id, values, scratch, trajectory, written, file_error)
     type(sweep_definition), intent(in) :: def   !< the sweep
     type(base_scenario), intent(in) :: base     !< its base scenario
@@ -398,6 +400,13 @@ contains
     call load_case(def, base, id, values, scratch, in, error, file_error)
     if (allocated(file_error)) return
     if (allocated(error)) return   ! an invalid case: no trajectory (the summary holds its message)
+    if (len(trajectory) > len(in%run%output)) then
+      ! refused by the definition check (output_dir); never cut the name short
+      call fatal_error(file_error, "case " // str(id) // ": cannot write its trajectory: the file name " // &
+        trajectory // " is " // str(len(trajectory)) // " characters long; a run's output holds at most " // &
+        str(len(in%run%output)))
+      return
+    end if
     in%run%trajectory = .true.
     in%run%output = trajectory
     if (base%scene == "line") then
@@ -416,6 +425,10 @@ contains
     end if
     inquire(file=trajectory, exist=exists)
     written = exists
+    ! no file is a result of the case only when the case failed (before its
+    ! first output record); a run that ended without error wrote its file
+    if (.not. exists .and. .not. allocated(error)) call fatal_error(file_error, "case " // str(id) // &
+      ": cannot write its trajectory: the run ended without error but " // trajectory // " does not exist")
   end subroutine run_trajectory
 
   !> Write case `id`'s namelist to `scratch` and read it: a write failure is

@@ -11,6 +11,7 @@ module airlaunch_sweep_definition
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
   use airlaunch_namelist, only: nml_file, nml_var, unset_real, unset_int, max_list_items
+  use airlaunch_run_config, only: run_config
   implicit none
   private
   public :: sweep_input, sweep_fixed, sweep_definition, read_sweep_definition
@@ -236,7 +237,8 @@ contains
     real(dp) :: t_end, progress_interval
     logical :: keep_failed, present, exists, is_dir
     character(len=512) :: msg
-    character(len=:), allocatable :: where
+    character(len=:), allocatable :: where, longest
+    type(run_config) :: single_run
     namelist /sweep/ name, base, output_dir, design, n_cases, seed, t_end, keep_failed, keep_worst, &
       worst_by, keep_ids, criteria, progress_interval
     type(nml_var), parameter :: vars(13) = [nml_var("name", "string", len(name)), &
@@ -386,6 +388,22 @@ contains
       end if
     end do
     def%n_cases = n_cases
+    ! The kept trajectories are written by the single run's output, a
+    ! character(len=256) variable: a longer file name was cut short (the files
+    ! went to OUTPUT_DIR/trajectories/case_NNNNNN.n, the count said "end before
+    ! their first output record").  The longest such name is the largest case
+    ! id's trajectory (the verification's OUTPUT_DIR/verify/case_NNNNNN.nc, an
+    ! airlaunch --output of the same limit, is shorter).
+    longest = def%trajectory_path(n_cases - 1)
+    if (len(longest) > len(single_run%output)) then
+      call fatal_error(error, where // "output_dir = '" // def%output_dir // "' is not allowed: it is " // &
+        str(len(def%output_dir)) // " characters long, and the longest file the sweep writes through a " // &
+        "single run's output, <output_dir>" // longest(len(def%output_dir) + 1:) // ", would be " // str(len(longest)) // " characters; a run's " // &
+        "output holds at most " // str(len(single_run%output)) // " (allowed: an output_dir of at most " // &
+        str(len(single_run%output) - (len(longest) - len(def%output_dir))) // " characters for " // &
+        str(n_cases) // " cases)")
+      return
+    end if
     def%seed = seed
     def%t_end = t_end
     def%keep_failed = keep_failed
@@ -590,7 +608,7 @@ contains
     integer, intent(in) :: id   !< case id
     character(len=:), allocatable :: p
     character(len=16) :: buf
-    write(buf, '(i6.6)') id
+    write(buf, '(i0.6)') id   ! at least 6 digits (i6.6 wrote ****** from id 1000000 on)
     p = self%trajectory_dir() // "/case_" // trim(buf) // ".nc"
   end function def_trajectory_path
 

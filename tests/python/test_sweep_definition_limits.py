@@ -5,7 +5,7 @@ stops before any case runs with one line naming the variable and what is
 allowed (`--check`, exit 2); the valid forms next to them still pass."""
 import pytest
 
-from test_sweep_support import SMALL_INPUTS, SWEEP_EXE, run_sweep, small_definition
+from test_sweep_support import SMALL_INPUTS, SWEEP_EXE, make_table, run_sweep, small_definition
 
 
 def _check(definition, tmp_path):
@@ -139,3 +139,41 @@ def test_case_namelist_takes_one_case_id(tmp_path, args, words):
     definition = small_definition(tmp_path / "d.nml", n_cases=4)
     line = _one_line(run_sweep(definition, tmp_path, None, *args))
     assert words in line, line
+
+
+def _long_dir(n):
+    """A relative directory name of n characters (two levels: a name holds at most 255)."""
+    first = min(n - 2, 120)
+    return "o" * first + "/" + "r" * (n - first - 1)
+
+
+@pytest.mark.parametrize("n_cases,length,allowed", [(4, 229, 228), (4, 256, 228), (2000000, 228, 227)])
+def test_output_dir_too_long_for_the_trajectories(tmp_path, n_cases, length, allowed):
+    """An output_dir of 229-256 characters was accepted, and the kept
+    trajectories (written through the single run's 256-character output)
+    went to names cut short (trajectories/case_000004.n) while the sweep said
+    "3 of the cases kept end before their first output record", exit 0. Now
+    the definition check refuses it: one line naming the longest file and the
+    limit (a case id of 7 digits needs one character more)."""
+    od = _long_dir(length)
+    definition = small_definition(tmp_path / "d.nml", n_cases=n_cases, output_dir=od)
+    line = _one_line(_check(definition, tmp_path))
+    assert f"&sweep: output_dir = '{od}' is not allowed: it is {length} characters long" in line, line
+    digits = f"{n_cases - 1:06d}"
+    assert f"<output_dir>/trajectories/case_{digits}.nc, would be {length + 22 + len(digits)} characters" in line
+    assert f"holds at most 256 (allowed: an output_dir of at most {allowed} characters for {n_cases} cases)" in line
+    assert not (tmp_path / od).exists()
+
+
+def test_output_dir_at_the_limit_keeps_its_trajectories(tmp_path):
+    """The longest output_dir allowed (228 characters with case ids of 6
+    digits): the kept trajectories are written under their full names."""
+    od = _long_dir(228)
+    definition = small_definition(tmp_path / "d.nml", n_cases=4, output_dir=od, extra_sweep="keep_ids = 1, 3")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "trajectories: 2 written" in res.stdout, res.stdout
+    assert "before their first output record" not in res.stdout, res.stdout
+    traj = tmp_path / od / "trajectories"
+    assert sorted(p.name for p in traj.iterdir()) == ["case_000001.nc", "case_000003.nc"]

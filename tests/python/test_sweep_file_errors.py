@@ -71,23 +71,23 @@ TMPFS_PAGES = 16
 
 
 @contextlib.contextmanager
-def small_tmpfs(path, free_pages):
-    """A 64 KiB tmpfs mounted at `path` with `free_pages` pages left free (a
-    filler file takes the rest); unmounted on exit.  Skips the test where
-    mounting is impossible (not root, no tmpfs, a container without
-    CAP_SYS_ADMIN)."""
+def small_tmpfs(path, free_pages, pages=TMPFS_PAGES):
+    """A tmpfs of `pages` pages (default 64 KiB) mounted at `path` with
+    `free_pages` pages left free (a filler file takes the rest); unmounted on
+    exit.  Skips the test where mounting is impossible (not root, no tmpfs, a
+    container without CAP_SYS_ADMIN)."""
     path = pathlib.Path(path)
     path.mkdir(parents=True, exist_ok=True)
     if os.geteuid() != 0 or shutil.which("mount") is None:
         pytest.skip("a full disk is made with a small tmpfs: needs root and mount(8)")
-    res = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={TMPFS_PAGES * PAGE}", "tmpfs", str(path)],
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={pages * PAGE}", "tmpfs", str(path)],
                          capture_output=True, text=True)
     if res.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs to make a full disk: {res.stderr.strip()}")
     try:
         filler = path / ".filler"
         with open(filler, "wb") as f:
-            f.write(b"\0" * ((TMPFS_PAGES - free_pages) * PAGE))
+            f.write(b"\0" * ((pages - free_pages) * PAGE))
         st = os.statvfs(path)
         assert st.f_bavail * st.f_frsize == free_pages * PAGE, "the tmpfs does not count pages as expected"
         yield filler
@@ -246,3 +246,61 @@ def test_torn_line_of_a_case_run_again_is_not_reported_again(tmp_path, exes):
     res = run_sweep(definition, tmp_path, None)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "resuming: 3 of 4" in res.stdout and "1 torn journal lines ignored" in res.stdout, res.stdout
+
+
+# --- the envelope step -------------------------------------------------------------
+
+def _leave_free(filler, pages_free):
+    """Resize the filler so that `pages_free` pages of its tmpfs stay free."""
+    st = os.statvfs(filler.parent)
+    free = st.f_bavail * st.f_frsize // PAGE
+    size = filler.stat().st_size + (free - pages_free) * PAGE
+    if size < filler.stat().st_size:
+        os.truncate(filler, size)
+    else:
+        with open(filler, "ab") as f:
+            f.write(b"\0" * (size - filler.stat().st_size))
+    st = os.statvfs(filler.parent)
+    assert st.f_bavail * st.f_frsize == pages_free * PAGE
+
+
+def test_envelope_on_a_full_disk_names_the_file_and_the_reason(tmp_path, exes):
+    """The envelope step on a full disk said "output_dir = ... is not usable:
+    .../figures is a directory" (savefig's OSError names no file), and for
+    envelope.nc only "NetCDF: HDF error". Now the line names the figure and
+    "No space left on device", or envelope.nc with the likely cause; neither is
+    left cut short under its final name (nor as .part)."""
+    from test_sweep_support import ROOT, run_python
+
+    sm = tmp_path / "sm"
+    definition = small_definition(tmp_path / "s.nml", n_cases=6, output_dir="sm/out",
+                                  extra_sweep=f"criteria = '{ROOT}/input/criteria_paper.nml'")
+    with small_tmpfs(sm, free_pages=120, pages=128) as filler:
+        make_table(definition, tmp_path)
+        assert run_sweep(definition, tmp_path, None).returncode == 0
+        out = sm / "out"
+        res = run_python(["envelope", definition, "--no-figures"], tmp_path)
+        assert res.returncode == 0, res.stdout + res.stderr
+        envelope_pages = -(-(out / "envelope.nc").stat().st_size // PAGE)
+        (out / "envelope.nc").unlink()
+        _leave_free(filler, 2)
+        res = run_python(["envelope", definition], tmp_path)
+        assert res.returncode == 2, res.stdout + res.stderr
+        line = res.stderr.strip()
+        assert len(line.splitlines()) == 1, res.stderr
+        assert "cannot write sm/out/envelope.nc: NetCDF: HDF error (likely: no space left on the device" in line, line
+        assert not [p.name for p in out.iterdir() if p.name.startswith("envelope")]
+        # room for envelope.nc, not for the first figure (tens of KiB)
+        _leave_free(filler, envelope_pages + 2)
+        res = run_python(["envelope", definition], tmp_path)
+        assert res.returncode == 2, res.stdout + res.stderr
+        line = res.stderr.strip()
+        assert len(line.splitlines()) == 1, res.stderr
+        assert "is not usable: cannot write sm/out/figures/passfail_map.png: No space left on device" in line, line
+        assert "is a directory" not in line
+        assert (out / "envelope.nc").is_file()
+        assert sorted(p.name for p in (out / "figures").iterdir()) == []
+        filler.unlink()
+        res = run_python(["envelope", definition], tmp_path)
+        assert res.returncode == 0, res.stdout + res.stderr
+        assert not list(out.rglob("*.part"))

@@ -1,0 +1,176 @@
+"""Stopping a sweep's steps by a signal (docs/sweep.md, "Interrupting a step"):
+Ctrl-C (SIGINT) or SIGTERM to a Python step is one line and exit status 130 or
+143, not a traceback, and leaves no file cut short under its final name nor a
+child process running; SIGTERM to scripts/sweep or scripts/sweep.slurm alone
+reaches mpirun and its ranks (they are in process groups of their own)."""
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from test_sweep_support import ENV, ROOT, SWEEP_EXE, make_table, run_sweep, small_definition
+
+CRITERIA = f"criteria = '{ROOT}/input/criteria_paper.nml'"
+
+
+def _start(cmd, cwd, env=ENV):
+    """A process with SIGINT's default action (a background job of a
+    non-interactive shell, or its children, would ignore it)."""
+    return subprocess.Popen([str(c) for c in cmd], cwd=cwd, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+
+def _wait_for(predicate, timeout=60.0, what="the step to start"):
+    t0 = time.monotonic()
+    while not predicate():
+        if time.monotonic() - t0 > timeout:
+            pytest.fail(f"timed out waiting for {what}")
+        time.sleep(0.05)
+
+
+def _alive(pid):
+    try:
+        return pathlib.Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _fake_exe(directory, name, pid_dir):
+    """An executable that records its pid (one file per process) and sleeps."""
+    directory.mkdir(parents=True, exist_ok=True)
+    pid_dir.mkdir(parents=True, exist_ok=True)
+    path = directory / name
+    path.write_text(f"#!/bin/sh\necho $$ > {pid_dir}/$$\nexec sleep 120\n")
+    path.chmod(0o755)
+    return path
+
+
+def _pids(pid_dir):
+    return [int(p.name) for p in pid_dir.iterdir()]
+
+
+def test_interrupted_table_step_is_one_line_and_leaves_no_table(tmp_path):
+    """Ctrl-C during the table step (here while it waits for airlaunch-sweep
+    --check) printed a KeyboardInterrupt traceback. Now: `sweep: interrupted`,
+    exit 130, no table.nc (nor .part), and the check's process is gone."""
+    definition = small_definition(tmp_path / "d.nml", n_cases=4)
+    pid_dir = tmp_path / "pids"
+    _fake_exe(tmp_path / "bin", "airlaunch-sweep", pid_dir)
+    proc = _start([sys.executable, "-m", "postproc.sweep", "table", definition, "--exe-dir", tmp_path / "bin"],
+                  tmp_path)
+    _wait_for(lambda: pid_dir.exists() and _pids(pid_dir))
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, out + err
+    assert err == "sweep: interrupted\n", err
+    assert not (tmp_path / "out" / "table.nc").exists() and not (tmp_path / "out" / "table.nc.part").exists()
+    _wait_for(lambda: not any(_alive(p) for p in _pids(pid_dir)), 10, "the check's process to end")
+
+
+def test_terminated_verify_ends_its_reruns(tmp_path):
+    """SIGTERM during verify ended Python by the signal and left the refined
+    runs going (Ctrl-C waited for every queued case in the thread pool). Now:
+    one line, exit 143, the runs in flight are ended and no other starts, no
+    verify.nc."""
+    if not SWEEP_EXE.exists():
+        pytest.fail(f"{SWEEP_EXE} is missing: run scripts/setup release first")
+    definition = small_definition(tmp_path / "d.nml", n_cases=6, extra_sweep=CRITERIA)
+    make_table(definition, tmp_path)
+    assert run_sweep(definition, tmp_path, None).returncode == 0
+    bin_dir, pid_dir = tmp_path / "bin", tmp_path / "pids"
+    _fake_exe(bin_dir, "airlaunch", pid_dir)
+    (bin_dir / "airlaunch-sweep").symlink_to(SWEEP_EXE)
+    proc = _start([sys.executable, "-m", "postproc.sweep", "verify", definition, "--ids", "0,1,2,3,4,5",
+                   "--jobs", "2", "--exe-dir", bin_dir], tmp_path)
+    _wait_for(lambda: pid_dir.exists() and len(_pids(pid_dir)) == 2, what="two reruns")
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, out + err
+    assert err == "sweep: interrupted (SIGTERM)\n", err
+    assert len(_pids(pid_dir)) == 2, "a queued rerun started after the signal"
+    _wait_for(lambda: not any(_alive(p) for p in _pids(pid_dir)), 10, "the reruns to end")
+    assert not (tmp_path / "out" / "verify.nc").exists()
+    assert not list((tmp_path / "out").glob("verify.nc.part"))
+    assert not list((tmp_path / "out" / "verify").glob("*.part"))
+
+
+def test_figure_writes_are_atomic_and_name_the_file(tmp_path):
+    """A figure cut short (an interrupt, a full disk) stays under .part only,
+    and is removed; savefig's OSError without a file name (a full disk) names
+    the figure: the envelope step blamed the figures directory instead."""
+    import errno
+
+    from postproc.sweep.figures import write_atomic
+
+    target = tmp_path / "margins.png"
+
+    def cut_short(exc):
+        def write(tmp):
+            pathlib.Path(tmp).write_bytes(b"\x89PNG half")
+            raise exc
+        return write
+
+    with pytest.raises(KeyboardInterrupt):
+        write_atomic(target, cut_short(KeyboardInterrupt()))
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(OSError) as info:
+        write_atomic(target, cut_short(OSError(errno.ENOSPC, "No space left on device")))
+    assert info.value.filename == str(target) and info.value.strerror == "No space left on device"
+    assert list(tmp_path.iterdir()) == []
+    write_atomic(target, lambda tmp: pathlib.Path(tmp).write_bytes(b"whole"))
+    assert [p.name for p in tmp_path.iterdir()] == ["margins.png"] and target.read_bytes() == b"whole"
+
+
+def _fake_srun(directory):
+    """srun for a machine without Slurm: mpirun with this machine's flags."""
+    directory.mkdir(parents=True, exist_ok=True)
+    flags = "--allow-run-as-root " if os.geteuid() == 0 else ""
+    path = directory / "srun"
+    path.write_text(f'#!/bin/sh\nshift\nexec mpirun {flags}--oversubscribe -np 2 "$@"\n')   # drops --mpi=pmix
+    path.chmod(0o755)
+
+
+@pytest.mark.parametrize("script", ["sweep", "sweep.slurm"])
+def test_term_to_the_script_reaches_the_ranks(tmp_path, script):
+    """kill -TERM to scripts/sweep (or the batch script) alone ended the script
+    and left mpirun and its ranks running to the end of the sweep (Slurm's
+    time-limit SIGTERM did not stop the ranks). Now the signal is passed on:
+    the ranks end at once, the script exits with 143 and a rerun resumes."""
+    if not SWEEP_EXE.exists():
+        pytest.fail(f"{SWEEP_EXE} is missing: run scripts/setup release first")
+    out = tmp_path / "out"
+    definition = small_definition(tmp_path / "d.nml", n_cases=1000, output_dir=out, extra_sweep=CRITERIA)
+    env = dict(ENV)
+    if script == "sweep":
+        cmd, cwd = [ROOT / "scripts" / "sweep", definition, "-n", "2", "--step", "run"], tmp_path
+        make_table(definition, tmp_path)
+    else:
+        _fake_srun(tmp_path / "bin")
+        env["PATH"] = f"{tmp_path / 'bin'}:{env['PATH']}"
+        cmd, cwd = ["bash", ROOT / "scripts" / "sweep.slurm", definition], ROOT
+    proc = _start(cmd, cwd, env)
+    journal = out / "journal"
+
+    def rows():
+        return sum(len(p.read_text().splitlines()) for p in journal.glob("rank_*.txt")) if journal.is_dir() else 0
+
+    _wait_for(lambda: rows() >= 20 or proc.poll() is not None, 120, "the first rows")
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 143, stdout + stderr
+    assert "stopped by SIGTERM" in stderr.splitlines()[-1], stderr
+    ranks = subprocess.run(["pgrep", "-f", f"airlaunch-sweep {definition}"], capture_output=True, text=True)
+    assert ranks.stdout == "", f"ranks still running: {ranks.stdout}"
+    n = rows()
+    assert 0 < n < 1000 and not (out / "summary.nc").exists()
+    time.sleep(1.0)
+    assert rows() == n, "the ranks went on after the script ended"
+    res = run_sweep(definition, tmp_path, 2)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "resuming:" in res.stdout and "1000 cases: 1000 ok" in res.stdout, res.stdout
