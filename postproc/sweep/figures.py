@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import itertools
-import os
 import pathlib
 
 import matplotlib
@@ -23,6 +22,7 @@ import numpy as np  # noqa: E402
 
 from .envelope import envelope_name, pass_probability_map, worst_case_table  # noqa: E402
 from .sensitivity import by_importance, significant  # noqa: E402
+from .files import write_atomic  # noqa: E402
 from .stamp import FIGURE_FILES  # noqa: E402
 
 PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
@@ -212,27 +212,6 @@ def worst_table(env, path_png, path_md, k=10):
     fig.savefig(path_png, dpi=110, format="png")
     plt.close(fig)
     return text
-
-
-def write_atomic(path, write):
-    """`write(tmp)` a file under PATH.part and rename it to `path`: a figure cut
-    short (a full disk, an interrupt) is never left under its final name.  An
-    OSError that names no file (matplotlib's savefig on a full disk) is
-    raised again naming `path`, with its reason."""
-    path = pathlib.Path(path)
-    tmp = path.with_name(path.name + ".part")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException as exc:
-        try:
-            tmp.unlink(missing_ok=True)
-        except OSError:
-            pass
-        if isinstance(exc, OSError) and not exc.filename:
-            raise OSError(exc.errno, exc.strerror or str(exc) or type(exc).__name__, str(path)) from exc
-        raise
-    return path
 
 
 def _png(draw, *args):

@@ -11,8 +11,9 @@ that file still is): ``stale_figures`` says why they are not.
 from __future__ import annotations
 
 import hashlib
-import os
 import pathlib
+
+from .files import write_text_atomic
 
 #: The files the envelope step draws into figures/ (figures.draw_all), by key.
 FIGURE_FILES = {"passfail_map": "passfail_map.png", "margins": "margins.png", "probability": "probability.png",
@@ -41,14 +42,7 @@ def write_stamp(figure_dir, envelope_path, summary_path, summary_created="") -> 
             f"summary = {pathlib.Path(summary_path).resolve()}\n"
             f"summary_sha256 = {sha256(summary_path)}\n"
             f"summary_created = {summary_created}\n")
-    tmp = stamp.with_name(STAMP + ".part")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, stamp)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return stamp
+    return write_text_atomic(stamp, text)
 
 
 def read_stamp(figure_dir) -> dict:

@@ -19,6 +19,7 @@ import scipy.stats as st
 import xarray as xr
 from scipy.stats import qmc
 
+from . import files
 from .definition import DefinitionError, InputSpec, SweepDefinition
 
 #: Unit samples are kept this far inside (0, 1) so that unbounded quantile
@@ -143,18 +144,8 @@ def write_atomic(ds: xr.Dataset, path) -> pathlib.Path:
     """Write a netCDF-4 file under a temporary name and rename it; on any
     failure the temporary file is removed and the exception goes on."""
     path = pathlib.Path(path)
-    tmp = path.with_name(path.name + ".part")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds))
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            tmp.unlink()
-        except OSError:
-            pass
-        raise
-    return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return files.write_atomic(path, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds)))
 
 
 #: Free space below which a write error without its own reason (netCDF's

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import concurrent.futures
 import math
-import os
 import pathlib
 import re
 import subprocess
@@ -28,6 +27,7 @@ import numpy as np
 import xarray as xr
 
 from .definition import DefinitionError
+from .files import write_text_atomic
 
 #: The line's segment indices that must follow a change of n_seg, and whether
 #: in a one-segment line each means the last end (refined_segment).
@@ -183,20 +183,6 @@ class Reruns:
             self._stopped = True
             for proc in self._procs:
                 proc.terminate()
-
-
-def write_text_atomic(path, text):
-    """Write `text` under PATH.part and rename it: never a namelist cut short
-    under its final name."""
-    path = pathlib.Path(path)
-    tmp = path.with_name(path.name + ".part")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
 
 
 def case_namelist(case_id, definition, sweep_exe, timeout):

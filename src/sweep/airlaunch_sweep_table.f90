@@ -48,6 +48,9 @@ contains
         "python -m postproc.sweep table " // def%path // ")")
       return
     end if
+    ! (as airlaunch_ncwrite: no HDF5 clean-up at exit, where a file whose
+    ! close failed on a full disk crashed it; the table is HDF5's first use here)
+    call h5dont_atexit_f(hdferr)
     call h5open_f(hdferr)
     call h5eset_auto_f(0, hdferr)
     call h5fopen_f(path, H5F_ACC_RDONLY_F, fid, hdferr)
