@@ -393,9 +393,10 @@ contains
     ! went to OUTPUT_DIR/trajectories/case_NNNNNN.n, the count said "end before
     ! their first output record").  The longest such name is the largest case
     ! id's trajectory (the verification's OUTPUT_DIR/verify/case_NNNNNN.nc, an
-    ! airlaunch --output of the same limit, is shorter).
+    ! airlaunch --output of the same limit, is shorter).  A sweep that keeps
+    ! no trajectory writes none: its output_dir is not limited so.
     longest = def%trajectory_path(n_cases - 1)
-    if (len(longest) > len(single_run%output)) then
+    if ((keep_failed .or. keep_worst > 0 .or. n_ids > 0) .and. len(longest) > len(single_run%output)) then
       call fatal_error(error, where // "output_dir = '" // def%output_dir // "' is not allowed: it is " // &
         str(len(def%output_dir)) // " characters long, and the longest file the sweep writes through a " // &
         "single run's output, <output_dir>" // longest(len(def%output_dir) + 1:) // ", would be " // str(len(longest)) // " characters; a run's " // &

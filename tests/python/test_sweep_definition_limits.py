@@ -156,13 +156,23 @@ def test_output_dir_too_long_for_the_trajectories(tmp_path, n_cases, length, all
     the definition check refuses it: one line naming the longest file and the
     limit (a case id of 7 digits needs one character more)."""
     od = _long_dir(length)
-    definition = small_definition(tmp_path / "d.nml", n_cases=n_cases, output_dir=od)
+    definition = small_definition(tmp_path / "d.nml", n_cases=n_cases, output_dir=od, extra_sweep="keep_worst = 1")
     line = _one_line(_check(definition, tmp_path))
     assert f"&sweep: output_dir = '{od}' is not allowed: it is {length} characters long" in line, line
     digits = f"{n_cases - 1:06d}"
     assert f"<output_dir>/trajectories/case_{digits}.nc, would be {length + 22 + len(digits)} characters" in line
     assert f"holds at most 256 (allowed: an output_dir of at most {allowed} characters for {n_cases} cases)" in line
     assert not (tmp_path / od).exists()
+
+
+def test_output_dir_without_kept_trajectories_is_not_limited_so(tmp_path):
+    """A sweep that keeps no trajectory (no keep_failed, keep_worst, keep_ids)
+    writes none through a single run's output: its output_dir may take the
+    whole 256 characters (the review of the limit above)."""
+    od = _long_dir(256)
+    definition = small_definition(tmp_path / "d.nml", n_cases=4, output_dir=od)
+    res = _check(definition, tmp_path)
+    assert res.returncode == 0, res.stderr
 
 
 def test_output_dir_at_the_limit_keeps_its_trajectories(tmp_path):
