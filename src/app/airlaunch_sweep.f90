@@ -22,7 +22,7 @@ program airlaunch_sweep
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file
-  use airlaunch_path, only: process_id
+  use airlaunch_path, only: process_id, ignore_file_size_signal
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -51,6 +51,7 @@ program airlaunch_sweep
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   call MPI_Init()
+  call ignore_file_size_signal()   ! a kept trajectory past ulimit -f is a file error, not SIGXFSZ
   call MPI_Comm_rank(MPI_COMM_WORLD, rank)
   call MPI_Comm_size(MPI_COMM_WORLD, nranks)
   call parse_arguments()

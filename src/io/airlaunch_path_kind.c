@@ -54,8 +54,12 @@ int airlaunch_lock_output(const char *path) {
     memset(&fl, 0, sizeof fl);
     fl.l_type = F_WRLCK;
     fl.l_whence = SEEK_SET;
+#ifdef F_OFD_SETLK
     int rc = fcntl(fd, F_OFD_SETLK, &fl);
     if (rc != 0 && errno == EINVAL) rc = fcntl(fd, F_SETLK, &fl);
+#else
+    int rc = fcntl(fd, F_SETLK, &fl);
+#endif
     if (rc != 0) {
       int busy = errno == EAGAIN || errno == EACCES;
       close(fd);

@@ -1061,26 +1061,24 @@ contains
 
   !> The maxima into the milestones: the trackers' (every step, refined
   !> between steps; the output records do not take them, so that they are the
-  !> same with and without the trajectory; `res` holds its initial values
-  !> here: 0, huge).  The peak tension's time is the first time the steps'
+  !> same with and without the trajectory).  The peak tension's time is the first time the steps'
   !> tension came within the band (rtol) of it: on a plateau (the steady tow
   !> before release) the place of the largest value is round-off and
   !> integrator noise.
   subroutine take_maxima(r, res)
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(inout) :: res
-    real(dp) :: top
     if (.not. associated(r%trk)) return
     call finish_observers(r)
     if (res%has_line) then
       associate (trk => r%trk(m_tension))
-        top = max(trk%best, res%peak_tension)
-        if (trk%best >= top - trk%band*abs(top)) res%peak_tension_time = trk%first_time(top)
-        res%peak_tension = top
+        ! (max with 0: a run that failed before its first sample)
+        res%peak_tension = max(trk%best, 0.0_dp)
+        if (trk%t_best >= 0.0_dp) res%peak_tension_time = trk%first_time(res%peak_tension)
       end associate
     end if
-    res%max_aircraft_pitch_excursion_deg = max(res%max_aircraft_pitch_excursion_deg, r%trk(m_pitch)%best)
-    res%max_load_factor_excursion = max(res%max_load_factor_excursion, r%trk(m_load)%best)
+    res%max_aircraft_pitch_excursion_deg = max(r%trk(m_pitch)%best, 0.0_dp)
+    res%max_load_factor_excursion = max(r%trk(m_load)%best, 0.0_dp)
     if (res%has_line) then
       ! the direct coupling's steps alone see the line and the aircraft together
       if (r%plan%initial() /= coupling_direct .or. r%switches > 0) then   ! the rigidized coupling ran
