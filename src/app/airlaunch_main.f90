@@ -17,7 +17,7 @@
 !> of both writing OUTPUT.part at once.
 program airlaunch
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
-  use airlaunch_error, only: error_type
+  use airlaunch_error, only: error_type, output_failure_note
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_namelist, only: nml_file
   use airlaunch_run_config, only: run_config, read_run_config, run_echo, require_output_directory
@@ -158,7 +158,11 @@ program airlaunch
       else if (written) then
         write(error_unit, '(a)') "airlaunch: output so far (status=failed): " // trim(run%output)
       else
-        write(error_unit, '(a)') "airlaunch: no output written (the run failed before its first record)"
+        if (index(error%message, output_failure_note) > 0) then
+          write(error_unit, '(a)') "airlaunch: no output written (writing it failed: above)"
+        else
+          write(error_unit, '(a)') "airlaunch: no output written (the run failed before its first record)"
+        end if
       end if
     end if
     call output_lock%release()

@@ -140,7 +140,11 @@ contains
       call write_output(r, run, echo, res, output_error)
       if (allocated(output_error)) then
         res%output_error = output_error%message
-        if (.not. allocated(run_error)) call move_alloc(output_error, run_error)
+        if (allocated(run_error)) then
+          call note_output_failure(run_error, output_error)
+        else
+          call move_alloc(output_error, run_error)
+        end if
       end if
     end if
     call release(r)
