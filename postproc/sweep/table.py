@@ -214,6 +214,10 @@ def write_table(defn: SweepDefinition, path=None) -> pathlib.Path:
     return write_atomic(make_table(defn), path or defn.table_path)
 
 
+#: The definition check takes well under a second; past this it is stuck.
+CHECK_TIMEOUT_S = 300
+
+
 def check_with_sweep(defn: SweepDefinition, sweep_exe) -> None:
     """Raise DefinitionError with airlaunch-sweep's own message if
     `airlaunch-sweep DEFINITION --check` refuses the definition: the base
@@ -223,7 +227,10 @@ def check_with_sweep(defn: SweepDefinition, sweep_exe) -> None:
     readers, so they are the Fortran program's, not repeated here."""
     try:
         res = subprocess.run([str(sweep_exe), str(defn.path), "--check"], capture_output=True, text=True,
-                             errors="replace", check=False)
+                             errors="replace", check=False, timeout=CHECK_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        raise DefinitionError(f"{sweep_exe} {defn.path} --check did not end within {CHECK_TIMEOUT_S} s "
+                              "(a singleton MPI start that hangs?)") from None
     except OSError as exc:
         raise DefinitionError(f"{sweep_exe}: cannot run airlaunch-sweep to check {defn.path} "
                               f"({exc.strerror or exc}; build it with scripts/setup release, or give --exe-dir)"
