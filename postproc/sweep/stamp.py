@@ -32,6 +32,21 @@ def sha256(path) -> str:
     return h.hexdigest()
 
 
+def file_stat(path) -> str:
+    """A file's size and modification time (ns), as the record keeps them."""
+    st = pathlib.Path(path).stat()
+    return f"{st.st_size} {st.st_mtime_ns}"
+
+
+def unchanged(path, stamp, name) -> bool:
+    """The file is the one the record names under `name`: the same size and
+    modification time (no need to read it: a summary of 10^7 cases is
+    gigabytes), else the same SHA-256 (a copy, or a file touched)."""
+    if stamp.get(f"{name}_stat") == file_stat(path):
+        return True
+    return sha256(path) == stamp[f"{name}_sha256"]
+
+
 def write_stamp(figure_dir, envelope_path, summary_path, summary_created="") -> pathlib.Path:
     """Record (atomically) the envelope and summary the figures were just drawn from."""
     stamp = pathlib.Path(figure_dir) / STAMP
@@ -39,8 +54,10 @@ def write_stamp(figure_dir, envelope_path, summary_path, summary_created="") -> 
             "(docs/sweep.md, 'Figures and the summary they show')\n"
             f"envelope = {pathlib.Path(envelope_path).resolve()}\n"
             f"envelope_sha256 = {sha256(envelope_path)}\n"
+            f"envelope_stat = {file_stat(envelope_path)}\n"
             f"summary = {pathlib.Path(summary_path).resolve()}\n"
             f"summary_sha256 = {sha256(summary_path)}\n"
+            f"summary_stat = {file_stat(summary_path)}\n"
             f"summary_created = {summary_created}\n")
     return write_text_atomic(stamp, text)
 
@@ -69,10 +86,10 @@ def stale_figures(figure_dir, envelope_path):
     if not envelope.is_file():
         return (f"{envelope}, which they were drawn from, is gone (airlaunch-sweep removes it when the sweep's "
                 "cases run again)")
-    if sha256(envelope) != stamp["envelope_sha256"]:
+    if not unchanged(envelope, stamp, "envelope"):
         return f"{envelope} was made again since they were drawn"
     summary = pathlib.Path(stamp["summary"])
-    if summary.is_file() and sha256(summary) != stamp["summary_sha256"]:
+    if summary.is_file() and not unchanged(summary, stamp, "summary"):
         return f"{summary} was made again since they were drawn"
     return None
 

@@ -252,3 +252,25 @@ def test_line_clearance_margin_and_untracked_cases():
     assert list(env["passed"].sel(criterion="line_clearance").values) == [1, 0, 1, 0, 1]
     with pytest.raises(DefinitionError, match="min_line_clearance_m = -1 is not allowed"):
         parse_criteria("&criteria\n  min_line_clearance_m = -1.0\n/\n")
+
+
+def test_the_figures_record_knows_a_file_by_its_stat_or_its_bytes(tmp_path):
+    """stamp.unchanged: the same size and modification time is the recorded
+    file without reading it (a summary of 10^7 cases is gigabytes); a file
+    touched since (another mtime) is still the recorded one if its SHA-256
+    is; other bytes of the same size are not."""
+    import os
+
+    from postproc.sweep import stamp
+
+    f = tmp_path / "summary.nc"
+    f.write_bytes(b"0123456789")
+    record = {"summary_sha256": stamp.sha256(f), "summary_stat": stamp.file_stat(f)}
+    assert stamp.unchanged(f, record, "summary")
+    st = f.stat()
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))       # touched, same bytes
+    assert stamp.unchanged(f, record, "summary")
+    f.write_bytes(b"9876543210")                                     # same size, other bytes
+    assert not stamp.unchanged(f, record, "summary")
+    # without the stat (a record of before), the bytes decide
+    assert stamp.unchanged(f, {"summary_sha256": stamp.sha256(f)}, "summary")
