@@ -3,7 +3,7 @@
 module airlaunch_error
   implicit none
   private
-  public :: error_type, fatal_error, has_error, note_output_failure, output_failure_note
+  public :: error_type, fatal_error, has_error, add_output_error, output_failure_note
 
   !> An error: a one-line message for the user.
   type :: error_type
@@ -17,7 +17,7 @@ module airlaunch_error
     logical :: output = .false.
   end type error_type
 
-  !> What note_output_failure adds to a run's error (airlaunch_main looks for it).
+  !> What add_output_error adds to a run's error (airlaunch_main looks for it).
   character(len=*), parameter :: output_failure_note = "; its output so far could not be written either: "
 
 contains
@@ -33,15 +33,21 @@ contains
     if (present(input)) error%input = input
   end subroutine fatal_error
 
-  !> A run that failed and whose output could not be written either: the
-  !> run's error, the one reported, says so too (nothing else is left of the
-  !> output's error).
-  subroutine note_output_failure(run_error, output_error)
-    type(error_type), allocatable, intent(inout) :: run_error  !< the run's failure
-    type(error_type), intent(in) :: output_error              !< the writer's
-    if (.not. allocated(run_error)) return
-    run_error%message = run_error%message // output_failure_note // output_error%message
-  end subroutine note_output_failure
+  !> The error a run reports once its output's writer has finished
+  !> (`output_error`, consumed): the run's own failure, which then says that
+  !> its output could not be written either, or, after a completed run, the
+  !> writer's error.
+  subroutine add_output_error(run_error, output_error)
+    type(error_type), allocatable, intent(inout) :: run_error     !< the run's failure, if any
+    type(error_type), allocatable, intent(inout) :: output_error  !< the writer's, if any
+    if (.not. allocated(output_error)) return
+    if (allocated(run_error)) then
+      run_error%message = run_error%message // output_failure_note // output_error%message
+      deallocate(output_error)
+    else
+      call move_alloc(output_error, run_error)
+    end if
+  end subroutine add_output_error
 
   !> True if `error` holds an error.
   logical pure function has_error(error)

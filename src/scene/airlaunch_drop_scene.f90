@@ -7,7 +7,7 @@
 !> parabola), and is a quick first look at a free-falling cargo.
 module airlaunch_drop_scene
   use airlaunch_kinds, only: dp, g0
-  use airlaunch_error, only: error_type, fatal_error, note_output_failure
+  use airlaunch_error, only: error_type, fatal_error, add_output_error
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state, isa_min_altitude, isa_max_altitude
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
@@ -237,13 +237,7 @@ contains
         if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, werr)
       end if
       call w%finish(werr)
-      if (allocated(werr)) then
-        if (allocated(run_error)) then
-          call note_output_failure(run_error, werr)
-        else
-          call move_alloc(werr, run_error)
-        end if
-      end if
+      call add_output_error(run_error, werr)
     end subroutine write_output
   end subroutine run_drop
 end module airlaunch_drop_scene

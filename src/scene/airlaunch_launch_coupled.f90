@@ -138,14 +138,8 @@ contains
     end if
     if (run%trajectory) then
       call write_output(r, run, echo, res, output_error)
-      if (allocated(output_error)) then
-        res%output_error = output_error%message
-        if (allocated(run_error)) then
-          call note_output_failure(run_error, output_error)
-        else
-          call move_alloc(output_error, run_error)
-        end if
-      end if
+      if (allocated(output_error)) res%output_error = output_error%message
+      call add_output_error(run_error, output_error)
     end if
     call release(r)
     if (allocated(run_error)) call move_alloc(run_error, error)

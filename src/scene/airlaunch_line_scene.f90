@@ -15,7 +15,7 @@
 !> (written so far, with status = "failed", if the run fails).
 module airlaunch_line_scene
   use airlaunch_kinds, only: dp, rad2deg
-  use airlaunch_error, only: error_type, fatal_error, note_output_failure
+  use airlaunch_error, only: error_type, fatal_error, add_output_error
   use airlaunch_strings, only: str
   use airlaunch_namelist
   use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
@@ -917,10 +917,7 @@ contains
       str(scene%rigid(m)%m_rigid) // " kg" // m_rigid_note(scene%rigid(m)) // ", theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
     if (allocated(run_error)) then
-      if (allocated(error)) then
-        call note_output_failure(run_error, error)
-        deallocate(error)
-      end if
+      call add_output_error(run_error, error)
       call move_alloc(run_error, error)
     end if
     call scene%free()
