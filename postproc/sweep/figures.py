@@ -193,9 +193,11 @@ def sensitivity(env, path):
     plt.close(fig)
 
 
-def worst_table(env, path_png, path_md, k=10):
-    """The worst cases as Markdown and as a picture of the table."""
-    text = worst_case_table(env, k)
+def worst_table(env, path_png, path_md, k=10, text=None):
+    """The worst cases as Markdown and as a picture of the table (`text`: the
+    Markdown table if already made)."""
+    if text is None:
+        text = worst_case_table(env, k)
     if path_md is not None:
         pathlib.Path(path_md).write_text(text)
     rows = [line.strip("|").split("|") for line in text.strip().splitlines()]
@@ -233,6 +235,6 @@ def draw_all(env, figure_dir):
     write_atomic(paths["probability"], _png(probability, env))
     text = worst_case_table(env, 10)
     write_atomic(paths["worst_cases_md"], lambda tmp: pathlib.Path(tmp).write_text(text))
-    write_atomic(paths["worst_cases"], lambda tmp: worst_table(env, tmp, None))
+    write_atomic(paths["worst_cases"], lambda tmp: worst_table(env, tmp, None, text=text))
     write_atomic(paths["sensitivity"], _png(sensitivity, env))
     return paths

@@ -18,7 +18,7 @@ program airlaunch_sweep
   use mpi_f08
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
-  use airlaunch_strings, only: str
+  use airlaunch_strings, only: str, fixed
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file
@@ -305,7 +305,7 @@ contains
     eta = -1.0_dp
     if (done > 0) eta = (total - done)/rate
     write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(n_resumed + done) // "/" // &
-      str(s%table%n_cases) // " done, " // str(failed) // " failed, " // fx(rate, 2) // " cases/s, ETA " // &
+      str(s%table%n_cases) // " done, " // str(failed) // " failed, " // fixed(rate, 2) // " cases/s, ETA " // &
       duration(eta)
     flush(output_unit)
   end subroutine report_progress
@@ -317,7 +317,7 @@ contains
       str(count(rows%status == status_ok)) // " ok, " // str(count(rows%status == status_failed)) // &
       " failed, " // str(count(rows%status == status_invalid)) // " invalid input; " // str(n_run) // &
       " run now on " // str(nranks) // " rank" // trim(merge("s", " ", nranks > 1)) // " in " // &
-      fx(elapsed, 2) // " s (" // fx(n_run/max(elapsed, 1.0e-9_dp), 3) // " cases/s), " // str(n_resumed) // &
+      fixed(elapsed, 2) // " s (" // fixed(n_run/max(elapsed, 1.0e-9_dp), 3) // " cases/s), " // str(n_resumed) // &
       " from the journal"
     write(output_unit, '(a)') "summary: " // s%def%summary_path()
     flush(output_unit)
@@ -429,18 +429,6 @@ contains
     if (code == exit_ok) stop, quiet=.true.
     stop code, quiet=.true.
   end subroutine finish
-
-  !> Fixed-point number with d decimals.
-  function fx(x, d) result(r)
-    real(dp), intent(in) :: x
-    integer, intent(in) :: d
-    character(len=:), allocatable :: r
-    character(len=40) :: buf, fmt
-    write(fmt, '("(f0.",i0,")")') d
-    write(buf, fmt) x
-    r = trim(adjustl(buf))
-    if (r(1:1) == ".") r = "0" // r
-  end function fx
 
   !> "1 h 02 min", "3 min 07 s", "12 s"; "?" if unknown.
   function duration(t) result(r)

@@ -3,7 +3,7 @@ module airlaunch_strings
   use airlaunch_kinds, only: dp
   implicit none
   private
-  public :: str, lower
+  public :: str, lower, fixed
 
   !> Format a number as a compact string.
   interface str
@@ -36,6 +36,21 @@ contains
       s = trim(adjustl(buf))
     end if
   end function str_real
+
+  !> Real with d digits after the point, a leading zero kept (0.878, -0.5).
+  function fixed(x, d) result(s)
+    real(dp), intent(in) :: x   !< value
+    integer, intent(in) :: d    !< digits after the point
+    character(len=:), allocatable :: s
+    character(len=40) :: buf, fmt
+    write(fmt, '("(f0.",i0,")")') d
+    write(buf, fmt) x
+    s = trim(adjustl(buf))
+    if (s(1:1) == '.') s = '0' // s
+    if (len(s) > 1) then
+      if (s(1:2) == '-.') s = '-0' // s(2:)
+    end if
+  end function fixed
 
   !> Integer as text.
   pure function str_int(i) result(s)

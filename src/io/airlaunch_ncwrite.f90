@@ -16,7 +16,7 @@ module airlaunch_ncwrite
   use h5ds
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
-  use airlaunch_path, only: free_bytes
+  use airlaunch_path, only: free_bytes, delete_file, parent_directory
   implicit none
   private
   public :: nc_writer
@@ -228,14 +228,6 @@ contains
     call delete_file(self%tmp_path)
   end subroutine nc_abort
 
-  !> Remove the file `path` if it is there.
-  subroutine delete_file(path)
-    character(len=*), intent(in) :: path
-    integer :: unit, ios
-    open(newunit=unit, file=path, status="old", iostat=ios)
-    if (ios == 0) close(unit, status="delete", iostat=ios)
-  end subroutine delete_file
-
   !> A failed write to the file: the error names the file and what failed,
   !> adds that its file system is full when it (nearly) is - HDF5 tells no
   !> reason - and marks the error as the output's (error_type%output).
@@ -256,21 +248,6 @@ contains
     call fatal_error(error, self%tmp_path // ": " // what // note)
     error%output = .true.
   end subroutine write_failure
-
-  !> The directory part of `path` ("." if it has none).
-  pure function parent_directory(path) result(dir)
-    character(len=*), intent(in) :: path
-    character(len=:), allocatable :: dir
-    integer :: k
-    k = index(path, "/", back=.true.)
-    if (k == 0) then
-      dir = "."
-    else if (k == 1) then
-      dir = "/"
-    else
-      dir = path(1:k-1)
-    end if
-  end function parent_directory
 
   !> An integer dimension with its coordinate variable.
   subroutine nc_add_int_dim(self, name, values, units, long_name, error)

@@ -10,6 +10,7 @@ module airlaunch_path
   private
   public :: path_kind, same_file, process_id, kind_missing, kind_regular, kind_directory, kind_other
   public :: free_bytes, file_lock, lock_held_elsewhere, lock_unavailable, ignore_file_size_signal
+  public :: delete_file, parent_directory
 
   !> What a path names (airlaunch_path_kind.c).
   integer, parameter :: kind_missing = 0, kind_regular = 1, kind_directory = 2, kind_other = 3
@@ -100,6 +101,29 @@ contains
     call c_release_lock(c_string(self%path), int(self%fd, c_int))
     self%fd = -1
   end subroutine lock_release
+
+  !> Remove the file `path` if it is there.
+  subroutine delete_file(path)
+    character(len=*), intent(in) :: path
+    integer :: unit, ios
+    open(newunit=unit, file=path, status="old", iostat=ios)
+    if (ios == 0) close(unit, status="delete", iostat=ios)
+  end subroutine delete_file
+
+  !> The directory part of `path` ("." if it has none).
+  pure function parent_directory(path) result(dir)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: dir
+    integer :: k
+    k = index(path, "/", back=.true.)
+    if (k == 0) then
+      dir = "."
+    else if (k == 1) then
+      dir = "/"
+    else
+      dir = path(1:k-1)
+    end if
+  end function parent_directory
 
   !> A NUL-terminated copy of `s` for C.
   pure function c_string(s) result(c)

@@ -16,7 +16,7 @@
 module airlaunch_line_scene
   use airlaunch_kinds, only: dp, rad2deg
   use airlaunch_error, only: error_type, fatal_error, add_output_error
-  use airlaunch_strings, only: str
+  use airlaunch_strings, only: str, fixed
   use airlaunch_namelist
   use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
   use airlaunch_ncwrite, only: nc_writer
@@ -1007,15 +1007,12 @@ contains
     type(rigid_equivalent), intent(in) :: q
     character(len=:), allocatable :: s
     real(dp) :: ratio
-    character(len=32) :: buf
     if (q%m_fallback) then
       s = " (the line mass: the centre does not move, |V_rigid| ~ 0)"
       return
     end if
     ratio = q%m_rigid/q%line_mass
-    write (buf, "(f0.3)") ratio
-    s = " (" // merge("0", " ", buf(1:1) == ".")
-    s = trim(s) // trim(buf) // " x the line mass"
+    s = " (" // fixed(ratio, 3) // " x the line mass"
     if (ratio > 10.0_dp) s = s // "; Eq. (31) is ill-conditioned here: the centre moves slowly against the nodes"
     s = s // ")"
   end function m_rigid_note

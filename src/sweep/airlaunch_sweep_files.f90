@@ -7,6 +7,7 @@ module airlaunch_sweep_files
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_char, c_null_char
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
+  use airlaunch_path, only: delete_file   ! (public here too: the sweep's file helpers in one place)
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
@@ -197,15 +198,6 @@ contains
     character(len=*), intent(in) :: path
     inquire(file=path // "/.", exist=dir_exists)
   end function dir_exists
-
-  !> Delete a file if it exists.
-  subroutine delete_file(path)
-    character(len=*), intent(in) :: path   !< file
-    integer :: unit, ios
-    if (.not. file_exists(path)) return
-    open(newunit=unit, file=path, status="old", iostat=ios)
-    if (ios == 0) close(unit, status="delete")
-  end subroutine delete_file
 
   !> Remove every case_<digits>.nc and case_<digits>.nc.part file of `dir`
   !> (a missing directory has none).
