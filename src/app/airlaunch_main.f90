@@ -24,6 +24,7 @@ program airlaunch
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch, setup_launch
+  use airlaunch_launch_history, only: ground_body_name
   use airlaunch_launch_system, only: launch_system
   use airlaunch_kinds, only: dp
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
@@ -225,6 +226,7 @@ contains
       tension_note(r) // &
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
       "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
+      ground_note(r) // &
       "integration: " // str(int(r%stats%steps)) // " steps, " // str(int(r%stats%rhs_evals)) // &
       " right-hand sides, " // str(int(r%stats%jac_evals)) // " Jacobians, " // &
       str(int(r%stats%nonlin_iters)) // " Newton iterations, " // str(int(r%stats%nonlin_fails)) // &
@@ -252,6 +254,16 @@ contains
     if (r%min_line_clearance < 0.0_dp) d = "not tracked (the rigidized coupling ran)"
     s = "minimum line-empennage clearance: " // d // new_line("a")
   end function line_clearance_note
+
+  !> Whether a CG reached &flight ground_altitude (the run ended there).
+  function ground_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s, reached
+    reached = "ground: reached by the " // trim(ground_body_name(r%ground_body)) // "'s CG at " // &
+      at(r%ground_time) // ", speed " // fx(r%ground_speed, 2) // " m/s (the run ends there)" // new_line("a")
+    s = "ground: not reached" // new_line("a")
+    if (r%ground_time >= 0.0d0) s = reached
+  end function ground_note
 
   !> Where and when the line parted (&line breaking_strength or break_time).
   function break_note(r) result(s)

@@ -10,6 +10,10 @@
 !>   g2 = CG past the ramp edge     Case 1 -> 2 when it crosses zero upwards (l0 travelled)
 !>   g3 = nose tip past the edge    Case 2 -> 3 when it crosses zero upwards (l10 travelled)
 !>   g4 = edge normal force N       Case 2 -> 3 early separation when N crosses zero downwards
+!>   g5 = lowest CG - ground        in every phase, when ground_altitude is set: the
+!>                                  aircraft's or the rocket's CG reaching the ground
+!>                                  (ground_time, ground_body, ground_speed; the phase
+!>                                  stays, `landed` tells the caller the scene is over)
 !> `advance` integrates to an output time, handles the events (phase change, event
 !> time recorded in event_time(1:3), CVODE re-initialised); entering Case 2 with
 !> N <= 0 separates at once (early_separation).
@@ -46,7 +50,7 @@ module airlaunch_separation
   public :: separation_system, separation_nroots
 
   !> Number of event functions.
-  integer, parameter :: separation_nroots = 4
+  integer, parameter :: separation_nroots = 5
   !> Largest number of load cases per solve: the real loads + 6 unit wrenches.
   integer, parameter :: ncol_max = 7
 
@@ -70,6 +74,11 @@ module airlaunch_separation
     logical :: edge_bilateral = .false.
     real(dp) :: edge_pull_time = -huge(1.0_dp) !< first zero crossing of N in Case 2 (bilateral)
     real(dp) :: quat_drift = 0.0_dp           !< largest |1 - |q|| of the state after the last `advance`
+    !> Geometric altitude of the ground [m]; -huge: none (no event g5)
+    real(dp) :: ground_altitude = -huge(1.0_dp)
+    real(dp) :: ground_time = -huge(1.0_dp)   !< when a CG reached the ground (-huge: not yet) [s]
+    integer :: ground_body = -1               !< which: 0 aircraft, 1 rocket (-1: none)
+    real(dp) :: ground_speed = 0.0_dp         !< that body's CG speed there, earth frame [m/s]
     ! --- bodies (paper numbering 0..n) and their loads, updated by load_state/evaluate
     type(rigid_body), allocatable :: bodies(:)   !< (0:n) 0 aircraft, 1 rocket, 2.. chain
     real(dp), allocatable :: force(:, :)         !< (3, 0:n) applied CG forces, earth [N]
@@ -107,6 +116,7 @@ module airlaunch_separation
     procedure :: nroots => sep_nroots
     procedure :: roots => sep_roots
     procedure :: handle_event => sep_handle_event
+    procedure :: landed => sep_landed
     procedure :: normalize_quaternions => sep_normalize_quaternions
     procedure :: has_projection => sep_has_projection
     procedure :: project => sep_project
@@ -456,6 +466,7 @@ contains
     type(error_type), allocatable :: error
     g = 1.0_dp
     status = rhs_ok
+    if (self%ground_altitude > -huge(1.0_dp)) g(5) = min(y(2), y(body_state_size + 2)) - self%ground_altitude
     select case (self%phase)
     case (phase_preparation)
       g(1) = t - self%t0
@@ -484,6 +495,7 @@ contains
     logical, intent(out) :: changed                       !< the phase changed
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     changed = .false.
+    if (which(5) < 0 .and. self%ground_time < -1.0e300_dp) call land()
     select case (self%phase)
     case (phase_preparation)
       if (which(1) /= 0) then
@@ -526,11 +538,32 @@ contains
         changed = .true.
       end if
     end select
+  contains
+    !> The lower of the aircraft's CG (state from 1) and the rocket's (from
+    !> body_state_size + 1) reached the ground.
+    subroutine land()
+      integer :: i
+      i = 1
+      self%ground_body = 0
+      if (y(body_state_size + 2) < y(2)) then
+        i = body_state_size + 1
+        self%ground_body = 1
+      end if
+      self%ground_time = t
+      self%ground_speed = norm2(y(i + 3:i + 5))
+    end subroutine land
   end subroutine sep_handle_event
+
+  !> A CG has reached the ground (event g5): the scene is over.
+  pure logical function sep_landed(self)
+    class(separation_system), intent(in) :: self   !< the scene
+    sep_landed = self%ground_time > -1.0e300_dp
+  end function sep_landed
 
   !> Integrate to tout, stopping at every event to switch the phase and restart
   !> CVODE.  On return the solver holds the state at tout (quat_drift its largest
-  !> quaternion norm error).
+  !> quaternion norm error), or at the ground event if a CG reached the ground
+  !> (`landed`).
   subroutine sep_advance(self, solver, tout, error)
     class(separation_system), intent(inout) :: self       !< the scene (the solver's system)
     type(cvode_solver), intent(inout) :: solver           !< CVODE bound to this scene
@@ -550,6 +583,7 @@ contains
         if (allocated(error)) return
       end if
       self%quat_drift = drift(solver%y)
+      if (self%landed()) return
       if (changed) then
         call solver%reinit(solver%t, solver%y, error)
         if (allocated(error)) return

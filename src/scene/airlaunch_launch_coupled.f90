@@ -233,6 +233,7 @@ contains
     if (allocated(error)) return
     sep%edge_bilateral = dsys%sep%edge_bilateral
     sep%quat_gain = dsys%sep%quat_gain
+    sep%ground_altitude = dsys%sep%ground_altitude
     ! gravity on the aircraft and the rocket; B2 and B3 get their weights from
     ! rigidized_loads (the line's true weight; no weight on the apparent mass)
     call sep%add_source(gravity_source(first=0, last=1))
@@ -346,6 +347,10 @@ contains
       if (r%plan%mode == "auto") t_stop = min(tout, r%next_check)
       call direct_advance(r, t_stop, res, switch, err)
       if (allocated(err)) return
+      if (r%dsys%sep%landed()) then
+        call record_landing(r, run, cfg, res, r%dsolver%t, err)
+        return
+      end if
       call direct_output(r, run, cfg, res, err)
       if (r%done) return
       if (switch) return
@@ -378,6 +383,10 @@ contains
       leave = .false.
       call direct_advance(r, tout, res, leave, err)
       if (allocated(err)) return
+      if (r%dsys%sep%landed()) then
+        call record_landing(r, run, cfg, res, r%dsolver%t, err)
+        return
+      end if
       call direct_output(r, run, cfg, res, err)
       if (r%done) return
     end do
@@ -459,6 +468,7 @@ contains
         r%dsys%clr, changed, lower, err)
       if (allocated(err)) return
       if (lower) r%last_record_of_extremum = r%dsolver%t
+      if (r%dsys%sep%landed()) return   ! a CG reached the ground: the run ends there
       if (changed) then
         if (leaves_at_phase(r, coupling_direct, r%dsys%sep%phase)) then
           switch = .true.
@@ -658,6 +668,10 @@ contains
         end if
         call rigidized_event(r, run, cfg, res, which, leave, err)
         if (allocated(err)) return
+        if (r%cpl%chain%sep%landed()) then
+          call record_landing(r, run, cfg, res, r%cpl%t, err)
+          return
+        end if
       end if
       call skip_recorded(r, run)
       if (stop_now(r, run, res, r%cpl%chain%sep%phase, r%cpl%t)) exit
@@ -703,6 +717,22 @@ contains
     if (abs(r%t_out(r%iout) - r%cpl%t) <= 1.0e-12_dp*max(1.0_dp, run%t_end)) &
       call rigidized_record(r, run, cfg, res, r%cpl%t, r%cpl%chain_solver%y, err)
   end subroutine rigidized_event
+
+  !> A CG reached the ground at time t (the active engine is there): the run
+  !> ends with a record at t unless that output time was just recorded.
+  subroutine record_landing(r, run, cfg, res, t, err)
+    type(coupled_run), intent(inout) :: r
+    type(run_config), intent(in) :: run
+    type(scenario_config), intent(in) :: cfg
+    type(launch_result), intent(inout) :: res
+    real(dp), intent(in) :: t
+    type(error_type), allocatable, intent(inout) :: err
+    r%done = .true.
+    if (r%hist%nrec > 0) then
+      if (r%hist%time(r%hist%nrec) >= t) return
+    end if
+    call record_now(r, run, cfg, res, err)
+  end subroutine record_landing
 
   !> The next output time is the first one after the rigidized coupling's time.
   subroutine skip_recorded(r, run)
@@ -1207,6 +1237,9 @@ contains
       res%separation_time = event_or_minus(sep%event_time(3))
       res%early_separation = sep%early_separation
       res%edge_pull_time = event_or_minus(sep%edge_pull_time)
+      res%ground_time = event_or_minus(sep%ground_time)
+      res%ground_body = sep%ground_body
+      res%ground_speed = sep%ground_speed
     end subroutine events_of
   end subroutine finish_result
 

@@ -18,7 +18,7 @@ module airlaunch_launch_history
   private
   public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones, history_bytes
   public :: handle_launch_event, rocket_pitch_rate
-  public :: write_milestones, event_or_minus, clearance_geometry_of
+  public :: write_milestones, event_or_minus, clearance_geometry_of, ground_body_name
 
   !> Milestones of one run (also the summary row of a sweep case).
   type :: launch_result
@@ -44,6 +44,10 @@ module airlaunch_launch_history
     integer :: line_breaks = 0               !< segments parted in all
     integer, allocatable :: parted_segments(:)  !< which (ascending; unallocated: none)
     real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
+    !> a CG reached &flight ground_altitude (the run ended there) [s] (-1: none)
+    real(dp) :: ground_time = -1.0_dp
+    integer :: ground_body = -1               !< which: 0 aircraft, 1 rocket (-1: none)
+    real(dp) :: ground_speed = 0.0_dp         !< its CG speed there, earth frame [m/s]
     real(dp) :: end_time = 0.0_dp
     logical :: has_line = .true.   !< false: no line (no peak tension; its attributes are left out)
     type(cvode_stats) :: stats
@@ -380,7 +384,24 @@ contains
     call w%add_real_att("/", "max_load_factor_excursion", res%max_load_factor_excursion, error)
     call w%add_real_att("/", "max_constraint_residual_m", res%max_constraint_residual, error)
     call w%add_real_att("/", "max_quaternion_norm_error", res%max_quaternion_norm_error, error)
+    call w%add_real_att("/", "ground_time_s", res%ground_time, error)
+    call w%add_text_att("/", "ground_body", trim(ground_body_name(res%ground_body)), error)
+    call w%add_real_att("/", "ground_speed_m_s", merge(res%ground_speed, nan, res%ground_time >= 0.0_dp), error)
   end subroutine write_milestones
+
+  !> "aircraft", "rocket" or "none" (ground_body -1).
+  pure function ground_body_name(body) result(name)
+    integer, intent(in) :: body
+    character(len=8) :: name
+    select case (body)
+    case (0)
+      name = "aircraft"
+    case (1)
+      name = "rocket"
+    case default
+      name = "none"
+    end select
+  end function ground_body_name
 
   pure real(dp) function event_or_minus(t) result(r)
     real(dp), intent(in) :: t

@@ -182,6 +182,7 @@ contains
         aircraft_prescribed=cfg%aircraft%dynamics == "prescribed")
       if (allocated(error)) return
       sys%sep%edge_bilateral = cfg%bay%edge_contact == "bilateral"
+      sys%sep%ground_altitude = cfg%flight%ground_altitude
       call sys%sep%joint%place_on_rail(sys%sep%bodies(0), cfg%bay%l0, 0.0_dp, sys%sep%bodies(1))
       call sys%sep%add_source(gravity_source())
       loads%rocket = cfg%rocket%aero

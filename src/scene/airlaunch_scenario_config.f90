@@ -8,7 +8,7 @@ module airlaunch_scenario_config
   use airlaunch_strings, only: str
   use airlaunch_namelist
   use airlaunch_run_config, only: echo_namelist_unit
-  use airlaunch_atmosphere, only: isa_max_altitude
+  use airlaunch_atmosphere, only: isa_max_altitude, isa_min_altitude
   use airlaunch_aircraft_aero, only: aircraft_aero
   use airlaunch_rocket_aero, only: rocket_aero
   use airlaunch_parachute, only: parachute
@@ -49,12 +49,17 @@ module airlaunch_scenario_config
   character(len=16), parameter :: coupling_modes(4) = [character(len=16) :: "direct", "rigidized", &
     "per_phase", "auto"]
 
+  !> The ground's margins to the atmosphere model's floor and to the release altitude [m].
+  real(dp), parameter :: ground_margin_below = 1000.0_dp, ground_margin_above = 100.0_dp
+
   !> Flight condition and trim.
   type :: flight_config
     real(dp) :: altitude = 10000.0_dp        !< [m] geometric
     real(dp) :: mach = 0.65_dp
     character(len=16) :: trim_mode = "calibrate"  !< "calibrate" (CL0, Cm0 from trim_alpha) or "fly"
     real(dp) :: trim_alpha = 1.2174_dp*deg2rad    !< [rad]
+    !> [m] geometric: the run ends when the aircraft's or the rocket's CG reaches it
+    real(dp) :: ground_altitude = 0.0_dp
   end type flight_config
 
   !> Carrier aircraft.
@@ -218,15 +223,16 @@ contains
     type(flight_config), intent(inout) :: c
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
-    real(dp) :: altitude, mach, trim_alpha_deg
+    real(dp) :: altitude, mach, trim_alpha_deg, ground_altitude
     character(len=16) :: trim_mode
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
-    namelist /flight/ altitude, mach, trim_mode, trim_alpha_deg
-    type(nml_var), parameter :: vars(4) = [nml_var("altitude", "real"), nml_var("mach", "real"), &
-      nml_var("trim_mode", "string", 16), nml_var("trim_alpha_deg", "real")]
+    namelist /flight/ altitude, mach, trim_mode, trim_alpha_deg, ground_altitude
+    type(nml_var), parameter :: vars(5) = [nml_var("altitude", "real"), nml_var("mach", "real"), &
+      nml_var("trim_mode", "string", 16), nml_var("trim_alpha_deg", "real"), nml_var("ground_altitude", "real")]
     altitude = c%altitude; mach = c%mach; trim_mode = c%trim_mode; trim_alpha_deg = c%trim_alpha*rad2deg
+    ground_altitude = c%ground_altitude
     call open_group(f, "flight", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -241,8 +247,15 @@ contains
     call require_range(f, "flight", "mach", mach, 0.05_dp, 0.95_dp, "", error)
     call require_choice(f, "flight", "trim_mode", trim_mode, [character(len=16) :: "calibrate", "fly"], error)
     call require_range(f, "flight", "trim_alpha_deg", trim_alpha_deg, trim_alpha_min_deg, trim_alpha_max_deg, "deg", error)
+    ! the ground: 1 km above the atmosphere model's floor (a last step's trial
+    ! states may go below the ground before its event is located), and far
+    ! enough below the release that the rocket's CG (a few metres below the
+    ! aircraft's) starts above it
+    if (.not. allocated(error)) call require_range(f, "flight", "ground_altitude", ground_altitude, &
+      isa_min_altitude + ground_margin_below, altitude - ground_margin_above, &
+      "m, and at least " // str(ground_margin_above) // " m below &flight altitude", error)
     if (allocated(error)) return
-    c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad)
+    c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad, ground_altitude)
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=flight)
     call echo_namelist_unit(u, echo)

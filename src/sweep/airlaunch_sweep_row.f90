@@ -25,7 +25,7 @@ module airlaunch_sweep_row
   integer, parameter :: status_invalid = 2  !< the case's input was rejected by the scenario reader
   character(len=16), parameter :: status_names(0:2) = [character(len=16) :: "ok", "failed", "invalid_input"]
 
-  integer, parameter :: n_metrics = 31
+  integer, parameter :: n_metrics = 33
   !> Summary variables of the airlaunch scene (the single run's milestone attribute names).
   character(len=40), parameter :: metric_names(n_metrics) = [character(len=40) :: &
     "trim_alpha_deg", "trim_elevator_deg", "trim_thrust_N", &
@@ -35,12 +35,12 @@ module airlaunch_sweep_row
     "min_clearance_m", "min_line_clearance_m", "peak_line_tension_N", "peak_line_tension_time_s", &
     "line_break_time_s", "line_breaks", "line_break_segment", "max_aircraft_pitch_excursion_deg", &
     "max_load_factor_excursion", &
-    "max_constraint_residual_m", &
+    "max_constraint_residual_m", "ground_time_s", "ground_speed_m_s", &
     "end_time_s", "steps", "rhs_evals", "jac_evals", "nonlin_iters", "nonlin_fails", "err_test_fails", &
     "wall_time_s"]
   character(len=12), parameter :: metric_units(n_metrics) = [character(len=12) :: &
     "degree", "degree", "N", "s", "s", "s", "1", "s", "degree", "degree s-1", "s", "degree", "degree", &
-    "m", "m", "N", "s", "s", "1", "1", "degree", "1", "m", "s", "1", "1", "1", "1", "1", "1", "s"]
+    "m", "m", "N", "s", "s", "1", "1", "degree", "1", "m", "s", "m s-1", "s", "1", "1", "1", "1", "1", "1", "s"]
   character(len=120), parameter :: metric_long_names(n_metrics) = [character(len=120) :: &
     "trim angle of attack (Case 0)", "trim elevator deflection", "trim thrust", &
     "release: Case 0 -> 1 (NaN: not reached)", "rocket CG at the ramp edge: Case 1 -> 2 (NaN: not reached)", &
@@ -56,12 +56,15 @@ module airlaunch_sweep_row
     "segments of the line parted (0: none, or no line)", &
     "the segment that parted first (1: at the rocket's tie-down, n_seg: at the parachute; 0: none, or no line)", &
     "largest aircraft pitch excursion from trim", "largest aircraft load factor excursion from 1", &
-    "largest cut-joint position residual", "simulated time reached", &
+    "largest cut-joint position residual", &
+    "the aircraft's or the rocket's CG reached &flight ground_altitude; the run ended there (NaN: not reached)", &
+    "that CG's speed there, earth frame (NaN: not reached)", "simulated time reached", &
     "CVODE steps", "right-hand-side evaluations", "Jacobian evaluations", "Newton iterations", &
     "Newton convergence failures", "error-test failures", "wall time of the case on its rank"]
   logical, parameter :: metric_is_integer(n_metrics) = [.false., .false., .false., .false., .false., .false., &
     .true., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., &
-    .true., .true., .false., .false., .false., .false., .true., .true., .true., .true., .true., .true., .false.]
+    .true., .true., .false., .false., .false., .false., .false., .false., .true., .true., .true., .true., .true., &
+    .true., .false.]
 
   !> Summary variables of the line scene (scene = 'line': docs/line.md §4;
   !> the names the airlaunch scene shares mean the same).
@@ -178,7 +181,7 @@ contains
       merge(res%peak_tension, nan, res%has_line), merge(defined(res%peak_tension_time), nan, res%has_line), &
       defined(res%line_break_time), real(res%line_breaks, dp), real(res%line_break_segment, dp), &
       res%max_aircraft_pitch_excursion_deg, res%max_load_factor_excursion, res%max_constraint_residual, &
-      res%end_time, real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
+      defined(res%ground_time), merge(res%ground_speed, nan, res%ground_time >= 0.0_dp), res%end_time, real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       real(res%stats%nonlin_iters, dp), real(res%stats%nonlin_fails, dp), real(res%stats%err_test_fails, dp), &
       wall]
   end function row_from_result

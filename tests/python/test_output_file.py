@@ -137,7 +137,9 @@ def test_a_long_scenario_path_is_read_whole(airlaunch_exe, tmp_path):
     d.mkdir(parents=True)
     nml = d / "s.nml"
     shutil.copy(GRAVITY_DROP, nml)
-    res = run_airlaunch(airlaunch_exe, nml, "--check")
+    # (--output: the file's own 'output/' is relative to the working directory,
+    # which a fresh clone does not have before scripts/run made it)
+    res = run_airlaunch(airlaunch_exe, nml, "--check", "--output", tmp_path / "o.nc")
     assert len(str(nml)) > 1024
     assert res.returncode == 0, res.stderr
     too_long = "x" * 4200 + ".nml"
@@ -169,19 +171,18 @@ def test_a_file_size_limit_is_a_failed_write_not_a_signal(airlaunch_exe, tmp_pat
 
 
 def test_a_failed_run_whose_output_cannot_be_written_says_both(airlaunch_exe, small_disk, tmp_path):
-    """The paper scenario at 300 m over 40 s falls out of the atmosphere model
-    (a numerical failure, exit 3) on a full disk: the one error line names the
+    """The paper scenario with a step budget it spends in free flight (&run
+    max_steps = 500: a numerical failure, exit 3) on a full disk: the one error line names the
     failure and that its output so far could not be written either (before,
     the write's error was dropped and the program said the run had failed
     "before its first record"); nothing is left."""
-    nml = nml_variant(tmp_path, "low", edits=[(r"^\s*t_end\s*=.*$", "  t_end = 40.0"),
-                                             (r"^\s*altitude\s*=.*$", "  altitude = 300.0")])
+    nml = nml_variant(tmp_path, "budget", edits=[(r"^(\s*t_end\s*=.*)$", r"\1\n  max_steps = 500")])
     (small_disk / "filler").write_bytes(b"\0" * 95_000)
     out = small_disk / "o.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert res.returncode == 3, (res.returncode, res.stderr)
     err = res.stderr.strip().splitlines()
-    assert "altitude" in err[0] and "its output so far could not be written either" in err[0], err[0]
+    assert "step budget" in err[0] and "its output so far could not be written either" in err[0], err[0]
     assert "no space left on the device" in err[0]
     assert err[-1] == "airlaunch: no output written (writing it failed: above)", err[-1]
     assert sorted(p.name for p in small_disk.iterdir()) == ["filler"]

@@ -115,7 +115,7 @@ def test_killed_sweep_resumes_to_the_same_summary(small, reference, tmp_path):
 
 
 FAILING_INPUTS = """
-&input name = 'flight%altitude', distribution = 'list', values = 300.0, 3000.0, units = 'm' /
+&input name = 'run%max_steps', distribution = 'list', values = 300, 500000, units = '1' /
 &input name = 'parachute%drag_area', distribution = 'list', values = 0.0, 10.0, units = 'm2' /
 """
 
@@ -132,8 +132,8 @@ def _single_run(tmp_path, cwd, definition, case):
 
 
 def test_failed_and_invalid_cases_are_recorded_and_the_sweep_goes_on(tmp_path, exes):
-    """Grid of altitude {300, 3000} m x drag area {0, 10} m^2 over 40 s: at 300 m
-    the rocket falls below the atmosphere model (a numerical failure); a zero
+    """Grid of step budget {300, 500 000} x drag area {0, 10} m^2 over 40 s: 300
+    steps are spent before the end (a numerical failure); a zero
     drag area is rejected by the scenario reader.  Every case gets its row and
     the one good case completes; each row is what `airlaunch` gives alone.
     keep_failed keeps the failed case only (it also took the invalid ones, which
@@ -148,17 +148,17 @@ def test_failed_and_invalid_cases_are_recorded_and_the_sweep_goes_on(tmp_path, e
     assert "trajectories: 1 written" in res.stdout, res.stdout
     assert sorted(p.name for p in (tmp_path / "out" / "trajectories").iterdir()) == ["case_000001.nc"]
     with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
-        alt = s["flight%altitude"].values
+        budget = s["run%max_steps"].values
         area = s["parachute%drag_area"].values
         status = s["status"].values
         failure = list(s["failure"].values)
         sep = s["separation_time_s"].values
     # grid order: the first input varies slowest
-    assert list(alt) == [300.0, 300.0, 3000.0, 3000.0] and list(area) == [0.0, 10.0, 0.0, 10.0]
+    assert list(budget) == [300, 300, 500000, 500000] and list(area) == [0.0, 10.0, 0.0, 10.0]
     assert list(status) == [2, 1, 2, 0]
     for k in (0, 2):
         assert "drag_area" in failure[k] and failure[k].startswith(f"case {k}:"), failure[k]
-    assert "altitude" in failure[1], failure[1]
+    assert "step budget" in failure[1], failure[1]
     assert failure[3] == ""
 
     # the failed case: the same message and milestones as a single run
