@@ -386,7 +386,8 @@ contains
     call w%add_real_att("/", "max_quaternion_norm_error", res%max_quaternion_norm_error, error)
     call w%add_real_att("/", "ground_time_s", res%ground_time, error)
     call w%add_text_att("/", "ground_body", trim(ground_body_name(res%ground_body)), error)
-    call w%add_real_att("/", "ground_speed_m_s", merge(res%ground_speed, nan, res%ground_time >= 0.0_dp), error)
+    ! (a speed is never negative: -1 marks "not reached", as min_clearance_m's)
+    call w%add_real_att("/", "ground_speed_m_s", merge(res%ground_speed, -1.0_dp, res%ground_time >= 0.0_dp), error)
   end subroutine write_milestones
 
   !> "aircraft", "rocket" or "none" (ground_body -1).

@@ -113,10 +113,10 @@ def test_every_coupling_reaches_the_ground_alike(airlaunch_exe, tmp_path, paper_
 
 def test_ground_not_reached_is_said(airlaunch_exe, tmp_path):
     """A run that ends at t_end above the ground: ground_time_s -1, no body,
-    speed NaN, and the summary says so."""
+    speed -1, and the summary says so."""
     ds, stdout = _run(airlaunch_exe, ROOT / "input" / "airlaunch_paper.nml", tmp_path / "p.nc")
     assert ds.attrs["ground_time_s"] == -1.0 and ds.attrs["ground_body"] == "none"
-    assert math.isnan(ds.attrs["ground_speed_m_s"])
+    assert ds.attrs["ground_speed_m_s"] == -1.0
     assert "ground: not reached" in stdout
     ds.close()
 
