@@ -92,10 +92,14 @@ module airlaunch_line_cvode
     !> parts); the event function is the smallest margin (weakest_segment)
     real(dp), allocatable :: strength(:)
     real(dp), allocatable :: root_tension(:)   !< work: the event function's tensions (N)
+    !> the ground's altitude [m] (-huge: none); its event function is the lowest
+    !> state node's altitude above it, after the strength's margin if any
+    real(dp) :: ground = -huge(1.0_dp)
   contains
     procedure :: rhs => system_rhs
     procedure :: nroots => system_nroots
     procedure :: roots => system_roots
+    procedure :: has_ground => system_has_ground
     procedure :: setup => system_setup
     procedure :: n_state => system_n_state
     procedure :: state_name => system_state_name
@@ -138,6 +142,7 @@ module airlaunch_line_cvode
     procedure :: set_stop_time => cvode_set_stop_time
     procedure :: set_fill_time => cvode_set_fill_time
     procedure :: set_strength => cvode_set_strength
+    procedure :: set_ground => cvode_set_ground
     procedure :: part => cvode_part
     procedure :: free => cvode_free
   end type line_cvode
@@ -292,22 +297,33 @@ contains
     status = rhs_ok
   end subroutine system_jacobian
 
-  !> One event function if the line can part (system%strength), else none.
+  !> One event function if the line can part (system%strength), one if it has
+  !> a ground, in that order.
   integer function system_nroots(self)
     class(line_system), intent(in) :: self   !< system
-    system_nroots = merge(1, 0, allocated(self%strength))
+    system_nroots = merge(1, 0, allocated(self%strength)) + merge(1, 0, self%has_ground())
   end function system_nroots
 
-  !> The event: the line's smallest margin to breaking (weakest_segment), in
-  !> its own tension array (the right-hand side's is the Jacobian's).
+  !> A ground is watched.
+  pure logical function system_has_ground(self)
+    class(line_system), intent(in) :: self   !< system
+    system_has_ground = self%ground > -huge(1.0_dp)
+  end function system_has_ground
+
+  !> The events: the line's smallest margin to breaking (weakest_segment), in
+  !> its own tension array (the right-hand side's is the Jacobian's), and the
+  !> lowest state node's altitude above the ground.
   subroutine system_roots(self, t, y, g, status)
     class(line_system), intent(inout) :: self   !< system
     real(dp), intent(in) :: t                   !< time [s]
     real(dp), intent(in) :: y(:)                !< state
-    real(dp), intent(out) :: g(:)               !< g(1): the smallest margin [N]
+    real(dp), intent(out) :: g(:)               !< the smallest margin [N]; the lowest node's height [m]
     integer, intent(out) :: status              !< rhs_ok or rhs_fatal
     integer :: k, st
     call self%unpack(t, y)
+    status = rhs_ok
+    if (self%has_ground()) g(size(g)) = minval(self%x(2, self%first:self%last)) - self%ground
+    if (.not. allocated(self%strength)) return
     call self%model%tensions(self%x, self%v, self%root_tension, st)
     if (st /= 0) then
       self%failure = "a line tension is not finite (NaN or overflow): the line state diverged"
@@ -512,6 +528,8 @@ contains
     class(line_cvode), intent(inout) :: self               !< scheme
     real(dp), intent(in) :: t_out                          !< output time [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    logical :: event
+    integer :: which(2)
     if (self%sys%n_state() == 0) then
       ! (no CVODE to stop: the stop time set last, if it lies ahead, ends the step)
       if (self%stateless_stop > self%t .and. self%stateless_stop < t_out) then
@@ -522,10 +540,13 @@ contains
       return
     end if
     if (associated(self%peak)) then
-      call self%solver%advance(t_out, error, event=self%strength_reached, observer=self%observer)
+      call self%solver%advance(t_out, error, event, which, observer=self%observer)
     else
-      call self%solver%advance(t_out, error, event=self%strength_reached)
+      call self%solver%advance(t_out, error, event, which)
     end if
+    ! (the strength's event comes first when both are watched: system_nroots)
+    self%strength_reached = event .and. allocated(self%sys%strength) .and. which(1) /= 0
+    self%ground_reached = event .and. self%sys%has_ground() .and. which(self%sys%nroots()) < 0
     self%t = self%solver%t
     if (allocated(error)) error%message = "line (cvode): " // error%message
   end subroutine cvode_advance
@@ -647,6 +668,18 @@ contains
     if (self%sys%n_state() == 0) return
     call self%solver%set_roots(self%sys%nroots(), error)
   end subroutine cvode_set_strength
+
+  !> The run ends where the lowest state node reaches the altitude `ground`:
+  !> CVODE watches its height above it (system_roots) and advance stops there
+  !> (ground_reached).  A line with no state has nothing to watch.
+  subroutine cvode_set_ground(self, ground, error)
+    class(line_cvode), intent(inout) :: self               !< scheme
+    real(dp), intent(in) :: ground                         !< [m]
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    self%sys%ground = ground
+    if (self%sys%n_state() == 0) return
+    call self%solver%set_roots(self%sys%nroots(), error)
+  end subroutine cvode_set_ground
 
   !> Segment k parts now: CVODE restarts here, the forces having jumped
   !> (nothing if it has parted already).

@@ -65,9 +65,13 @@ module airlaunch_line_scheme
     !> the last advance stopped where a segment's tension reached its strength
     !> (set_strength): the owner parts it (part) and goes on
     logical :: strength_reached = .false.
+    !> the last advance stopped where the lowest integrated node reached the
+    !> ground (set_ground): the owner ends the run there
+    logical :: ground_reached = .false.
   contains
     procedure :: peak_tension => scheme_peak_tension
     procedure :: set_strength => scheme_set_strength
+    procedure :: set_ground => scheme_set_ground
     procedure :: part => scheme_part
     procedure :: start_peak => scheme_start_peak
     procedure :: release_peak => scheme_release_peak
@@ -147,6 +151,19 @@ contains
       "this scheme has none (" // str(size(strength)) // " segment strengths given)")
     if (.false.) self%t = self%t
   end subroutine scheme_set_strength
+
+  !> The run ends where the lowest node that is a state (not a kinematic end)
+  !> reaches the geometric altitude `ground` [m]: the integrator watches it as
+  !> an event and stops there (ground_reached).  A scheme without event
+  !> location cannot (the default: an error).
+  subroutine scheme_set_ground(self, ground, error)
+    class(line_scheme), intent(inout) :: self              !< scheme
+    real(dp), intent(in) :: ground                         !< [m]
+    type(error_type), allocatable, intent(inout) :: error  !< set: not supported
+    call fatal_error(error, "line: a ground (at " // str(ground) // " m) needs a scheme that locates " // &
+      "events (cvode); this scheme has none")
+    if (.false.) self%t = self%t
+  end subroutine scheme_set_ground
 
   !> Segment k parts now (line_model%part): it carries nothing from here on,
   !> and the integrator restarts here, the forces having jumped.  The default:

@@ -50,6 +50,10 @@ module airlaunch_line_scene
     integer :: weak_link_segment = 1                !< (the reader resolves it: n_seg by default)
     real(dp) :: break_time = -1.0_dp                !< [s]
     integer :: break_segment = 1
+    !> the run ends where the lowest integrated node reaches the geometric
+    !> altitude ground_altitude [m] (ground false: no ground)
+    logical :: ground = .false.
+    real(dp) :: ground_altitude = 0.0_dp
   end type line_scene_config
 
   !> Where the line scene's first and last segments are (messages).
@@ -78,6 +82,8 @@ module airlaunch_line_scene
     integer :: line_breaks = 0                 !< segments parted in all
     real(dp) :: deploy_speed = -1.0_dp         !< air speed at the canopy's deployment [m/s]
     real(dp) :: final_tip_speed = -1.0_dp      !< speed of node N (end b) at the last record [m/s]
+    real(dp) :: ground_time = -1.0_dp          !< a node reached the ground; the run ended there [s]
+    real(dp) :: ground_speed = -1.0_dp         !< that node's speed there [m/s]
     !> largest node speed change within 2 L/c of the first break (its samples and records) [m/s]
     real(dp) :: recoil_speed = -1.0_dp
     real(dp) :: end_time = 0.0_dp              !< time the integration reached [s]
@@ -132,6 +138,9 @@ module airlaunch_line_scene
     real(dp) :: recoil_end = -1.0_dp                 !< the recoil's window closes [s] (-1: no break)
     real(dp) :: recoil_next = -1.0_dp                !< the window's next sample [s]
     logical :: recoil_open = .false.                 !< the window is open (its end not yet sampled)
+    real(dp) :: ground_time = -1.0_dp                !< the lowest integrated node reached the ground [s] (-1: not)
+    integer :: ground_node = -1                      !< which node, 0..N (-1: none)
+    real(dp) :: ground_speed = -1.0_dp               !< its speed there [m/s] (-1: not reached)
     real(dp), allocatable, private :: x(:, :), v(:, :), f(:, :), tension(:)
   contains
     procedure :: init => scene_init
@@ -236,6 +245,8 @@ contains
       opts, error)
     if (allocated(error)) return
     call prepare_break(self, error)
+    if (allocated(error)) return
+    call prepare_ground(self, error)
     if (allocated(error)) return
     call set_next_stop(self, error)
     if (allocated(error)) return
@@ -350,6 +361,49 @@ contains
     end associate
   end subroutine prepare_break
 
+  !> The ground (a line scene with ground_altitude) into the scheme, which
+  !> watches the lowest integrated node's height above it; a node that starts
+  !> at or below it is an input error.
+  subroutine prepare_ground(self, error)
+    type(line_scene), intent(inout) :: self                !< scene (scheme built)
+    type(error_type), allocatable, intent(inout) :: error  !< set on bad input
+    integer :: k0, k1, k
+    if (.not. self%cfg%ground) return
+    call integrated_nodes(self, k0, k1)
+    if (k1 < k0) then
+      call fatal_error(error, "line_scene: ground_altitude = " // str(self%cfg%ground_altitude) // " m is not " // &
+        "allowed on a line of n_seg = 1 between two kinematic ends: no node of it is integrated, so nothing " // &
+        "can reach the ground")
+      return
+    end if
+    k = k0 - 1 + minloc(self%x(2, k0:k1), 1)
+    if (.not. self%x(2, k) > self%cfg%ground_altitude) then
+      call fatal_error(error, "line_scene: ground_altitude = " // str(self%cfg%ground_altitude) // " m is not " // &
+        "allowed: node " // str(k) // " starts at altitude " // str(self%x(2, k)) // " m, not above it")
+      return
+    end if
+    call self%scheme%set_ground(self%cfg%ground_altitude, error)
+  end subroutine prepare_ground
+
+  !> The nodes the scheme integrates: k0..k1 (the kinematic ends' are given).
+  pure subroutine integrated_nodes(self, k0, k1)
+    type(line_scene), intent(in) :: self   !< scene
+    integer, intent(out) :: k0, k1         !< first and last
+    k0 = merge(1, 0, self%cfg%end_a%is_kinematic())
+    k1 = self%model%n - merge(1, 0, self%cfg%end_b%is_kinematic())
+  end subroutine integrated_nodes
+
+  !> The scheme stopped where the lowest integrated node reached the ground.
+  subroutine take_ground(self)
+    type(line_scene), intent(inout) :: self   !< scene (the scheme at the event)
+    integer :: k0, k1
+    call self%scheme%get_state(self%x, self%v)
+    call integrated_nodes(self, k0, k1)
+    self%ground_node = k0 - 1 + minloc(self%x(2, k0:k1), 1)
+    self%ground_time = self%scheme%t
+    self%ground_speed = norm2(self%v(:, self%ground_node))
+  end subroutine take_ground
+
   !> Stop the scheme at the next change of the system known in advance: the
   !> canopy's deployment, the end of its filling, the scheduled cut.
   subroutine set_next_stop(self, error)
@@ -375,9 +429,14 @@ contains
     do while (self%scheme%t < t_target)
       t_next = t_target
       if (self%deploy_pending) t_next = min(t_next, deployment_time(self%cfg))
-      ! (the scheme returns early at a stop time or where a strength is reached)
+      ! (the scheme returns early at a stop time or where a strength or the
+      ! ground is reached)
       call self%scheme%advance(t_next, error)
       if (allocated(error)) return
+      if (self%scheme%ground_reached) then
+        call take_ground(self)
+        return
+      end if
       if (self%scheme%strength_reached) then
         call part_at_strength(self, error)
       else if (self%break_pending .and. self%scheme%t >= self%cfg%break_time) then
@@ -499,6 +558,7 @@ contains
       call advance_to(self, t_out, error)
       if (allocated(error)) exit
       call record(self, error)
+      if (self%ground_time >= 0.0_dp) exit   ! (the run ends at the ground)
     end do
     self%completed = .not. allocated(error)
     self%t_reached = self%scheme%t
@@ -579,6 +639,9 @@ contains
     self%recoil_end = -1.0_dp
     self%recoil_next = -1.0_dp
     self%recoil_open = .false.
+    self%ground_time = -1.0_dp
+    self%ground_node = -1
+    self%ground_speed = -1.0_dp
     if (allocated(self%v_break)) deallocate(self%v_break)
     self%n_out = 0
     self%completed = .false.
@@ -611,16 +674,16 @@ contains
     character(len=16) :: a_kind, b_kind, initial_shape, scheme
     real(dp) :: a_position(3), a_velocity(3), a_amplitude(3), a_frequency, a_phase_deg, a_t_start, a_mass
     real(dp) :: a_drag_area, b_position(3), b_velocity(3), b_amplitude(3), b_frequency, b_phase_deg
-    real(dp) :: b_t_start, b_mass, b_drag_area, initial_sag, dt, force_tol
+    real(dp) :: b_t_start, b_mass, b_drag_area, initial_sag, dt, force_tol, ground_altitude
     integer :: max_iterations
-    logical :: record_tensions, peak_tension
+    logical :: record_tensions, peak_tension, ground
     namelist /line/ length, n_seg, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, &
       cd_tangential, gravity, air, wind, air_density, mass, breaking_strength, break_time, break_segment, &
       weak_link_strength, weak_link_segment
     namelist /line_scene/ a_kind, a_position, a_velocity, a_amplitude, a_frequency, a_phase_deg, a_t_start, &
       a_mass, a_drag_area, b_kind, b_position, b_velocity, b_amplitude, b_frequency, b_phase_deg, b_t_start, &
       b_mass, b_drag_area, initial_shape, initial_sag, scheme, dt, force_tol, max_iterations, record_tensions, &
-      peak_tension
+      peak_tension, ground, ground_altitude
     type(nml_var), parameter :: line_vars(19) = [nml_var("length", "real"), nml_var("n_seg", "integer"), &
       nml_var("ea", "real"), nml_var("mass_per_length", "real"), nml_var("damping", "real"), &
       nml_var("settling_damping", "real"), nml_var("diameter", "real"), nml_var("cd_normal", "real"), &
@@ -628,7 +691,7 @@ contains
       nml_var("wind", "real3"), nml_var("air_density", "real"), nml_var("mass", "string", length=8), &
       nml_var("breaking_strength", "real"), nml_var("break_time", "real"), nml_var("break_segment", "integer"), &
       nml_var("weak_link_strength", "real"), nml_var("weak_link_segment", "integer")]
-    type(nml_var), parameter :: scene_vars(26) = [nml_var("a_kind", "string", 16), &
+    type(nml_var), parameter :: scene_vars(28) = [nml_var("a_kind", "string", 16), &
       nml_var("a_position", "real3"), nml_var("a_velocity", "real3"), &
       nml_var("a_amplitude", "real3"), nml_var("a_frequency", "real"), nml_var("a_phase_deg", "real"), &
       nml_var("a_t_start", "real"), nml_var("a_mass", "real"), nml_var("a_drag_area", "real"), &
@@ -637,7 +700,8 @@ contains
       nml_var("b_t_start", "real"), nml_var("b_mass", "real"), nml_var("b_drag_area", "real"), &
       nml_var("initial_shape", "string", 16), nml_var("initial_sag", "real"), nml_var("scheme", "string", 16), &
       nml_var("dt", "real"), nml_var("force_tol", "real"), nml_var("max_iterations", "integer"), &
-      nml_var("record_tensions", "logical"), nml_var("peak_tension", "logical")]
+      nml_var("record_tensions", "logical"), nml_var("peak_tension", "logical"), nml_var("ground", "logical"), &
+      nml_var("ground_altitude", "real")]
     character(len=16), parameter :: kinds(5) = [character(len=16) :: "fixed", "prescribed", "free", &
       "point_mass", "canopy"]
     type(line_scene_config) :: d
@@ -663,6 +727,8 @@ contains
     dt = d%integration%dt; force_tol = d%integration%force_tol; max_iterations = d%integration%max_iterations
     record_tensions = .true.
     peak_tension = d%integration%peak_tension
+    ground = d%ground
+    ground_altitude = d%ground_altitude
 
     call f%check_group("line", line_vars, error)
     if (allocated(error)) return
@@ -734,6 +800,19 @@ contains
     end if
     call check_break_before_end(f, break_time, run%t_end, error)
     if (allocated(error)) return
+    if (.not. ground .and. f%is_set("line_scene", "ground_altitude")) then
+      call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(ground_altitude) // &
+        " m is not allowed with ground = .false. (the default: the scene has no ground); set ground = .true.")
+      return
+    end if
+    if (ground) then
+      if (trim(scheme) == "marching") then
+        call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(ground_altitude) // &
+          " m is not allowed with scheme = 'marching' (the paper's explicit marching does not locate events: " // &
+          "use scheme = 'cvode', the default)")
+        return
+      end if
+    end if
     if ((breaking_strength > 0.0_dp .or. weak_link_strength > 0.0_dp) .and. n_seg == 1 .and. &
         is_kinematic(a_kind) .and. is_kinematic(b_kind)) then
       ! no node of the line is integrated: nothing would watch the strength
@@ -763,6 +842,8 @@ contains
     cfg%break_segment = break_segment
     cfg%weak_link_strength = weak_link_strength
     cfg%weak_link_segment = weak_link_segment
+    cfg%ground = ground
+    cfg%ground_altitude = ground_altitude
     cfg%integration%scheme = scheme
     cfg%integration%dt = dt
     cfg%integration%force_tol = force_tol
@@ -912,7 +993,7 @@ contains
       str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
       merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records)" // &
-      peak_note(scene) // nl // break_note(scene) // &
+      peak_note(scene) // nl // break_note(scene) // ground_note(scene) // &
       "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg" // m_rigid_note(scene%rigid(m)) // ", theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
@@ -942,6 +1023,8 @@ contains
     r%line_breaks = scene%line_breaks
     r%recoil_speed = scene%recoil_speed
     r%deploy_speed = scene%deploy_speed
+    r%ground_time = scene%ground_time
+    r%ground_speed = scene%ground_speed
     r%end_time = scene%t_reached
     r%stats = scene%stats
     r%completed = scene%completed
@@ -969,6 +1052,18 @@ contains
       str(scene%recoil_speed) // " m/s (the largest change of a node's velocity within 2 L/c of it)" // &
       new_line("a")
   end function break_note
+
+  !> The summary's line on the ground ('' without one: no ground_altitude).
+  function ground_note(scene) result(text)
+    type(line_scene), intent(in) :: scene  !< scene (after run)
+    character(len=:), allocatable :: text
+    text = ""
+    if (.not. scene%cfg%ground) return
+    text = "ground (" // str(scene%cfg%ground_altitude) // " m): not reached" // new_line("a")
+    if (scene%ground_time >= 0.0_dp) text = "ground (" // str(scene%cfg%ground_altitude) // " m): reached by node " // &
+      str(scene%ground_node) // " at t = " // str(scene%ground_time) // " s, speed " // str(scene%ground_speed) // &
+      " m/s (the run ends there)" // new_line("a")
+  end function ground_note
 
   !> The summary's line on the initial shape: its largest segment strain and
   !> tension EA eps (the shape 'sag' has the parabola's length, not L's).
@@ -1105,6 +1200,11 @@ contains
     call w%add_int_att("/", "line_break_segment", [scene%line_break_segment], error)
     call w%add_int_att("/", "line_breaks", [scene%line_breaks], error)
     call w%add_real_att("/", "line_recoil_speed_m_s", scene%recoil_speed, error)
+    if (scene%cfg%ground) then
+      call w%add_real_att("/", "ground_time_s", scene%ground_time, error)
+      call w%add_int_att("/", "ground_node", [scene%ground_node], error)
+      call w%add_real_att("/", "ground_speed_m_s", scene%ground_speed, error)
+    end if
     if (scene%line_breaks > 0) call w%add_int_att("/", "line_parted_segments", &
       pack([(k, k = 1, n)], scene%model%parted), error)
     call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)

@@ -68,13 +68,14 @@ module airlaunch_sweep_row
 
   !> Summary variables of the line scene (scene = 'line': docs/line.md §4;
   !> the names the airlaunch scene shares mean the same).
-  integer, parameter :: n_line_metrics = 16
+  integer, parameter :: n_line_metrics = 18
   character(len=40), parameter :: line_metric_names(n_line_metrics) = [character(len=40) :: &
     "peak_line_tension_N", "peak_line_tension_time_s", "max_end_tension_a_N", "max_end_tension_b_N", &
     "line_break_time_s", "line_breaks", "line_break_segment", "line_recoil_speed_m_s", "canopy_deploy_air_speed_m_s", &
-    "final_tip_speed_m_s", "end_time_s", "steps", "rhs_evals", "jac_evals", "completed", "wall_time_s"]
+    "final_tip_speed_m_s", "ground_time_s", "ground_speed_m_s", "end_time_s", "steps", "rhs_evals", "jac_evals", &
+    "completed", "wall_time_s"]
   character(len=12), parameter :: line_metric_units(n_line_metrics) = [character(len=12) :: &
-    "N", "s", "N", "N", "s", "1", "1", "m s-1", "m s-1", "m s-1", "s", "1", "1", "1", "1", "s"]
+    "N", "s", "N", "N", "s", "1", "1", "m s-1", "m s-1", "m s-1", "s", "m s-1", "s", "1", "1", "1", "1", "s"]
   character(len=120), parameter :: line_metric_long_names(n_line_metrics) = [character(len=120) :: &
     "largest segment tension over every step (NaN: &line_scene peak_tension = .false.)", &
     "time the peak segment tension was first reached (NaN: not tracked)", &
@@ -86,10 +87,14 @@ module airlaunch_sweep_row
     "recoil: the largest speed change of a node since the first break, over the records (NaN: no break)", &
     "air speed of the canopy end when it deployed (NaN: no canopy, or not deployed)", &
     "speed of node n_seg (end b) at the last record", &
+    "the lowest integrated node reached &line_scene ground_altitude; the run ended there (NaN: not, or no ground)", &
+    "that node's speed there (NaN: not reached)", &
     "simulated time reached", "time steps", "force evaluations of the whole line", &
-    "Jacobian evaluations (cvode)", "1 if the run reached t_end", "wall time of the case on its rank"]
+    "Jacobian evaluations (cvode)", "1 if the run completed (reached t_end, or the ground)", &
+    "wall time of the case on its rank"]
   logical, parameter :: line_metric_is_integer(n_line_metrics) = [.false., .false., .false., .false., &
-    .false., .true., .true., .false., .false., .false., .false., .true., .true., .true., .true., .false.]
+    .false., .true., .true., .false., .false., .false., .false., .false., .false., .true., .true., .true., .true., &
+    .false.]
 
   !> The summary variables of one scene's sweep (metrics_of).
   type :: metric_set
@@ -198,7 +203,7 @@ contains
     row%metrics = [defined(res%peak_tension), defined(res%peak_tension_time), defined(res%max_end_tension(1)), &
       defined(res%max_end_tension(2)), defined(res%line_break_time), real(res%line_breaks, dp), &
       real(res%line_break_segment, dp), defined(res%recoil_speed), defined(res%deploy_speed), &
-      defined(res%final_tip_speed), res%end_time, &
+      defined(res%final_tip_speed), defined(res%ground_time), defined(res%ground_speed), res%end_time, &
       real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       merge(1.0_dp, 0.0_dp, res%completed), wall]
   end function row_from_line_result

@@ -78,3 +78,28 @@ def test_the_airdrop_opens_and_settles_into_the_steady_descent(airlaunch_exe, tm
         # passive line: the energy may only fall (the run's own invariant; 1e-6 of the
         # largest kinetic energy for the rounding of the recorded sums)
         assert 0.0 <= ds.attrs["max_energy_rise_J"] <= 1e-6 * float(ds["line_energy_kinetic"].max())
+
+
+def test_the_platform_touches_down_at_the_steady_descent_rate(airlaunch_exe, tmp_path):
+    """With `&line_scene ground = .true.` (sea level: 1500 m below the exit) and
+    t_end = 400 s the run ends at the touchdown, the lowest integrated node's
+    event: the platform (node 0), after ~260 s, at the steady descent rate
+    (1e-4 as above; measured 8.6e-6); the last record is the event, the
+    platform on the ground (1e-6 m: the event's own state), every earlier
+    record above it; the sweep summary's names are in the file."""
+    text = AIRDROP.read_text().replace("  t_end = 200.0", "  t_end = 400.0", 1)
+    text = text.replace("&line_scene\n", "&line_scene\n  ground = .true., ground_altitude = 0.0\n", 1)
+    nml = tmp_path / "touchdown.nml"
+    nml.write_text(text)
+    out = tmp_path / "touchdown.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    v_t = steady_descent_rate()
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "completed" and ds.attrs["ground_node"] == 0
+        t_g = ds.attrs["ground_time_s"]
+        assert 200.0 < t_g < 400.0 and ds["time"].values[-1] == t_g
+        y0 = ds["line_node_position"].values[:, 0, 1]
+        assert abs(y0[-1]) < 1e-6 and np.all(y0[:-1] > 0.0)
+        assert ds.attrs["ground_speed_m_s"] == pytest.approx(v_t, rel=1e-4)
+    assert f"ground (0.0 m): reached by node 0 at t = " in res.stdout, res.stdout
