@@ -10,7 +10,10 @@
 !> group, variable, value and what is allowed), 3 for a numerical failure (the
 !> output written so far is kept, with status="failed"), 4 when the run
 !> completed but its output file could not be written (a full disk): the
-!> milestones are printed, nothing is left under the output's name.
+!> milestones are printed, nothing is left under the output's name; 130 or
+!> 143 when SIGINT (Ctrl-C) or SIGTERM interrupted the integration (the output
+!> written so far is kept, with status="interrupted"; a second signal ends the
+!> process at once).
 !>
 !> While it runs, the program holds a lock on OUTPUT.part.lock (removed at its
 !> end): a second run asked to write the same file is refused (exit 2) instead
@@ -31,6 +34,7 @@ program airlaunch
   use airlaunch_strings, only: str
   use airlaunch_blas_threads, only: use_one_blas_thread
   use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal
+  use airlaunch_interrupt, only: catch_interrupts
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
@@ -44,6 +48,8 @@ program airlaunch
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   call ignore_file_size_signal()   ! a file past ulimit -f is a failed write (exit 4), not SIGXFSZ
+  ! Ctrl-C or SIGTERM during the integration ends the run with its output so far (exit 130, 143)
+  call catch_interrupts()
   nargs = command_argument_count()
   path = ""
   output_override = ""
@@ -147,6 +153,7 @@ program airlaunch
       call output_lock%release()
       stop 4, quiet=.true.
     end if
+    if (error%signal /= 0) call report_interrupt()
     write(error_unit, '(a)') "airlaunch: error: " // error%message
     if (allocated(summary)) write(error_unit, '(a)') summary
     if (run%trajectory) then
@@ -174,6 +181,25 @@ program airlaunch
   call output_lock%release()
 
 contains
+
+  !> The run was interrupted (SIGINT, SIGTERM caught between the integrator's
+  !> steps): one line, then where its output so far is; exit 128 + the signal,
+  !> as the signal's default action would have, with the lock released.
+  subroutine report_interrupt()
+    integer :: code
+    write(error_unit, '(a)') "airlaunch: " // error%message
+    if (run%trajectory) then
+      inquire(file=trim(run%output), exist=written)
+      if (written) then
+        write(error_unit, '(a)') "airlaunch: output so far (status=interrupted): " // trim(run%output)
+      else
+        write(error_unit, '(a)') "airlaunch: no output written"
+      end if
+    end if
+    call output_lock%release()
+    code = 128 + error%signal
+    stop code, quiet=.true.
+  end subroutine report_interrupt
 
   !> The output file must be one that can be written: checked once the whole
   !> input is read (its own errors first), before the run; an old file of the same

@@ -3,7 +3,7 @@
 module airlaunch_error
   implicit none
   private
-  public :: error_type, fatal_error, has_error, add_output_error, output_failure_note
+  public :: error_type, fatal_error, has_error, add_output_error, output_failure_note, run_status
 
   !> An error: a one-line message for the user.
   type :: error_type
@@ -15,6 +15,9 @@ module airlaunch_error
     !> the run's output file could not be written (a full disk, an I/O
     !> error): the program reports it apart from a failure of the run itself
     logical :: output = .false.
+    !> the run was interrupted by this signal (SIGINT, SIGTERM: airlaunch_interrupt);
+    !> 0: not.  The program exits 128 + it after writing the output so far
+    integer :: signal = 0
   end type error_type
 
   !> What add_output_error adds to a run's error (airlaunch_main looks for it).
@@ -48,6 +51,17 @@ contains
       call move_alloc(output_error, run_error)
     end if
   end subroutine add_output_error
+
+  !> A run's status for its output: "completed" (no error), "interrupted" (a
+  !> caught signal, error%signal) or "failed".
+  pure function run_status(error) result(status)
+    type(error_type), allocatable, intent(in) :: error  !< the run's error, if any
+    character(len=:), allocatable :: status
+    status = "completed"
+    if (.not. allocated(error)) return
+    status = "failed"
+    if (error%signal /= 0) status = "interrupted"
+  end function run_status
 
   !> True if `error` holds an error.
   logical pure function has_error(error)

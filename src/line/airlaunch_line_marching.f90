@@ -60,6 +60,7 @@
 module airlaunch_line_marching
   use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
+  use airlaunch_interrupt, only: interrupt_signal, interrupted_error
   use airlaunch_strings, only: str
   use airlaunch_linalg, only: solve_general
   use airlaunch_line_model, only: line_model, marching_diverged, far_end_not_converged
@@ -189,6 +190,11 @@ contains
     if (t_out <= self%t) return
     eps = 1.0e-12_dp*max(1.0_dp, abs(t_out))
     do while (self%tn < t_out - eps)
+      if (interrupt_signal() /= 0) then
+        ! a caught SIGINT or SIGTERM: the run ends here, its output so far kept
+        call interrupted_error(error, interrupt_signal(), self%tn)
+        return
+      end if
       h = self%dt
       if (self%t_stop > self%tn + eps) h = min(h, self%t_stop - self%tn)
       call self%step(h, error)

@@ -7,7 +7,7 @@
 !> parabola), and is a quick first look at a free-falling cargo.
 module airlaunch_drop_scene
   use airlaunch_kinds, only: dp, g0
-  use airlaunch_error, only: error_type, fatal_error, add_output_error
+  use airlaunch_error, only: error_type, fatal_error, add_output_error, run_status
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state, isa_min_altitude, isa_max_altitude
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
@@ -233,7 +233,7 @@ contains
         call w%add_var_1d("store_mach", ["time"], mach(1:n), "1", "store Mach number", werr)
         call write_run_metadata(w, "drop", "airlaunch demo: store drop with quadratic drag", echo, werr)
         call w%add_real_att("/", "fall_time_s", t_impact, werr)
-        call w%add_text_att("/", "status", merge("completed", "failed   ", .not. allocated(run_error)), werr)
+        call w%add_text_att("/", "status", run_status(run_error), werr)
         if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, werr)
       end if
       call w%finish(werr)

@@ -133,7 +133,7 @@ contains
     call finish_result(r, res)
     call take_maxima(r, res)
     if (allocated(run_error)) then
-      res%status = "failed"
+      res%status = run_status(run_error)
       res%failure = run_error%message
     end if
     if (run%trajectory) then

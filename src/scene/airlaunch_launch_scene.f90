@@ -3,7 +3,7 @@
 !> the output contract (docs/output.md) and the milestones.
 module airlaunch_launch_scene
   use airlaunch_kinds, only: dp, pi, g0, rad2deg, deg2rad
-  use airlaunch_error, only: error_type, fatal_error, add_output_error
+  use airlaunch_error, only: error_type, fatal_error, add_output_error, run_status
   use airlaunch_strings, only: str
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_gust, only: gust_field, make_gust

@@ -15,7 +15,7 @@
 !> (written so far, with status = "failed", if the run fails).
 module airlaunch_line_scene
   use airlaunch_kinds, only: dp, rad2deg
-  use airlaunch_error, only: error_type, fatal_error, add_output_error
+  use airlaunch_error, only: error_type, fatal_error, add_output_error, run_status
   use airlaunch_strings, only: str, fixed
   use airlaunch_namelist
   use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
@@ -1207,7 +1207,7 @@ contains
     end if
     if (scene%line_breaks > 0) call w%add_int_att("/", "line_parted_segments", &
       pack([(k, k = 1, n)], scene%model%parted), error)
-    call w%add_text_att("/", "status", trim(merge("completed", "failed   ", scene%completed)), error)
+    call w%add_text_att("/", "status", run_status(run_error), error)
     if (allocated(run_error)) call w%add_text_att("/", "failure", run_error%message, error)
     if (is_passive(scene%cfg)) call w%add_real_att("/", "max_energy_rise_J", energy_rise(scene), error)
     chute_end = canopy_end_of(scene%cfg)

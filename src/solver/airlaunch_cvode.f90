@@ -11,6 +11,7 @@ module airlaunch_cvode
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
+  use airlaunch_interrupt, only: interrupt_signal, interrupted_error
   use fsundials_context_mod
   use fsundials_nvector_mod
   use fsundials_matrix_mod
@@ -469,6 +470,12 @@ contains
       ! after an event CVODE first returns the rest of its step (no new step),
       ! unless the event was at the step's end (tn = the event's time, self%t)
       if (.not. self%after_root .or. .not. (tn(1) > self%t)) then
+        if (interrupt_signal() /= 0) then
+          ! a caught SIGINT or SIGTERM: the run ends here, its output so far kept
+          self%t = tn(1)
+          call interrupted_error(error, interrupt_signal(), self%t)
+          return
+        end if
         if (self%steps_taken() - first >= limit .or. &
           (self%max_total > 0 .and. self%steps_taken() >= self%max_total)) then
           self%t = tn(1)

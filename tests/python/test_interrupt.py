@@ -1,0 +1,71 @@
+"""Ctrl-C (SIGINT) or SIGTERM (kill, a batch system's time limit) during a
+single run: the integrator stops between two steps, the output so far is
+written whole with status "interrupted" and the failure naming the signal and
+the time, the lock and the .part are gone, and the program exits 128 + the
+signal, as the signal's default action would (docs/output.md).  Before, the
+process died at once: no output, a stale OUTPUT.part and OUTPUT.part.lock."""
+import re
+import signal
+import subprocess
+import time
+
+import pytest
+import xarray as xr
+
+from conftest import ROOT, nml_variant
+
+#: the pendulum of input/line_pendulum.nml at 100 segments over 6000 s: minutes of work
+SLOW_LINE = [("  t_end = 6.0 ", "  t_end = 6000.0 "), ("  n_seg = 10\n", "  n_seg = 100\n")]
+#: the paper scenario at 240 segments and rtol 1e-9, atol 1e-10: ~15 s on this machine
+SLOW_LAUNCH = [(r"^  rtol = 1.0e-5 .*$", "  rtol = 1.0e-9"), (r"^  atol = 1.0e-6 .*$", "  atol = 1.0e-10"),
+               (r"^  n_seg = 15 .*$", "  n_seg = 240")]
+
+
+def _interrupted_run(exe, nml, out, signo):
+    proc = subprocess.Popen([str(exe), str(nml), "--output", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    assert proc.poll() is None, "the run ended before the signal: make it longer"
+    proc.send_signal(signo)
+    try:
+        stdout, stderr = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("no end within 60 s of the signal")
+    return proc.returncode, stdout, stderr
+
+
+def _check(exe, nml, out, signo, name):
+    code, stdout, stderr = _interrupted_run(exe, nml, out, signo)
+    assert code == 128 + signo, (code, stderr)
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 2, lines
+    m = re.search(rf"interrupted by {name} at t = ([0-9.]+) s$", lines[0])
+    assert lines[0].startswith("airlaunch: ") and m, lines[0]
+    assert lines[1] == f"airlaunch: output so far (status=interrupted): {out}", lines[1]
+    t_stop = float(m.group(1))
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "interrupted"
+        assert f"interrupted by {name}" in ds.attrs["failure"]
+        t = ds["time"].values
+        assert t[0] == 0.0 and t[-1] <= t_stop + 1e-9 and len(t) > 1
+    leftovers = sorted(p.name for p in out.parent.iterdir() if p.name.startswith(out.name + "."))
+    assert leftovers == [], leftovers
+    return t_stop
+
+
+def test_sigint_ends_the_line_scene_with_its_output(airlaunch_exe, tmp_path):
+    text = (ROOT / "input" / "line_pendulum.nml").read_text()
+    for old, new in SLOW_LINE:
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    nml = tmp_path / "slow_line.nml"
+    nml.write_text(text)
+    t_stop = _check(airlaunch_exe, nml, tmp_path / "line.nc", signal.SIGINT, "SIGINT")
+    assert 0.0 < t_stop < 6000.0
+
+
+def test_sigterm_ends_the_launch_scene_with_its_output(airlaunch_exe, tmp_path):
+    nml = nml_variant(tmp_path, "slow_launch", edits=SLOW_LAUNCH)
+    t_stop = _check(airlaunch_exe, nml, tmp_path / "launch.nc", signal.SIGTERM, "SIGTERM")
+    assert 0.0 < t_stop < 15.0
