@@ -544,9 +544,14 @@ contains
     else
       call self%solver%advance(t_out, error, event, which)
     end if
-    ! (the strength's event comes first when both are watched: system_nroots)
-    self%strength_reached = event .and. allocated(self%sys%strength) .and. which(1) /= 0
-    self%ground_reached = event .and. self%sys%has_ground() .and. which(self%sys%nroots()) < 0
+    ! (the strength's event comes first when both are watched: system_nroots;
+    ! Fortran does not short-circuit .and.: the indices are guarded apart)
+    self%strength_reached = .false.
+    self%ground_reached = .false.
+    if (event) then
+      if (allocated(self%sys%strength)) self%strength_reached = which(1) /= 0
+      if (self%sys%has_ground()) self%ground_reached = which(self%sys%nroots()) < 0
+    end if
     self%t = self%solver%t
     if (allocated(error)) error%message = "line (cvode): " // error%message
   end subroutine cvode_advance
