@@ -800,7 +800,8 @@ contains
     end if
     call check_break_before_end(f, break_time, run%t_end, error)
     if (allocated(error)) return
-    if (.not. ground .and. f%is_set("line_scene", "ground_altitude")) then
+    ! (the default value passes: the resolved input, run again, sets it)
+    if (.not. ground .and. ground_altitude /= d%ground_altitude) then
       call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(ground_altitude) // &
         " m is not allowed with ground = .false. (the default: the scene has no ground); set ground = .true.")
       return
