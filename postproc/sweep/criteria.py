@@ -45,8 +45,6 @@ def check_scene(criteria, scene, have, path):
 UNTRACKED = (
     ("line", "enabled", False, ("line_tension", "line_clearance"), "the scene has no line"),
     ("line_scene", "peak_tension", False, ("line_tension",), "the peak tension is not tracked"),
-    ("line", "coupling", "rigidized", ("line_clearance",), "the rigidized coupling does not track the line's "
-                                                          "clearance"),
 )
 
 

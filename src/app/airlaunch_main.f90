@@ -271,13 +271,13 @@ contains
     end if
   end function tension_note
 
-  !> The line's smallest distance from the empennage point (the direct
-  !> coupling's; not tracked when the rigidized coupling ran).
+  !> The line's smallest distance from the empennage point (over the direct
+  !> coupling's steps and the rigidized coupling's line sub-steps).
   function line_clearance_note(r) result(s)
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s, d
     d = fx(r%min_line_clearance, 2) // " m"
-    if (r%min_line_clearance < 0.0_dp) d = "not tracked (the rigidized coupling ran)"
+    if (.not. r%min_line_clearance < huge(r%min_line_clearance)) d = "none (no step was taken)"
     s = "minimum line-empennage clearance: " // d // new_line("a")
   end function line_clearance_note
 

@@ -1107,14 +1107,10 @@ contains
     end if
     res%max_aircraft_pitch_excursion_deg = max(r%trk(m_pitch)%best, 0.0_dp)
     res%max_load_factor_excursion = max(r%trk(m_load)%best, 0.0_dp)
-    if (res%has_line) then
-      ! the direct coupling's steps alone see the line and the aircraft together
-      if (r%plan%initial() /= coupling_direct .or. r%switches > 0) then   ! the rigidized coupling ran
-        res%min_line_clearance = -1.0_dp
-      else if (r%trk(m_line_gap)%t_best >= 0.0_dp) then
-        res%min_line_clearance = min(res%min_line_clearance, -r%trk(m_line_gap)%best)
-      end if
-    end if
+    ! the direct coupling's steps and the rigidized coupling's line sub-steps
+    ! (with the chain's empennage point) both offer the line's clearance
+    if (res%has_line .and. r%trk(m_line_gap)%t_best >= 0.0_dp) &
+      res%min_line_clearance = min(res%min_line_clearance, -r%trk(m_line_gap)%best)
   end subroutine take_maxima
 
   !> Whether the observer's integrator carries metric m.
@@ -1127,7 +1123,9 @@ contains
     case (src_chain)
       watches = m == m_pitch .or. m == m_load
     case default
-      watches = m == m_tension
+      ! (the line's sub-steps: its tension, and its clearance from the empennage
+      ! point interpolated between the chain's samples like the tie-down's)
+      watches = m == m_tension .or. m == m_line_gap
     end select
   end function watches
 
@@ -1184,7 +1182,9 @@ contains
         call l%unpack(t, self%y)
         call l%model%tensions(l%x, l%v, l%tension, status)
         ok = status == 0
-        if (ok) q(m_tension) = maxval(l%tension)
+        if (.not. ok) return
+        q(m_tension) = maxval(l%tension)
+        q(m_line_gap) = -l%tail_clearance(t)
       end associate
     end select
   end subroutine metric_values

@@ -35,7 +35,7 @@ module airlaunch_launch_history
     real(dp) :: pitch_max_time = -1.0_dp, pitch_max_deg = 0.0_dp, nose_elevation_at_max_deg = 0.0_dp
     real(dp) :: min_clearance = huge(1.0_dp), peak_tension = 0.0_dp, peak_tension_time = -1.0_dp
     !> smallest distance from the aircraft's empennage point to the line [m]
-    !> (huge: no line; -1: not tracked, the rigidized coupling ran)
+    !> (huge: no line, or a run that failed before its first step)
     real(dp) :: min_line_clearance = huge(1.0_dp)
     real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
     real(dp) :: max_constraint_residual = 0.0_dp

@@ -214,6 +214,8 @@ module airlaunch_rigidized_coupling
     ! samples of the current outer step (relative frame)
     real(dp), private :: tie_x(3) = 0.0_dp, tie_v(3) = 0.0_dp, b3_x(3) = 0.0_dp, b3_v(3) = 0.0_dp
     real(dp), private :: tie0_x(3) = 0.0_dp, tie0_v(3) = 0.0_dp, b30_x(3) = 0.0_dp, b30_v(3) = 0.0_dp
+    !> the empennage point (the line's clearance) at the outer step's end and start (relative)
+    real(dp), private :: tail_x(3) = 0.0_dp, tail_v(3) = 0.0_dp, tail0_x(3) = 0.0_dp, tail0_v(3) = 0.0_dp
     real(dp), private :: step_t0 = 0.0_dp            !< start of the current outer step [s]
     logical, private :: motion_set = .false.         !< the line's end motions of the step are set
     ! chain states saved at the output times of the current outer step (begin_step)
@@ -647,6 +649,8 @@ contains
       self%tie_x + opts%outer_dt*self%tie_v, self%tie_v)
     call self%line%far%set_body_motion(t0, self%b3_x, self%b3_v, t0 + opts%outer_dt, &
       self%b3_x + opts%outer_dt*self%b3_v, self%b3_v)
+    call self%line%tail%set_body_motion(t0, self%tail_x, self%tail_v, t0 + opts%outer_dt, &
+      self%tail_x + opts%outer_dt*self%tail_v, self%tail_v)
     self%marching = opts%inner_scheme == "marching"
     if (self%marching) then
       call self%marcher%init(self%line, t0, yl, opts%inner_dt, opts%inner_force_tol, opts%inner_max_iterations, &
@@ -724,6 +728,8 @@ contains
       self%tie_v = s%bodies(1)%point_velocity(s%tie_down) - frame_v
       self%b3_x = s%bodies(3)%r - frame_x
       self%b3_v = s%bodies(3)%v - frame_v
+      self%tail_x = s%bodies(0)%point_position(self%chain%clr%point) - frame_x
+      self%tail_v = s%bodies(0)%point_velocity(self%chain%clr%point) - frame_v
     end associate
   end subroutine sample_ends
 
@@ -792,6 +798,7 @@ contains
     eps = 1.0e-12_dp*max(1.0_dp, abs(t_target))
     call sample_ends(self, self%t, self%chain_solver%y)
     self%tie0_x = self%tie_x; self%tie0_v = self%tie_v; self%b30_x = self%b3_x; self%b30_v = self%b3_v
+    self%tail0_x = self%tail_x; self%tail0_v = self%tail_v
     nt = 0
     if (present(t_out)) nt = size(t_out)
     if (.not. allocated(self%saved_t)) allocate(self%saved_y(chain_size, 0), self%saved_t(0))
@@ -840,6 +847,7 @@ contains
       call self%line%near%set_body_motion(self%step_t0, self%tie0_x, self%tie0_v, t1, self%tie_x, self%tie_v)
       if (self%line%far_kinematic) call self%line%far%set_body_motion(self%step_t0, self%b30_x, self%b30_v, t1, &
         self%b3_x, self%b3_v)
+      call self%line%tail%set_body_motion(self%step_t0, self%tail0_x, self%tail0_v, t1, self%tail_x, self%tail_v)
       if (self%marching) then
         call self%marcher%set_stop_time(t1)
       else

@@ -15,6 +15,7 @@ module airlaunch_rigidized_line
   use airlaunch_line, only: line_model, line_end, line_force_jacobian, node_state_name, marching_diverged, &
     far_end_not_converged
   use airlaunch_parachute, only: parachute, canopy_node_acceleration, canopy_node_jacobian
+  use airlaunch_clearance, only: segment_distance
   implicit none
   private
   public :: rigidized_line, line_marcher
@@ -30,6 +31,9 @@ module airlaunch_rigidized_line
     real(dp) :: h_ref = 0.0_dp              !< h0 of the reference frame [m]
     type(line_end) :: near                  !< node 0: the chain's tie-down samples (relative)
     type(line_end) :: far                   !< node N: B3's samples (relative), far_kinematic only
+    !> the aircraft's empennage point (the clearance's): the chain's samples
+    !> (relative), so that the line's clearance from it is taken on the sub-steps
+    type(line_end) :: tail
     integer :: last = 0                     !< last state node (N or N-1)
     real(dp), allocatable :: x(:, :), v(:, :), f(:, :), tension(:)   !< absolute work arrays (0:N)
     real(dp), allocatable :: inv_mass(:)    !< work: 1/(whole node mass) at the last Jacobian (0:N)
@@ -40,6 +44,7 @@ module airlaunch_rigidized_line
     procedure :: has_node_jacobian => line_has_node_jacobian
     procedure :: node_jacobian => line_node_jacobian
     procedure :: unpack => line_unpack
+    procedure :: tail_clearance => line_tail_clearance
     procedure :: pack => line_pack
     procedure :: n_state => line_n_state
     procedure :: setup => line_setup
@@ -125,6 +130,22 @@ contains
 
   !> Absolute node positions and velocities at time t from the state y
   !> (node 0 and, for far_kinematic, node N from their samples).
+  !> The smallest distance from the empennage point (its samples, `tail`) at
+  !> time t to the line's segments, as last unpacked at t [m] (the direct
+  !> coupling's launch_line_clearance: the same segments, the same point).
+  real(dp) function line_tail_clearance(self, t) result(d)
+    class(rigidized_line), intent(in) :: self
+    real(dp), intent(in) :: t
+    real(dp) :: p(3), pv(3)
+    integer :: j
+    call self%tail%motion(t, p, pv)
+    p = p + [self%v_ref*t, self%h_ref, 0.0_dp]
+    d = huge(1.0_dp)
+    do j = 1, self%model%n
+      d = min(d, segment_distance(p, self%x(:, j - 1), self%x(:, j)))
+    end do
+  end function line_tail_clearance
+
   subroutine line_unpack(self, t, y)
     class(rigidized_line), intent(inout) :: self
     real(dp), intent(in) :: t, y(:)

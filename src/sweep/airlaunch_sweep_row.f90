@@ -50,7 +50,7 @@ module airlaunch_sweep_row
     "time of the first rocket pitch maximum after separation (the firing moment; NaN: not reached)", &
     "rocket Euler pitch at its first maximum", "rocket nose elevation at the first pitch maximum", &
     "minimum distance from the rocket's surface to the empennage point after separation (NaN: not separated)", &
-    "minimum distance from the empennage point to the line (NaN: no line, or the rigidized coupling ran)", &
+    "minimum distance from the empennage point to the line over every step (NaN: no line)", &
     "peak line tension (NaN: the scene has no line)", "time of the peak line tension (NaN: no line)", &
     "the line first parted (&line breaking_strength or break_time; NaN: it did not, or no line)", &
     "segments of the line parted (0: none, or no line)", &
