@@ -39,6 +39,9 @@ module airlaunch_run_config
     !> The most steps the run's integrator may take (a run that cannot make
     !> progress stops with a message instead of crawling on); 0 = no limit.
     integer :: max_steps = default_max_steps
+    !> The most wall-clock time each CVODE integrator of the run may take from
+    !> its start [s] (a run that crawls stops with a message); 0 = no limit.
+    real(dp) :: max_wall_time = 0.0_dp
   end type run_config
 
 contains
@@ -50,20 +53,21 @@ contains
     character(len=:), allocatable, intent(inout) :: echo  !< resolved input text
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     character(len=16) :: scene
-    real(dp) :: t_end, output_dt, rtol, atol
+    real(dp) :: t_end, output_dt, rtol, atol, max_wall_time
     character(len=256) :: output
     logical :: trajectory, present, stop_when_final
     integer :: unit, ios, max_order, max_steps
     character(len=256) :: msg
-    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps
-    type(nml_var), parameter :: vars(10) = [nml_var("scene", "string", len(scene)), nml_var("t_end", "real"), &
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps, &
+      max_wall_time
+    type(nml_var), parameter :: vars(11) = [nml_var("scene", "string", len(scene)), nml_var("t_end", "real"), &
       nml_var("output_dt", "real"), nml_var("output", "string", len(output)), nml_var("rtol", "real"), &
       nml_var("atol", "real"), nml_var("trajectory", "logical"), nml_var("max_order", "integer"), &
-      nml_var("stop_when_final", "logical"), nml_var("max_steps", "integer")]
+      nml_var("stop_when_final", "logical"), nml_var("max_steps", "integer"), nml_var("max_wall_time", "real")]
 
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
     rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
-    stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps
+    stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps; max_wall_time = cfg%max_wall_time
     call f%check_group("run", vars, error)
     if (allocated(error)) return
     call f%position("run", unit, present)
@@ -82,6 +86,7 @@ contains
     call require_range(f, "run", "atol", atol, 1.0e-16_dp, 1.0_dp, "", error)
     call require_int_range(f, "run", "max_order", max_order, 0, 5, error)
     call require_int_range(f, "run", "max_steps", max_steps, 0, huge(1), error)
+    call require_nonnegative(f, "run", "max_wall_time", max_wall_time, "s (0: no limit)", error)
     if (allocated(error)) return
     if (t_end/output_dt > max_output_times) then
       call fatal_error(error, f%path // ": &run: t_end / output_dt = " // str(t_end) // " s / " // &
@@ -95,7 +100,7 @@ contains
     end if
 
     cfg = run_config(scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, &
-      max_steps)
+      max_steps, max_wall_time)
     if (.not. allocated(echo)) echo = ""
     echo = echo // run_echo(cfg)
   end subroutine read_run_config
@@ -107,14 +112,15 @@ contains
     type(run_config), intent(in) :: cfg   !< settings
     character(len=:), allocatable :: text
     character(len=16) :: scene
-    real(dp) :: t_end, output_dt, rtol, atol
+    real(dp) :: t_end, output_dt, rtol, atol, max_wall_time
     character(len=256) :: output
     logical :: trajectory, stop_when_final
     integer :: max_order, max_steps, u
-    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps
+    namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps, &
+      max_wall_time
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
     rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
-    stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps
+    stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps; max_wall_time = cfg%max_wall_time
     text = ""
     open(newunit=u, status="scratch", action="readwrite")
     write(u, nml=run)

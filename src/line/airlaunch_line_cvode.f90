@@ -509,7 +509,7 @@ contains
     scheme%sys%v = v0
     scheme%opts = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%rtol, atol=opts%atol, max_step=opts%max_step, &
-      max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, &
+      max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, max_wall_time=opts%max_wall_time, &
       analytic_jacobian=opts%analytic_jacobian, t_final=opts%t_final, &
       newton_coefficient=line_newton_coefficient(opts%rtol))
     if (opts%peak_tension) call scheme%start_peak(opts%rtol)

@@ -164,6 +164,7 @@ contains
     opts%rtol = run%rtol
     opts%atol = run%atol
     opts%max_total_steps = run%max_steps
+    opts%max_wall_time = run%max_wall_time
     opts%t_final = run%t_end   ! the steps do not depend on the output times
     opts%max_order = run%max_order   ! 0: CVODE's default (BDF up to 5)
     opts%atol_vector = [spread(run%atol*1.0e3_dp, 1, 3), spread(run%atol*1.0e2_dp, 1, 3)]

@@ -211,6 +211,7 @@ contains
     ropt%chain_max_order = 2
     ropt%inner_max_order = 2
     ropt%max_steps = run%max_steps
+    ropt%max_wall_time = run%max_wall_time
     ropt%t_end = run%t_end
     if (run%max_order > 0) then
       ropt%chain_max_order = run%max_order
@@ -280,6 +281,7 @@ contains
     opts%rtol = run%rtol
     opts%atol = run%atol
     opts%max_total_steps = run%max_steps
+    opts%max_wall_time = run%max_wall_time
     opts%t_final = run%t_end   ! the steps do not depend on the output times
     ! Newton's band system with the positions (bodies' and nodes', x' = v)
     ! eliminated: 65 of the paper scenario's 116 unknowns, and LAPACK's partial

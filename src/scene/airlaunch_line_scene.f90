@@ -854,6 +854,7 @@ contains
     if (f%is_set("run", "atol")) cfg%integration%atol = run%atol
     if (f%is_set("run", "max_order")) cfg%integration%max_order = run%max_order
     cfg%integration%max_steps = run%max_steps
+    cfg%integration%max_wall_time = run%max_wall_time
     if (scheme == "marching" .and. run%max_steps > 0) then
       if (run%t_end/dt > run%max_steps) then
         call fatal_error(error, f%path // ": &line_scene: dt = " // str(dt) // " s is not allowed with t_end = " // &

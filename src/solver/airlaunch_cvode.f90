@@ -11,7 +11,7 @@ module airlaunch_cvode
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
-  use airlaunch_interrupt, only: interrupt_signal, interrupted_error
+  use airlaunch_interrupt, only: interrupt_signal, interrupted_error, wall_clock
   use fsundials_context_mod
   use fsundials_nvector_mod
   use fsundials_matrix_mod
@@ -56,6 +56,8 @@ module airlaunch_cvode
     !> steps allowed over the solver's life, re-initialisations included (a run's
     !> budget: `&run max_steps`); 0 = no limit
     integer :: max_total_steps = 0
+    !> wall-clock time allowed from init [s] (a run's budget: `&run max_wall_time`); 0 = no limit
+    real(dp) :: max_wall_time = 0.0_dp
     logical :: stability_limit_detection = .false. !< BDF order reduction near the imaginary axis
     !> Newton's convergence test: the iteration stops when its estimated error is
     !> below this fraction of the error tolerance (CVodeSetNonlinConvCoef); 0 = CVODE's 0.1
@@ -149,6 +151,9 @@ module airlaunch_cvode
     integer(c_int), allocatable :: root_which(:)
     real(dp) :: t_final = 0.0_dp           !< cvode_options%t_final
     integer(c_long) :: max_total = 0       !< cvode_options%max_total_steps
+    real(dp) :: max_wall = 0.0_dp          !< cvode_options%max_wall_time [s]
+    real(dp) :: wall_deadline = 0.0_dp     !< wall_clock() when it is spent (0: no limit) [s]
+    logical :: out_of_time = .false.       !< the last failure: the wall-time budget spent
     integer(c_long) :: max_interval = 0    !< cvode_options%max_num_steps
     ! --- the stretches shown to a step_observer
     type(step_polynomial) :: poly          !< the interpolant of the last step
@@ -349,6 +354,10 @@ contains
     ! default of 500 and a negative value as no limit, so <= 0 goes in as -1.
     self%max_interval = max(0_c_long, int(opts%max_num_steps, c_long))
     self%max_total = int(max(0, opts%max_total_steps), c_long)
+    self%max_wall = max(0.0_dp, opts%max_wall_time)
+    self%wall_deadline = 0.0_dp
+    if (self%max_wall > 0.0_dp) self%wall_deadline = wall_clock() + self%max_wall
+    self%out_of_time = .false.
     self%stats_before = cvode_stats()
     call forget_steps(self)
     self%stop_time = huge(1.0_dp)
@@ -475,6 +484,14 @@ contains
           self%t = tn(1)
           call interrupted_error(error, interrupt_signal(), self%t)
           return
+        end if
+        if (self%wall_deadline > 0.0_dp) then
+          if (wall_clock() > self%wall_deadline) then
+            self%t = tn(1)
+            self%out_of_time = .true.
+            call fatal_error(error, failure_message(self, CV_TOO_MUCH_WORK))
+            return
+          end if
         end if
         if (self%steps_taken() - first >= limit .or. &
           (self%max_total > 0 .and. self%steps_taken() >= self%max_total)) then
@@ -839,7 +856,10 @@ contains
     select case (flag)
     case (CV_TOO_MUCH_WORK)
       taken = self%steps_taken()
-      if (self%max_total > 0 .and. taken >= self%max_total) then
+      if (self%out_of_time) then
+        why = "the wall-time budget is spent (" // str(self%max_wall) // " s since the integrator started, " // &
+          str(int(taken)) // " steps, &run max_wall_time)"
+      else if (self%max_total > 0 .and. taken >= self%max_total) then
         why = "the step budget is spent (" // str(int(self%max_total)) // " steps in total, &run max_steps)"
       else
         why = "too many steps between two outputs (" // str(int(self%max_interval)) // &

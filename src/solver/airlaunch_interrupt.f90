@@ -1,3 +1,7 @@
+!> When a run stops before its end on the user's behalf: a request to stop
+!> (SIGINT, SIGTERM; below) and the wall clock of the integrators' wall-time
+!> budget (&run max_wall_time, wall_clock).
+!>
 !> A request to stop the run (SIGINT, SIGTERM): caught by the program that
 !> asks for it (catch_interrupts: airlaunch_main only) and polled by the
 !> integrators between their steps (interrupt_signal), which then return an
@@ -8,12 +12,13 @@
 !> not catch interrupts always polls 0.
 module airlaunch_interrupt
   use, intrinsic :: iso_c_binding, only: c_int
+  use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: catch_interrupts, interrupt_signal, interrupted_error, signal_name
+  public :: catch_interrupts, interrupt_signal, interrupted_error, signal_name, wall_clock
 
   interface
     !> Catch SIGINT and SIGTERM from now on (once each: a second one ends the process).
@@ -37,6 +42,14 @@ contains
   integer function interrupt_signal()
     interrupt_signal = int(c_interrupt_signal())
   end function interrupt_signal
+
+  !> A monotonic wall clock [s] (system_clock's 64-bit count: the
+  !> integrators' wall-time budget, &run max_wall_time).
+  real(dp) function wall_clock()
+    integer(int64) :: count, rate
+    call system_clock(count, rate)
+    wall_clock = real(count, dp)/real(rate, dp)
+  end function wall_clock
 
   !> "SIGINT", "SIGTERM", or "signal N".
   function signal_name(signo) result(name)
