@@ -20,12 +20,12 @@ from .definition import DefinitionError, check_namelist_text, read_namelist_text
 #: Variables of &criteria (what each limits is in docs/sweep.md).
 CRITERIA_VARS = ("min_clearance_m", "min_line_clearance_m", "line_strength_n", "line_safety_factor",
                  "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion",
-                 "firing_pitch_min_deg", "firing_pitch_max_deg", "firing_time_max_s")
+                 "firing_pitch_min_deg", "firing_pitch_max_deg", "firing_time_max_s", "max_ground_speed_m_s")
 
 
 #: The criteria's summary variables that a sweep of each scene other than the
 #: air-launch has (an airlaunch-scene summary has every one; docs/sweep.md).
-SCENE_CRITERION_METRICS = {"line": ("peak_line_tension_N",)}
+SCENE_CRITERION_METRICS = {"line": ("peak_line_tension_N", "ground_speed_m_s")}
 
 
 def check_scene(criteria, scene, have, path):
@@ -41,10 +41,12 @@ def check_scene(criteria, scene, have, path):
 
 #: Settings of a base scenario (or of its sweep's &fixed) under which a
 #: criterion's metric is never computed, so that every case's margin would be
-#: NaN and fail: (group, variable, the value, the criteria, why).
+#: NaN and fail: (group, variable, the value, the criteria, why, the scene it
+#: applies to (None: any) and whether a base that does not set it has it).
 UNTRACKED = (
-    ("line", "enabled", False, ("line_tension", "line_clearance"), "the scene has no line"),
-    ("line_scene", "peak_tension", False, ("line_tension",), "the peak tension is not tracked"),
+    ("line", "enabled", False, ("line_tension", "line_clearance"), "the scene has no line", None, False),
+    ("line_scene", "peak_tension", False, ("line_tension",), "the peak tension is not tracked", None, False),
+    ("line_scene", "ground", False, ("touchdown",), "the scene has no ground, the default", "line", True),
 )
 
 
@@ -70,8 +72,13 @@ def check_tracked(criteria, defn, path):
         base = f90nml.reads(read_namelist_text(defn.base, "the base scenario"))
     except Exception:   # noqa: BLE001 - any unreadable base is airlaunch-sweep's to report
         base = None
-    for group, var, off, names, why in UNTRACKED:
+    scene = str(base.get("run", {}).get("scene", "airlaunch")).strip().lower() if base is not None else None
+    for group, var, off, names, why, only_scene, off_by_default in UNTRACKED:
+        if only_scene is not None and scene != only_scene:
+            continue
         value, source = _setting(defn, base, group, var)
+        if value is None and off_by_default and base is not None:
+            value, source = off, f"the base scenario {defn.base} (by default)"
         if isinstance(value, str):
             value = value.strip().lower()
         if value is None or value != off or isinstance(value, bool) != isinstance(off, bool):
@@ -128,6 +135,8 @@ class Criterion:
             return np.minimum(lower, lim["firing_pitch_max_deg"] - p)
         if self.name == "firing_time":
             return lim["firing_time_max_s"] - m["pitch_max_time_s"]
+        if self.name == "touchdown":
+            return lim["max_ground_speed_m_s"] - m["ground_speed_m_s"]
         raise DefinitionError(f"criterion {self.name} has no margin")
 
 
@@ -220,6 +229,13 @@ def parse_criteria(text, path="<criteria>"):
             raise DefinitionError(f"{where}firing_time_max_s = {lim:g} is not allowed (must be > 0 s)")
         out.append(Criterion("firing_time", "the firing moment (first pitch maximum) comes by the limit", "s",
                              lim, ("pitch_max_time_s",), {"firing_time_max_s": lim}))
+    if "max_ground_speed_m_s" in v:
+        lim = v["max_ground_speed_m_s"]
+        if not lim > 0:
+            raise DefinitionError(f"{where}max_ground_speed_m_s = {lim:g} is not allowed (must be > 0 m/s)")
+        out.append(Criterion("touchdown", "speed at the ground (the run's end: &flight ground_altitude, "
+                             "&line_scene ground) <= limit; a case that ends above the ground fails", "m s-1",
+                             lim, ("ground_speed_m_s",), {"max_ground_speed_m_s": lim}))
     if not out:
         raise DefinitionError(f"{path}: &criteria sets no criterion (allowed: {', '.join(CRITERIA_VARS)})")
     return out

@@ -254,6 +254,22 @@ def test_line_clearance_margin_and_untracked_cases():
         parse_criteria("&criteria\n  min_line_clearance_m = -1.0\n/\n")
 
 
+def test_touchdown_margin_and_cases_that_did_not_land():
+    """&criteria max_ground_speed_m_s: margin = limit - ground_speed_m_s; a
+    case that ended above the ground (NaN: its t_end too short) fails it."""
+    a = np.linspace(0, 1, 5)
+    ds = synthetic_summary(a, a, np.full(5, 9.0))
+    ds["ground_speed_m_s"] = ("case", np.array([5.0, 9.0, 8.5, np.nan, 7.0]))
+    env = evaluate(ds, parse_criteria("&criteria\n  max_ground_speed_m_s = 8.5\n/\n"))
+    margin = env["margin"].sel(criterion="touchdown").values
+    np.testing.assert_allclose(margin, [3.5, -0.5, 0.0, np.nan, 1.5], atol=1e-12)
+    assert list(env["passed"].sel(criterion="touchdown").values) == [1, 0, 1, 0, 1]
+    np.testing.assert_allclose(env["relative_margin"].sel(criterion="touchdown").values[[0, 1]],
+                               [3.5 / 8.5, -0.5 / 8.5], rtol=1e-12)
+    with pytest.raises(DefinitionError, match="max_ground_speed_m_s = 0 is not allowed"):
+        parse_criteria("&criteria\n  max_ground_speed_m_s = 0.0\n/\n")
+
+
 def test_the_figures_record_knows_a_file_by_its_stat_or_its_bytes(tmp_path):
     """stamp.unchanged: the same size and modification time is the recorded
     file without reading it (a summary of 10^7 cases is gigabytes); a file

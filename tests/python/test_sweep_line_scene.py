@@ -220,3 +220,53 @@ def test_line_clearance_under_the_rigidized_coupling_is_judged(tmp_path):
     definition = absolute_definition("sweep_paper", tmp_path, "&fixed name = 'line%enabled', value = '.false.' /\n")
     res = run_python(["envelope", definition, "--no-figures", "--check", "--criteria", criteria], tmp_path)
     assert res.returncode == 2 and "the scene has no line" in res.stderr, res.stderr
+
+
+TOUCHDOWN_CRITERIA = "&criteria max_ground_speed_m_s = 5.7 /\n"
+
+
+def test_touchdown_speed_criterion(tmp_path):
+    """The heavy airdrop swept to the ground (&fixed line_scene%ground = .true.,
+    t_end 400 s): every case lands, at the steady descent rate of its own
+    platform mass and canopy drag area, sqrt(2 W / (rho sum Cd A)), the
+    independent reference of test_line_airdrop.py (1e-4 as there: the swing
+    left after ~260 s of descent); the touchdown criterion's margin is the
+    limit less that speed, and the cases pass where it is below the limit
+    (5.7 m/s: near the nominal 5.68 m/s, so that the sweep has both)."""
+    edits = [("n_cases = 200", "n_cases = 6"), ("t_end = 10.0 ", "t_end = 400.0 "),
+             ("keep_worst = 3", "keep_worst = 0"),
+             ("&input name = 'parachute%drag_area'",
+              "&fixed name = 'line_scene%ground', value = '.true.' /\n&input name = 'parachute%drag_area'")]
+    summary = run_example_sweep("sweep_airdrop", tmp_path, edits)
+    criteria = tmp_path / "touchdown.nml"
+    criteria.write_text(TOUCHDOWN_CRITERIA)
+    res = run_python(["envelope", tmp_path / "sweep_airdrop.nml", "--no-figures", "--criteria", criteria], tmp_path)
+    assert res.returncode == 0, res.stderr
+    g = 9.80665
+    with xr.open_dataset(summary) as s, xr.open_dataset(tmp_path / "out" / "envelope.nc") as env:
+        v = s["ground_speed_m_s"].values
+        assert np.isfinite(v).all() and (s["ground_time_s"].values == s["end_time_s"].values).all()
+        weight = (s["line_scene%a_mass"].values + 60.0 + 0.2 * 20.0) * g
+        drag_area = s["parachute%drag_area"].values + 1.0 + 0.01 * np.pi * 0.02 * 20.0
+        steady = np.sqrt(2 * weight / (1.1117 * drag_area))
+        np.testing.assert_allclose(v, steady, rtol=1e-4)
+        touchdown = env.sel(criterion="touchdown")
+        np.testing.assert_array_equal(touchdown["margin"].values, 5.7 - v)
+        np.testing.assert_array_equal(touchdown["passed"].values, (v <= 5.7).astype(np.int8))
+        assert 0 < touchdown["passed"].values.sum() < len(v)
+
+
+def test_touchdown_criterion_needs_a_ground(tmp_path):
+    """A line-scene base without a ground (the default) never lands: the
+    touchdown criterion is refused before any case, in one line; with
+    &fixed line_scene%ground = .true. it is accepted."""
+    criteria = tmp_path / "touchdown.nml"
+    criteria.write_text(TOUCHDOWN_CRITERIA)
+    definition = absolute_definition("sweep_airdrop", tmp_path, "")
+    res = run_python(["envelope", definition, "--no-figures", "--check", "--criteria", criteria], tmp_path)
+    assert res.returncode == 2 and res.stderr.strip().count("\n") == 0, res.stderr
+    assert "max_ground_speed_m_s is not allowed for this sweep: the base scenario" in res.stderr
+    assert "(by default) sets &line_scene ground = .false. (the scene has no ground, the default" in res.stderr
+    definition = absolute_definition("sweep_airdrop", tmp_path, "&fixed name = 'line_scene%ground', value = 'T' /\n")
+    res = run_python(["envelope", definition, "--no-figures", "--check", "--criteria", criteria], tmp_path)
+    assert res.returncode == 0, res.stderr
