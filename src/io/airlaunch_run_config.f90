@@ -39,8 +39,9 @@ module airlaunch_run_config
     !> The most steps the run's integrator may take (a run that cannot make
     !> progress stops with a message instead of crawling on); 0 = no limit.
     integer :: max_steps = default_max_steps
-    !> The most wall-clock time each CVODE integrator of the run may take from
-    !> its start [s] (a run that crawls stops with a message); 0 = no limit.
+    !> The most wall-clock time the run's integration may take from its start,
+    !> one budget for all its CVODE integrators [s] (a run that crawls stops
+    !> with a message); 0 = no limit.
     real(dp) :: max_wall_time = 0.0_dp
   end type run_config
 

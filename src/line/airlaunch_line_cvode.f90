@@ -42,6 +42,7 @@ module airlaunch_line_cvode
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
+  use airlaunch_atmosphere, only: isa_min_altitude, isa_max_altitude
   use airlaunch_step_maxima, only: maxima_observer
   use airlaunch_line_model, only: line_model, line_energy, node_state_name, weakest_segment
   use airlaunch_line_mass, only: line_mass_matrix
@@ -236,6 +237,14 @@ contains
     integer :: k, j, n, st
     n = self%model%n
     call self%unpack(t, y)
+    k = self%model%node_outside_atmosphere(self%x)
+    if (k >= 0) then
+      self%failure = "line node " // str(k) // " altitude " // str(self%x(2, k)) // " m is outside the " // &
+        "atmosphere model (ISA, " // str(isa_min_altitude) // " to " // str(isa_max_altitude) // &
+        " m; &line air_density = 0)"
+      status = rhs_fatal
+      return
+    end if
     call self%model%forces(self%x, self%v, self%f, self%tension, st)
     self%n_forces = self%n_forces + 1
     if (st /= 0) then
@@ -509,7 +518,8 @@ contains
     scheme%sys%v = v0
     scheme%opts = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%rtol, atol=opts%atol, max_step=opts%max_step, &
-      max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, max_wall_time=opts%max_wall_time, &
+      max_order=opts%max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, &
+      max_wall_time=opts%max_wall_time, wall_deadline=opts%wall_deadline, &
       analytic_jacobian=opts%analytic_jacobian, t_final=opts%t_final, &
       newton_coefficient=line_newton_coefficient(opts%rtol))
     if (opts%peak_tension) call scheme%start_peak(opts%rtol)

@@ -85,7 +85,7 @@ module airlaunch_line_model
   use airlaunch_kinds, only: dp, g0, pi
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_atmosphere, only: isa, air_state, isa_min_altitude, isa_max_altitude
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
@@ -137,6 +137,7 @@ module airlaunch_line_model
     procedure :: stable_step => model_stable_step
     procedure :: total_mass => model_total_mass
     procedure :: end_tangent => model_end_tangent
+    procedure :: node_outside_atmosphere => model_node_outside_atmosphere
     procedure :: part => model_part
     procedure :: part_reached => model_part_reached
   end type line_model
@@ -543,6 +544,25 @@ contains
       log_slope = log(rho_hi/rho_lo)/(y_hi - y_lo)
     end if
   end subroutine air_density_fit
+
+  !> The first node (0..N) outside the atmosphere model where the air is the
+  !> ISA's (air on, air_density 0: the model's range, isa_min_altitude to
+  !> isa_max_altitude); -1: none, or a fixed density.  Its density is held at
+  !> the range's end there (isa), so an owner that integrates the line stops
+  !> instead of flying on in made-up air.
+  pure integer function model_node_outside_atmosphere(self, x) result(k)
+    class(line_model), intent(in) :: self   !< line
+    real(dp), intent(in) :: x(:, 0:)        !< node positions [m]
+    integer :: j
+    k = -1
+    if (.not. self%p%air .or. self%p%air_density > 0.0_dp) return
+    do j = 0, self%n
+      if (.not. (x(2, j) >= isa_min_altitude .and. x(2, j) <= isa_max_altitude)) then
+        k = j
+        return
+      end if
+    end do
+  end function model_node_outside_atmosphere
 
   !> The line breaks at segment k (1..N; nothing if it has already parted
   !> there): from now on the segment carries no tension and no drag.

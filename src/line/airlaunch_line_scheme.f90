@@ -31,8 +31,10 @@ module airlaunch_line_scheme
     logical :: analytic_jacobian = .true.
     !> cvode: steps allowed over the whole run (`&run max_steps`); 0 = no limit
     integer :: max_steps = 0
-    !> cvode: wall-clock time allowed from the start (`&run max_wall_time`) [s]; 0 = no limit
+    !> cvode: the run's wall-time budget (`&run max_wall_time`) [s]; 0 = no limit
     real(dp) :: max_wall_time = 0.0_dp
+    !> cvode: wall_clock() at which it is spent (0: max_wall_time from the scheme's start)
+    real(dp) :: wall_deadline = 0.0_dp
     !> cvode: end of the run [s]; the first step's estimate looks that far, not
     !> to the first output time, so the steps do not depend on the output times
     !> (0: the first output time)

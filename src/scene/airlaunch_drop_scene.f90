@@ -164,7 +164,7 @@ contains
     opts%rtol = run%rtol
     opts%atol = run%atol
     opts%max_total_steps = run%max_steps
-    opts%max_wall_time = run%max_wall_time
+    opts%max_wall_time = run%max_wall_time   ! (its one integrator: the budget runs from its start)
     opts%t_final = run%t_end   ! the steps do not depend on the output times
     opts%max_order = run%max_order   ! 0: CVODE's default (BDF up to 5)
     opts%atol_vector = [spread(run%atol*1.0e3_dp, 1, 3), spread(run%atol*1.0e2_dp, 1, 3)]
@@ -198,7 +198,10 @@ contains
         ! the run completed; its file could not be written (the writer's own message)
         call move_alloc(run_error, error)
       else
-        call fatal_error(error, "drop scene: " // run_error%message)
+        ! (the message prefixed in place: its flags, e.g. the signal of an
+        ! interrupted run, stay)
+        run_error%message = "drop scene: " // run_error%message
+        call move_alloc(run_error, error)
         ! the summary so far (output.md): the last record
         summary = summary // "last record at t = " // str(time(n)) // " s, altitude " // str(pos(2, n)) // " m"
         return

@@ -158,6 +158,8 @@ contains
     integer :: nmax, k, n, st
     n = r%dsys%line%n
     call set_direct_options(run, n_state, r%dsys%has_line, r%dopts)
+    ! one wall-time budget for the run, whichever integrators share it
+    if (run%max_wall_time > 0.0_dp) r%dopts%wall_deadline = wall_clock() + run%max_wall_time
     ! with a &gust, a quarter of its passage 2H/V0 (launch_system%gust_max_step):
     ! CVODE reads the right-hand side only at the points of its steps, so a
     ! longer step (the trimmed flight before the gust takes steps of seconds)
@@ -191,6 +193,7 @@ contains
     allocate(r%xl(3, 0:n), r%vl(3, 0:n), r%ten(n))
     r%ropt = rigidized_options(run, cfg)
     r%ropt%max_step = r%dsys%gust_max_step
+    r%ropt%wall_deadline = r%dopts%wall_deadline
     call build_chain(cfg, r%dsys, r%chain, error)
   end subroutine prepare_run
 

@@ -9,6 +9,7 @@ module airlaunch_launch_scene
   use airlaunch_gust, only: gust_field, make_gust
   use airlaunch_rotation, only: quat_from_euler
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats, add_stats
+  use airlaunch_interrupt, only: wall_clock
   use airlaunch_linalg, only: solve_banded
   use airlaunch_run_config, only: run_config, refuse_records
   use airlaunch_ncwrite, only: nc_writer
@@ -97,6 +98,17 @@ contains
       end if
       f_tie = f_new
     end do
+    ! both CGs start above the ground (its event watches for a crossing only)
+    associate(y_air => sys%sep%bodies(0)%r(2), y_rocket => sys%sep%bodies(1)%r(2))
+      if (.not. min(y_air, y_rocket) > cfg%flight%ground_altitude) then
+        call fatal_error(error, "&flight: ground_altitude = " // str(cfg%flight%ground_altitude) // &
+          " m is not allowed: the rocket's CG starts at " // str(y_rocket) // " m and the aircraft's at " // &
+          str(y_air) // " m, not both above it (the default 0 m is sea level; set ground_altitude lower, " // &
+          "down to -1000 m)")
+        res%status = "invalid_input"
+        return
+      end if
+    end associate
     ! a strength the trimmed flight's steady tension already reaches: the line
     ! would part before the run starts (the event watches for a crossing only)
     if (allocated(sys%strength)) then   ! a line that can break

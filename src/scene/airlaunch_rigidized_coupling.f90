@@ -117,8 +117,10 @@ module airlaunch_rigidized_coupling
     !> Steps each of the two integrators (chain, line) may take over the run
     !> (`&run max_steps`); 0 = no limit.
     integer :: max_steps = 0
-    !> wall-clock time each integrator may take from its start (`&run max_wall_time`) [s]; 0 = no limit
+    !> the run's wall-time budget (`&run max_wall_time`) [s]; 0 = no limit
     real(dp) :: max_wall_time = 0.0_dp
+    !> wall_clock() at which it is spent, the run's (cvode_options%wall_deadline)
+    real(dp) :: wall_deadline = 0.0_dp
     !> end of the run [s]: the first step after each (re)start of either solver
     !> is sized towards it (cut at the outer step's stop time), not towards the
     !> next output time (cvode_options%t_final)
@@ -634,7 +636,8 @@ contains
     if (allocated(error)) return
     copt = cvode_options(method="bdf", linear_solver="dense", rtol=opts%chain_rtol, &
       atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000, \
-      max_total_steps=opts%max_steps, max_wall_time=opts%max_wall_time, t_final=opts%t_end, max_step=opts%max_step)
+      max_total_steps=opts%max_steps, max_wall_time=opts%max_wall_time, wall_deadline=opts%wall_deadline, &
+      t_final=opts%t_end, max_step=opts%max_step)
     call self%chain_solver%init(self%chain, t0, y, copt, error)
     if (allocated(error)) return
     ! --- the line's integrator
@@ -644,7 +647,7 @@ contains
     lopt = cvode_options(method="bdf", linear_solver="second_order_band", upper_bandwidth=line_band_upper, &
       lower_bandwidth=line_band_lower, rtol=opts%inner_rtol, atol_vector=atol_l, &
       max_order=opts%inner_max_order, max_num_steps=1000000, max_total_steps=opts%max_steps, t_final=opts%t_end, &
-      max_step=opts%max_step, max_wall_time=opts%max_wall_time)
+      max_step=opts%max_step, max_wall_time=opts%max_wall_time, wall_deadline=opts%wall_deadline)
     self%t = t0
     call sample_ends(self, t0, self%chain_solver%y)
     call self%line%near%set_body_motion(t0, self%tie_x, self%tie_v, t0 + opts%outer_dt, &

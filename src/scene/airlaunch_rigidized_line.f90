@@ -128,8 +128,6 @@ contains
     m = 6*self%last
   end function line_n_state
 
-  !> Absolute node positions and velocities at time t from the state y
-  !> (node 0 and, for far_kinematic, node N from their samples).
   !> The smallest distance from the empennage point (its samples, `tail`) at
   !> time t to the line's segments, as last unpacked at t [m] (the direct
   !> coupling's launch_line_clearance: the same segments, the same point).
@@ -146,6 +144,8 @@ contains
     end do
   end function line_tail_clearance
 
+  !> Absolute node positions and velocities at time t from the state y
+  !> (node 0 and, for far_kinematic, node N from their samples).
   subroutine line_unpack(self, t, y)
     class(rigidized_line), intent(inout) :: self
     real(dp), intent(in) :: t, y(:)

@@ -49,8 +49,8 @@ module airlaunch_scenario_config
   character(len=16), parameter :: coupling_modes(4) = [character(len=16) :: "direct", "rigidized", &
     "per_phase", "auto"]
 
-  !> The ground's margins to the atmosphere model's floor and to the release altitude [m].
-  real(dp), parameter :: ground_margin_below = 1000.0_dp, ground_margin_above = 100.0_dp
+  !> The ground's margin to the atmosphere model's floor [m].
+  real(dp), parameter :: ground_margin_below = 1000.0_dp
 
   !> Flight condition and trim.
   type :: flight_config
@@ -248,12 +248,10 @@ contains
     call require_choice(f, "flight", "trim_mode", trim_mode, [character(len=16) :: "calibrate", "fly"], error)
     call require_range(f, "flight", "trim_alpha_deg", trim_alpha_deg, trim_alpha_min_deg, trim_alpha_max_deg, "deg", error)
     ! the ground: 1 km above the atmosphere model's floor (a last step's trial
-    ! states may go below the ground before its event is located), and far
-    ! enough below the release that the rocket's CG (a few metres below the
-    ! aircraft's) starts above it
+    ! states may go below the ground before its event is located), and below
+    ! the release (setup_launch checks that both CGs start above it)
     if (.not. allocated(error)) call require_range(f, "flight", "ground_altitude", ground_altitude, &
-      isa_min_altitude + ground_margin_below, altitude - ground_margin_above, &
-      "m, and at least " // str(ground_margin_above) // " m below &flight altitude", error)
+      isa_min_altitude + ground_margin_below, altitude, "m: at most &flight altitude", error)
     if (allocated(error)) return
     c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad, ground_altitude)
     open(newunit=u, status="scratch", action="readwrite")

@@ -56,8 +56,11 @@ module airlaunch_cvode
     !> steps allowed over the solver's life, re-initialisations included (a run's
     !> budget: `&run max_steps`); 0 = no limit
     integer :: max_total_steps = 0
-    !> wall-clock time allowed from init [s] (a run's budget: `&run max_wall_time`); 0 = no limit
+    !> the run's wall-time budget [s] (`&run max_wall_time`); 0 = no limit
     real(dp) :: max_wall_time = 0.0_dp
+    !> wall_clock() at which that budget is spent, the same for every integrator
+    !> of the run (its owner sets it at the run's start); 0: max_wall_time from init
+    real(dp) :: wall_deadline = 0.0_dp
     logical :: stability_limit_detection = .false. !< BDF order reduction near the imaginary axis
     !> Newton's convergence test: the iteration stops when its estimated error is
     !> below this fraction of the error tolerance (CVodeSetNonlinConvCoef); 0 = CVODE's 0.1
@@ -356,7 +359,10 @@ contains
     self%max_total = int(max(0, opts%max_total_steps), c_long)
     self%max_wall = max(0.0_dp, opts%max_wall_time)
     self%wall_deadline = 0.0_dp
-    if (self%max_wall > 0.0_dp) self%wall_deadline = wall_clock() + self%max_wall
+    if (self%max_wall > 0.0_dp) then
+      self%wall_deadline = opts%wall_deadline
+      if (.not. self%wall_deadline > 0.0_dp) self%wall_deadline = wall_clock() + self%max_wall
+    end if
     self%out_of_time = .false.
     self%stats_before = cvode_stats()
     call forget_steps(self)
@@ -857,8 +863,8 @@ contains
     case (CV_TOO_MUCH_WORK)
       taken = self%steps_taken()
       if (self%out_of_time) then
-        why = "the wall-time budget is spent (" // str(self%max_wall) // " s since the integrator started, " // &
-          str(int(taken)) // " steps, &run max_wall_time)"
+        why = "the wall-time budget is spent (" // str(self%max_wall) // " s since the run started; this " // &
+          "integrator took " // str(int(taken)) // " steps, &run max_wall_time)"
       else if (self%max_total > 0 .and. taken >= self%max_total) then
         why = "the step budget is spent (" // str(int(self%max_total)) // " steps in total, &run max_steps)"
       else

@@ -186,7 +186,8 @@ contains
       merge(res%peak_tension, nan, res%has_line), merge(defined(res%peak_tension_time), nan, res%has_line), &
       defined(res%line_break_time), real(res%line_breaks, dp), real(res%line_break_segment, dp), &
       res%max_aircraft_pitch_excursion_deg, res%max_load_factor_excursion, res%max_constraint_residual, &
-      defined(res%ground_time), merge(res%ground_speed, nan, res%ground_time >= 0.0_dp), res%end_time, real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
+      defined(res%ground_time), merge(res%ground_speed, nan, res%ground_time >= 0.0_dp), res%end_time, &
+      real(res%stats%steps, dp), real(res%stats%rhs_evals, dp), real(res%stats%jac_evals, dp), &
       real(res%stats%nonlin_iters, dp), real(res%stats%nonlin_fails, dp), real(res%stats%err_test_fails, dp), &
       wall]
   end function row_from_result

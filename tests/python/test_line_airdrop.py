@@ -12,6 +12,7 @@ Independent references:
   largest rise itself, which a wrong sign of the entrained air's momentum would make
   positive (+ (3/2) (dm_a/dt) v^2)."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -103,3 +104,30 @@ def test_the_platform_touches_down_at_the_steady_descent_rate(airlaunch_exe, tmp
         assert abs(y0[-1]) < 1e-6 and np.all(y0[:-1] > 0.0)
         assert ds.attrs["ground_speed_m_s"] == pytest.approx(v_t, rel=1e-4)
     assert f"ground (0.0 m): reached by node 0 at t = " in res.stdout, res.stdout
+
+
+def test_a_line_below_the_atmosphere_model_stops_the_run(airlaunch_exe, tmp_path):
+    """The airdrop from 100 m in the standard atmosphere (&line air_density = 0)
+    without a ground falls through the model's floor (-2 km) after ~400 s: a
+    numerical failure, exit 3, one line naming the time, the node and its
+    altitude, the output so far readable with status "failed" and its last
+    record above the floor.  Before, the ISA was held at its floor's density
+    there and the run went on to t_end (-9.9 km at 2000 s, "completed")."""
+    text = AIRDROP.read_text().replace("  t_end = 200.0", "  t_end = 2000.0", 1)
+    for old, new in [("  air_density = 1.1117", "  air_density = 0.0"),
+                     ("a_position = 0.0, 1500.0, 0.0", "a_position = 0.0, 100.0, 0.0"),
+                     ("b_position = -20.0, 1500.0, 0.0", "b_position = -20.0, 100.0, 0.0")]:
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    nml = tmp_path / "deep.nml"
+    nml.write_text(text)
+    out = tmp_path / "deep.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 3, res.stderr
+    first = res.stderr.strip().splitlines()[0]
+    assert re.search(r"t = [0-9.]+ s: right-hand side failed: line node \d+ altitude -2[0-9.]+ m is outside the "
+                     r"atmosphere model \(ISA, -2000.0 to 47000.0 m; &line air_density = 0\)", first), first
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "failed" and "outside the atmosphere model" in ds.attrs["failure"]
+        assert ds["line_node_position"].values[-1, :, 1].min() >= -2000.0
+        assert ds["time"].values[-1] > 300.0
