@@ -239,35 +239,29 @@ def test_worst_cases_not_computed_before_computed_cases_with_a_nan_metric():
     assert list(worst_cases(env, 3)) == [1, 4, 0]
 
 
-def test_line_clearance_margin_and_untracked_cases():
-    """&criteria min_line_clearance_m: margin = min_line_clearance_m - limit; a
-    case whose line clearance was not tracked (NaN: the rigidized coupling ran)
-    fails it, as any NaN metric."""
+@pytest.mark.parametrize("limit_var, limit, bad, criterion, metric, values, margins", [
+    # min_line_clearance_m: margin = min_line_clearance_m - limit; NaN: no line
+    ("min_line_clearance_m", 5.0, "-1", "line_clearance", "min_line_clearance_m", [6.6, 4.0, 5.0, np.nan, 7.5],
+     [1.6, -1.0, 0.0, np.nan, 2.5]),
+    # max_ground_speed_m_s: margin = limit - ground_speed_m_s; NaN: the case ended above the ground
+    ("max_ground_speed_m_s", 8.5, "0", "touchdown", "ground_speed_m_s", [5.0, 9.0, 8.5, np.nan, 7.0],
+     [3.5, -0.5, 0.0, np.nan, 1.5]),
+], ids=["line-clearance", "touchdown"])
+def test_margin_of_a_one_metric_criterion(limit_var, limit, bad, criterion, metric, values, margins):
+    """A criterion on one summary variable: its margin in its own units and,
+    divided by the limit, the relative margin; a case whose variable is NaN
+    (not computed: no line, no landing) fails it, as any NaN metric; a limit
+    out of its range is refused in one line."""
     a = np.linspace(0, 1, 5)
     ds = synthetic_summary(a, a, np.full(5, 9.0))
-    ds["min_line_clearance_m"] = ("case", np.array([6.6, 4.0, 5.0, np.nan, 7.5]))
-    env = evaluate(ds, parse_criteria("&criteria\n  min_line_clearance_m = 5.0\n/\n"))
-    margin = env["margin"].sel(criterion="line_clearance").values
-    np.testing.assert_allclose(margin, [1.6, -1.0, 0.0, np.nan, 2.5], atol=1e-12)
-    assert list(env["passed"].sel(criterion="line_clearance").values) == [1, 0, 1, 0, 1]
-    with pytest.raises(DefinitionError, match="min_line_clearance_m = -1 is not allowed"):
-        parse_criteria("&criteria\n  min_line_clearance_m = -1.0\n/\n")
-
-
-def test_touchdown_margin_and_cases_that_did_not_land():
-    """&criteria max_ground_speed_m_s: margin = limit - ground_speed_m_s; a
-    case that ended above the ground (NaN: its t_end too short) fails it."""
-    a = np.linspace(0, 1, 5)
-    ds = synthetic_summary(a, a, np.full(5, 9.0))
-    ds["ground_speed_m_s"] = ("case", np.array([5.0, 9.0, 8.5, np.nan, 7.0]))
-    env = evaluate(ds, parse_criteria("&criteria\n  max_ground_speed_m_s = 8.5\n/\n"))
-    margin = env["margin"].sel(criterion="touchdown").values
-    np.testing.assert_allclose(margin, [3.5, -0.5, 0.0, np.nan, 1.5], atol=1e-12)
-    assert list(env["passed"].sel(criterion="touchdown").values) == [1, 0, 1, 0, 1]
-    np.testing.assert_allclose(env["relative_margin"].sel(criterion="touchdown").values[[0, 1]],
-                               [3.5 / 8.5, -0.5 / 8.5], rtol=1e-12)
-    with pytest.raises(DefinitionError, match="max_ground_speed_m_s = 0 is not allowed"):
-        parse_criteria("&criteria\n  max_ground_speed_m_s = 0.0\n/\n")
+    ds[metric] = ("case", np.array(values))
+    env = evaluate(ds, parse_criteria(f"&criteria\n  {limit_var} = {limit}\n/\n"))
+    np.testing.assert_allclose(env["margin"].sel(criterion=criterion).values, margins, atol=1e-12)
+    assert list(env["passed"].sel(criterion=criterion).values) == [1, 0, 1, 0, 1]
+    np.testing.assert_allclose(env["relative_margin"].sel(criterion=criterion).values[[0, 1]],
+                               np.array(margins[:2]) / limit, rtol=1e-12)
+    with pytest.raises(DefinitionError, match=f"{limit_var} = {bad} is not allowed"):
+        parse_criteria(f"&criteria\n  {limit_var} = {bad}.0\n/\n")
 
 
 def test_the_figures_record_knows_a_file_by_its_stat_or_its_bytes(tmp_path):
