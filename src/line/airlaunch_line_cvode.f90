@@ -42,9 +42,9 @@ module airlaunch_line_cvode
   use airlaunch_strings, only: str
   use airlaunch_ode, only: ode_system, band_view, node_blocks, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options, cvode_stats
-  use airlaunch_atmosphere, only: isa_min_altitude, isa_max_altitude
   use airlaunch_step_maxima, only: maxima_observer
-  use airlaunch_line_model, only: line_model, line_energy, node_state_name, weakest_segment
+  use airlaunch_line_model, only: line_model, line_energy, node_state_name, weakest_segment, &
+    outside_atmosphere_message
   use airlaunch_line_mass, only: line_mass_matrix
   use airlaunch_line_ends, only: line_end, end_point_mass
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, scheme_peak_tension, &
@@ -239,9 +239,7 @@ contains
     call self%unpack(t, y)
     k = self%model%node_outside_atmosphere(self%x)
     if (k >= 0) then
-      self%failure = "line node " // str(k) // " altitude " // str(self%x(2, k)) // " m is outside the " // &
-        "atmosphere model (ISA, " // str(isa_min_altitude) // " to " // str(isa_max_altitude) // &
-        " m; &line air_density = 0)"
+      self%failure = outside_atmosphere_message(self%x, k)
       status = rhs_fatal
       return
     end if

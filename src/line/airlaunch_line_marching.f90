@@ -62,9 +62,8 @@ module airlaunch_line_marching
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_interrupt, only: interrupt_signal, interrupted_error
   use airlaunch_strings, only: str
-  use airlaunch_atmosphere, only: isa_min_altitude, isa_max_altitude
   use airlaunch_linalg, only: solve_general
-  use airlaunch_line_model, only: line_model, marching_diverged, far_end_not_converged
+  use airlaunch_line_model, only: line_model, marching_diverged, far_end_not_converged, outside_atmosphere_message
   use airlaunch_line_ends, only: line_end, end_point_mass
   use airlaunch_line_scheme, only: line_scheme, line_scheme_options, line_scheme_stats, check_fill_target
   implicit none
@@ -231,9 +230,8 @@ contains
     ! forces at the old level (explicit right-hand side of Eq. (15))
     k = self%model%node_outside_atmosphere(self%x)
     if (k >= 0) then
-      call fatal_error(error, "line (marching): at t = " // str(self%tn) // " s line node " // str(k) // &
-        " altitude " // str(self%x(2, k)) // " m is outside the atmosphere model (ISA, " // &
-        str(isa_min_altitude) // " to " // str(isa_max_altitude) // " m; &line air_density = 0)")
+      call fatal_error(error, "line (marching): at t = " // str(self%tn) // " s " // &
+        outside_atmosphere_message(self%x, k))
       return
     end if
     call self%model%forces(self%x, self%v, self%f, self%tension, st)

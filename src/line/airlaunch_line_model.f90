@@ -89,7 +89,7 @@ module airlaunch_line_model
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
-  public :: weakest_segment, segment_strengths
+  public :: weakest_segment, segment_strengths, outside_atmosphere_message
   public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
     far_end_not_converged
 
@@ -544,6 +544,16 @@ contains
       log_slope = log(rho_hi/rho_lo)/(y_hi - y_lo)
     end if
   end subroutine air_density_fit
+
+  !> What stops a run whose node k is outside the atmosphere model
+  !> (model_node_outside_atmosphere): node, altitude and the model's range.
+  function outside_atmosphere_message(x, k) result(msg)
+    real(dp), intent(in) :: x(:, 0:)   !< node positions [m]
+    integer, intent(in) :: k           !< the node
+    character(len=:), allocatable :: msg
+    msg = "line node " // str(k) // " altitude " // str(x(2, k)) // " m is outside the atmosphere model (ISA, " // &
+      str(isa_min_altitude) // " to " // str(isa_max_altitude) // " m; &line air_density = 0)"
+  end function outside_atmosphere_message
 
   !> The first node (0..N) outside the atmosphere model where the air is the
   !> ISA's (air on, air_density 0: the model's range, isa_min_altitude to

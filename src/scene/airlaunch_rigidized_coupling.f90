@@ -654,8 +654,6 @@ contains
       self%tie_x + opts%outer_dt*self%tie_v, self%tie_v)
     call self%line%far%set_body_motion(t0, self%b3_x, self%b3_v, t0 + opts%outer_dt, &
       self%b3_x + opts%outer_dt*self%b3_v, self%b3_v)
-    call self%line%tail%set_body_motion(t0, self%tail_x, self%tail_v, t0 + opts%outer_dt, &
-      self%tail_x + opts%outer_dt*self%tail_v, self%tail_v)
     self%marching = opts%inner_scheme == "marching"
     if (self%marching) then
       call self%marcher%init(self%line, t0, yl, opts%inner_dt, opts%inner_force_tol, opts%inner_max_iterations, &
