@@ -27,7 +27,7 @@ program airlaunch
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch, setup_launch
-  use airlaunch_launch_history, only: ground_body_name
+  use airlaunch_launch_history, only: ground_body_name, ground_point_name
   use airlaunch_launch_system, only: launch_system
   use airlaunch_kinds, only: dp
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
@@ -281,11 +281,13 @@ contains
     s = "minimum line-empennage clearance: " // d // new_line("a")
   end function line_clearance_note
 
-  !> Whether a CG reached &flight ground_altitude (the run ended there).
+  !> Whether a body reached &flight ground_altitude (the run ended there).
   function ground_note(r) result(s)
     type(launch_result), intent(in) :: r
-    character(len=:), allocatable :: s, reached
-    reached = "ground: reached by the " // trim(ground_body_name(r%ground_body)) // "'s CG at " // &
+    character(len=:), allocatable :: s, reached, point
+    point = trim(ground_point_name(r%ground_point))
+    if (point == "cg") point = "CG"
+    reached = "ground: reached by the " // trim(ground_body_name(r%ground_body)) // "'s " // point // " at " // &
       at(r%ground_time) // ", speed " // fx(r%ground_speed, 2) // " m/s (the run ends there)" // new_line("a")
     s = "ground: not reached" // new_line("a")
     if (r%ground_time >= 0.0d0) s = reached

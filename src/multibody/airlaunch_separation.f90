@@ -10,10 +10,12 @@
 !>   g2 = CG past the ramp edge     Case 1 -> 2 when it crosses zero upwards (l0 travelled)
 !>   g3 = nose tip past the edge    Case 2 -> 3 when it crosses zero upwards (l10 travelled)
 !>   g4 = edge normal force N       Case 2 -> 3 early separation when N crosses zero downwards
-!>   g5 = lowest CG - ground        in every phase, when ground_altitude is set: the
-!>                                  aircraft's or the rocket's CG reaching the ground
-!>                                  (ground_time, ground_body, ground_speed; the phase
-!>                                  stays, `landed` tells the caller the scene is over)
+!>   g5 = lowest point - ground     in every phase, when ground_altitude is set: the
+!>                                  aircraft's CG or the rocket's lowest point (its
+!>                                  envelope, the cut joint's cylinder) reaching the
+!>                                  ground (ground_time, ground_body, ground_point,
+!>                                  ground_speed; the phase stays, `landed` tells the
+!>                                  caller the scene is over)
 !> `advance` integrates to an output time, handles the events (phase change, event
 !> time recorded in event_time(1:3), CVODE re-initialised); entering Case 2 with
 !> N <= 0 separates at once (early_separation).
@@ -44,15 +46,20 @@ module airlaunch_separation
   use airlaunch_cut_joint, only: cut_joint, cut_joint_geometry, cut_joint_options, joint_state, &
     joint_components, phase_name, phase_preparation, phase_extraction, phase_rotation, phase_free
   use airlaunch_cfa, only: cfa_workspace, cfa_solve, slide_locked, slide_free, slide_coulomb
+  use airlaunch_rotation, only: quat_to_dcm
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
   private
   public :: separation_system, separation_nroots
+  public :: ground_at_cg, ground_at_nose, ground_at_tail
 
   !> Number of event functions.
   integer, parameter :: separation_nroots = 5
   !> Largest number of load cases per solve: the real loads + 6 unit wrenches.
   integer, parameter :: ncol_max = 7
+  !> Which point reached the ground: the aircraft's CG, the rocket envelope's
+  !> nose end or its tail end (the lowest point of that end's rim).
+  integer, parameter :: ground_at_cg = 0, ground_at_nose = 1, ground_at_tail = 2
 
   !> Aircraft + rocket chain + cut joint + phases.
   type, extends(ode_system) :: separation_system
@@ -76,9 +83,10 @@ module airlaunch_separation
     real(dp) :: quat_drift = 0.0_dp           !< largest |1 - |q|| of the state after the last `advance`
     !> Geometric altitude of the ground [m]; -huge: none (no event g5)
     real(dp) :: ground_altitude = -huge(1.0_dp)
-    real(dp) :: ground_time = -huge(1.0_dp)   !< when a CG reached the ground (-huge: not yet) [s]
+    real(dp) :: ground_time = -huge(1.0_dp)   !< when a body reached the ground (-huge: not yet) [s]
     integer :: ground_body = -1               !< which: 0 aircraft, 1 rocket (-1: none)
-    real(dp) :: ground_speed = 0.0_dp         !< that body's CG speed there, earth frame [m/s]
+    integer :: ground_point = -1              !< where: ground_at_cg, _nose or _tail (-1: none)
+    real(dp) :: ground_speed = 0.0_dp         !< that point's speed there, earth frame [m/s]
     ! --- bodies (paper numbering 0..n) and their loads, updated by load_state/evaluate
     type(rigid_body), allocatable :: bodies(:)   !< (0:n) 0 aircraft, 1 rocket, 2.. chain
     real(dp), allocatable :: force(:, :)         !< (3, 0:n) applied CG forces, earth [N]
@@ -117,6 +125,7 @@ module airlaunch_separation
     procedure :: roots => sep_roots
     procedure :: handle_event => sep_handle_event
     procedure :: landed => sep_landed
+    procedure :: rocket_lowest_point => sep_rocket_lowest_point
     procedure :: normalize_quaternions => sep_normalize_quaternions
     procedure :: has_projection => sep_has_projection
     procedure :: project => sep_project
@@ -466,7 +475,7 @@ contains
     type(error_type), allocatable :: error
     g = 1.0_dp
     status = rhs_ok
-    if (self%ground_altitude > -huge(1.0_dp)) g(5) = min(y(2), y(body_state_size + 2)) - self%ground_altitude
+    if (self%ground_altitude > -huge(1.0_dp)) g(5) = min(y(2), rocket_lowest(y)) - self%ground_altitude
     select case (self%phase)
     case (phase_preparation)
       g(1) = t - self%t0
@@ -483,6 +492,17 @@ contains
       g(3) = self%joint%nose_past_edge(self%bodies(0), self%bodies(1))
       g(4) = self%normal_force
     end select
+  contains
+    !> Height of the rocket's lowest point in y (chain state from
+    !> body_state_size + 1: CG position, velocity, quaternion).
+    real(dp) function rocket_lowest(y) result(h)
+      real(dp), intent(in) :: y(:)
+      real(dp) :: c(3, 3), p(3)
+      integer :: o, which_end
+      o = body_state_size
+      c = quat_to_dcm(y(o + 7:o + 10))
+      call self%rocket_lowest_point(y(o + 2), c(2, :), h, which_end, p)
+    end function rocket_lowest
   end subroutine sep_roots
 
   !> Apply the phase transitions of the events in `which` (CVODE root info, +1 a
@@ -539,22 +559,54 @@ contains
       end if
     end select
   contains
-    !> The lower of the aircraft's CG (state from 1) and the rocket's (from
-    !> body_state_size + 1) reached the ground.
+    !> The lower of the aircraft's CG and the rocket's lowest point reached the
+    !> ground: which body, which point, and that point's speed.
     subroutine land()
-      integer :: i
-      i = 1
-      self%ground_body = 0
-      if (y(body_state_size + 2) < y(2)) then
-        i = body_state_size + 1
-        self%ground_body = 1
-      end if
+      real(dp) :: h, p(3)
+      integer :: which_end
+      call self%load_state(y)
+      call self%rocket_lowest_point(self%bodies(1)%r(2), self%bodies(1)%c(2, :), h, which_end, p)
       self%ground_time = t
-      self%ground_speed = norm2(y(i + 3:i + 5))
+      if (h < y(2)) then
+        self%ground_body = 1
+        self%ground_point = which_end
+        self%ground_speed = norm2(self%bodies(1)%point_velocity(p))
+      else
+        self%ground_body = 0
+        self%ground_point = ground_at_cg
+        self%ground_speed = norm2(self%bodies(0)%v)
+      end if
     end subroutine land
   end subroutine sep_handle_event
 
-  !> A CG has reached the ground (event g5): the scene is over.
+  !> The rocket's lowest point: on its envelope, the cut joint's cylinder (radius
+  !> rocket_radius, on the rocket's x axis from the tail at nose_x - rocket_length
+  !> to the nose at nose_x), the lowest point of the lower end's rim.  From the
+  !> CG's height and the earth's vertical in rocket axes (the second row of the
+  !> body-to-earth matrix): that point's height, which end (ground_at_nose or
+  !> ground_at_tail; the nose when the axis is level) and the point, rocket axes.
+  pure subroutine sep_rocket_lowest_point(self, cg_height, up, height, which_end, point)
+    class(separation_system), intent(in) :: self   !< the scene
+    real(dp), intent(in) :: cg_height              !< the rocket's CG, earth y [m]
+    real(dp), intent(in) :: up(3)                  !< the earth's unit vertical, rocket axes
+    real(dp), intent(out) :: height                !< the lowest point's earth y [m]
+    integer, intent(out) :: which_end              !< ground_at_nose or ground_at_tail
+    real(dp), intent(out) :: point(3)              !< the lowest point, rocket axes [m]
+    real(dp) :: x_end(2), s
+    associate(geo => self%joint%geo)
+      x_end(ground_at_nose) = geo%nose_x
+      x_end(ground_at_tail) = geo%nose_x - geo%rocket_length
+      which_end = merge(ground_at_nose, ground_at_tail, up(1)*x_end(ground_at_nose) <= up(1)*x_end(ground_at_tail))
+      point = [x_end(which_end), 0.0_dp, 0.0_dp]
+      ! the end face's rim point furthest down: the radius along the face's
+      ! steepest downward direction (none when the axis is vertical)
+      s = hypot(up(2), up(3))
+      if (s > 0.0_dp) point(2:3) = -geo%rocket_radius*up(2:3)/s
+    end associate
+    height = cg_height + dot_product(up, point)
+  end subroutine sep_rocket_lowest_point
+
+  !> A body has reached the ground (event g5): the scene is over.
   pure logical function sep_landed(self)
     class(separation_system), intent(in) :: self   !< the scene
     sep_landed = self%ground_time > -1.0e300_dp
@@ -562,7 +614,7 @@ contains
 
   !> Integrate to tout, stopping at every event to switch the phase and restart
   !> CVODE.  On return the solver holds the state at tout (quat_drift its largest
-  !> quaternion norm error), or at the ground event if a CG reached the ground
+  !> quaternion norm error), or at the ground event if a body reached the ground
   !> (`landed`).
   subroutine sep_advance(self, solver, tout, error)
     class(separation_system), intent(inout) :: self       !< the scene (the solver's system)

@@ -473,7 +473,7 @@ contains
         r%dsys%clr, changed, lower, err)
       if (allocated(err)) return
       if (lower) r%last_record_of_extremum = r%dsolver%t
-      if (r%dsys%sep%landed()) return   ! a CG reached the ground: the run ends there
+      if (r%dsys%sep%landed()) return   ! a body reached the ground: the run ends there
       if (changed) then
         if (leaves_at_phase(r, coupling_direct, r%dsys%sep%phase)) then
           switch = .true.
@@ -723,7 +723,7 @@ contains
       call rigidized_record(r, run, cfg, res, r%cpl%t, r%cpl%chain_solver%y, err)
   end subroutine rigidized_event
 
-  !> A CG reached the ground at time t (the active engine is there): the run
+  !> A body reached the ground at time t (the active engine is there): the run
   !> ends with a record at t unless that output time was just recorded.
   subroutine record_landing(r, run, cfg, res, t, err)
     type(coupled_run), intent(inout) :: r
@@ -1244,6 +1244,7 @@ contains
       res%edge_pull_time = event_or_minus(sep%edge_pull_time)
       res%ground_time = event_or_minus(sep%ground_time)
       res%ground_body = sep%ground_body
+      res%ground_point = sep%ground_point
       res%ground_speed = sep%ground_speed
     end subroutine events_of
   end subroutine finish_result

@@ -9,7 +9,7 @@ module airlaunch_launch_history
   use airlaunch_cvode, only: cvode_stats
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_scenario_config, only: scenario_config
-  use airlaunch_separation, only: separation_system
+  use airlaunch_separation, only: separation_system, ground_at_cg, ground_at_nose, ground_at_tail
   use airlaunch_cut_joint, only: phase_free, phase_name
   use airlaunch_strings, only: str
   use airlaunch_launch_loads, only: launch_loads
@@ -18,7 +18,7 @@ module airlaunch_launch_history
   private
   public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones, history_bytes
   public :: handle_launch_event, rocket_pitch_rate
-  public :: write_milestones, event_or_minus, clearance_geometry_of, ground_body_name
+  public :: write_milestones, event_or_minus, clearance_geometry_of, ground_body_name, ground_point_name
 
   !> Milestones of one run (also the summary row of a sweep case).
   type :: launch_result
@@ -44,10 +44,13 @@ module airlaunch_launch_history
     integer :: line_breaks = 0               !< segments parted in all
     integer, allocatable :: parted_segments(:)  !< which (ascending; unallocated: none)
     real(dp) :: max_quaternion_norm_error = 0.0_dp  !< largest | |q| - 1 | of the integrated quaternions
-    !> a CG reached &flight ground_altitude (the run ended there) [s] (-1: none)
+    !> the aircraft's CG or the rocket's lowest point reached &flight ground_altitude
+    !> (the run ended there) [s] (-1: none)
     real(dp) :: ground_time = -1.0_dp
     integer :: ground_body = -1               !< which: 0 aircraft, 1 rocket (-1: none)
-    real(dp) :: ground_speed = 0.0_dp         !< its CG speed there, earth frame [m/s]
+    !> where: airlaunch_separation's ground_at_cg, _nose or _tail (-1: none)
+    integer :: ground_point = -1
+    real(dp) :: ground_speed = 0.0_dp         !< that point's speed there, earth frame [m/s]
     real(dp) :: end_time = 0.0_dp
     logical :: has_line = .true.   !< false: no line (no peak tension; its attributes are left out)
     type(cvode_stats) :: stats
@@ -386,6 +389,7 @@ contains
     call w%add_real_att("/", "max_quaternion_norm_error", res%max_quaternion_norm_error, error)
     call w%add_real_att("/", "ground_time_s", res%ground_time, error)
     call w%add_text_att("/", "ground_body", trim(ground_body_name(res%ground_body)), error)
+    call w%add_text_att("/", "ground_point", trim(ground_point_name(res%ground_point)), error)
     ! (a speed is never negative: -1 marks "not reached", as min_clearance_m's)
     call w%add_real_att("/", "ground_speed_m_s", merge(res%ground_speed, -1.0_dp, res%ground_time >= 0.0_dp), error)
   end subroutine write_milestones
@@ -403,6 +407,23 @@ contains
       name = "none"
     end select
   end function ground_body_name
+
+  !> "cg", "nose", "tail" or "none" (ground_point -1): the point of ground_body
+  !> that reached the ground.
+  pure function ground_point_name(point) result(name)
+    integer, intent(in) :: point
+    character(len=4) :: name
+    select case (point)
+    case (ground_at_cg)
+      name = "cg"
+    case (ground_at_nose)
+      name = "nose"
+    case (ground_at_tail)
+      name = "tail"
+    case default
+      name = "none"
+    end select
+  end function ground_point_name
 
   pure real(dp) function event_or_minus(t) result(r)
     real(dp), intent(in) :: t

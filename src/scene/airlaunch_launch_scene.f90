@@ -67,8 +67,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     type(launch_system) :: fresh
     type(air_state) :: air
-    real(dp) :: v0, pull, f_tie(3), f_new(3), tol
-    integer :: pass
+    real(dp) :: v0, pull, f_tie(3), f_new(3), tol, y_low, low_point(3)
+    integer :: pass, low_end
     integer, parameter :: max_pass = 6
 
     air = isa(cfg%flight%altitude)
@@ -98,11 +98,13 @@ contains
       end if
       f_tie = f_new
     end do
-    ! both CGs start above the ground (its event watches for a crossing only)
-    associate(y_air => sys%sep%bodies(0)%r(2), y_rocket => sys%sep%bodies(1)%r(2))
-      if (.not. min(y_air, y_rocket) > cfg%flight%ground_altitude) then
+    ! the aircraft's CG and the rocket's lowest point start above the ground
+    ! (its event watches for a crossing only)
+    call sys%sep%rocket_lowest_point(sys%sep%bodies(1)%r(2), sys%sep%bodies(1)%c(2, :), y_low, low_end, low_point)
+    associate(y_air => sys%sep%bodies(0)%r(2))
+      if (.not. min(y_air, y_low) > cfg%flight%ground_altitude) then
         call fatal_error(error, "&flight: ground_altitude = " // str(cfg%flight%ground_altitude) // &
-          " m is not allowed: the rocket's CG starts at " // str(y_rocket) // " m and the aircraft's at " // &
+          " m is not allowed: the rocket's lowest point starts at " // str(y_low) // " m and the aircraft's CG at " // &
           str(y_air) // " m, not both above it (the default 0 m is sea level; set ground_altitude lower, " // &
           "down to -1000 m)")
         res%status = "invalid_input"

@@ -249,7 +249,8 @@ contains
     call require_range(f, "flight", "trim_alpha_deg", trim_alpha_deg, trim_alpha_min_deg, trim_alpha_max_deg, "deg", error)
     ! the ground: 1 km above the atmosphere model's floor (a last step's trial
     ! states may go below the ground before its event is located), and below
-    ! the release (setup_launch checks that both CGs start above it)
+    ! the release (setup_launch checks that the aircraft's CG and the rocket's
+    ! lowest point start above it)
     if (.not. allocated(error)) call require_range(f, "flight", "ground_altitude", ground_altitude, &
       isa_min_altitude + ground_margin_below, altitude, "m: at most &flight altitude", error)
     if (allocated(error)) return

@@ -1,6 +1,7 @@
-"""The ground (`&flight ground_altitude`): the run ends when the aircraft's or
-the rocket's CG reaches it, an event located by CVODE's root finding, with
-the time, the body and its speed as milestones (docs/output.md).  Before,
+"""The ground (`&flight ground_altitude`): the run ends when the aircraft's CG
+or the rocket's lowest point (its envelope, a cylinder of its length and
+diameter) reaches it, an event located by CVODE's root finding, with the
+time, the body, the point and its speed as milestones (docs/output.md).  Before,
 a long run went on below ground and failed, exit 3, when the rocket left the
 atmosphere model at -2 km."""
 import math
@@ -21,20 +22,44 @@ def _run(exe, nml, out):
     return xr.open_dataset(out), res.stdout
 
 
+ROCKET_NOSE, ROCKET_LENGTH = 9.25, 18.5    # the gravity drop's and the paper file's rocket: cg_from_nose, length [m]
+
+
+def _lowest_point(y_cg, elevation_deg, radius):
+    """Height of the rocket envelope's lowest point (a cylinder of `radius`
+    from the tail at ROCKET_NOSE - ROCKET_LENGTH to the nose at ROCKET_NOSE
+    on the axis, its elevation from the records), and which end it is on:
+    the lower end's centre less the radius times the cosine of the axis
+    elevation (its end face's rim, tilted)."""
+    s, c = math.sin(math.radians(elevation_deg)), math.cos(math.radians(elevation_deg))
+    ends = {"nose": ROCKET_NOSE * s, "tail": (ROCKET_NOSE - ROCKET_LENGTH) * s}
+    end = min(ends, key=ends.get)
+    return y_cg + ends[end] - radius * c, end
+
+
 def test_ballistic_fall_to_the_ground_against_analytic(airlaunch_exe, tmp_path):
     """The gravity drop with the aircraft held steady and the rocket's
     aerodynamics off (c_axial = c_dn = 0, no fins, and a 1 cm diameter, which
     scales the slender-body normal force that has no coefficient down by
-    2.6e4): after the separation only gravity acts, so from any record (t, y,
-    v) the rocket reaches the ground 500 m below the release at
-    t + (v_y + sqrt(v_y^2 + 2 g (y - ground))) / g with speed
-    sqrt(v_x^2 + v_z^2 + v_y^2 + 2 g (y - ground)).  BDF is exact on a
-    constant acceleration and CVODE locates the root to ~1e-14 s; what is
-    left is the normal force of the 1 cm body and rtol 1e-6 over the 5 s
-    before: 1e-5 s and 1e-6 relative allowed.  The run ends there: status
-    completed, exit 0, the last record at the event with the rocket on the
-    ground (1e-6 m: the event's own state), every earlier record above it."""
-    ground = 5500.0
+    2.6e4): after the separation only gravity acts, so the CG falls on a
+    parabola and the rocket turns in its plane of symmetry at the constant
+    rate it left the edge with (30 deg/s here: it tumbles).  From a record
+    (t_k, CG, velocity, axis angle phi_k) and the rate between it and the next
+    record (t_k, CG, velocity, axis angle phi_k, turn rate) the envelope's
+    lowest point (18.5 m cylinder, nose 9.25 m ahead of the CG) is predicted
+    in closed form over time, and its first crossing of the ground 500 m
+    below the release is found by bisection.  BDF is exact on a constant
+    acceleration and CVODE locates the root to ~1e-14 s; what is left is the
+    normal force of the 1 cm body and rtol 1e-6 over the 10 s before (the
+    turn rate wanders by 2e-5 of itself: 3e-6 s at the ground): 1e-5 s
+    allowed, measured 1.0e-6 and 3.3e-6 s.  The speed is the touching point's, from the event's own
+    record: the CG's plus the turn rate times the point's arm (1e-9: the
+    same state, only the geometry differs).  The run ends there:
+    status completed, exit 0, the last record at the event with the lowest
+    point on the ground (1e-6 m: the event's own state), at the end the
+    closed form says, every earlier record above it.  The CG alone, as
+    before, would land 7.7 m lower, 0.05 s later."""
+    ground, radius = 5500.0, 0.005
     nml = nml_variant(tmp_path, base=GRAVITY_DROP, edits=[
         (r"^  dynamics = 'free' .*$", "  dynamics = 'prescribed'"),
         (r"^  c_axial = 0.35$", "  c_axial = 0.0"), (r"^  c_dn = 1.2$", "  c_dn = 0.0"),
@@ -45,20 +70,46 @@ def test_ballistic_fall_to_the_ground_against_analytic(airlaunch_exe, tmp_path):
     assert ds.attrs["status"] == "completed" and ds.attrs["ground_body"] == "rocket"
     t_g, v_g = ds.attrs["ground_time_s"], ds.attrs["ground_speed_m_s"]
     t = ds["time"].values
-    y = ds["rocket_position"].values[:, 1]
+    pos = ds["rocket_position"].values
     v = ds["rocket_velocity"].values
-    assert t[-1] == t_g and abs(y[-1] - ground) < 1e-6
-    assert np.all(y[:-1] > ground)
-    assert np.linalg.norm(v[-1]) == pytest.approx(v_g, rel=1e-12)
-    t_sep = ds.attrs["separation_time_s"]
-    after = np.flatnonzero(t > t_sep + 0.1)
+    elev = ds["rocket_nose_elevation_deg"].values
+    euler = np.radians(ds["rocket_euler_deg"].values)
+    low = [_lowest_point(pos[k, 1], elev[k], radius) for k in range(len(t))]
+    assert t[-1] == t_g and abs(low[-1][0] - ground) < 1e-6
+    assert all(h > ground for h, _ in low[:-1])
+    assert ds.attrs["ground_point"] == low[-1][1]
+    assert pos[-1, 1] - ground > 1.0        # the CG is well above: the extent counts
+    # the axis angle in the plane of the fall (yaw and roll are 0 or 180 deg)
+    phi = np.arctan2(np.sin(euler[:, 1]), np.cos(euler[:, 1]) * np.cos(euler[:, 0]))
+    assert np.all(np.abs(pos[:, 2]) < 1e-9) and np.all(np.abs(np.sin(euler[:, 2])) < 1e-9)
+    # the turn rate about the earth's z axis (Euler pitch rate, its sign flipped by a yaw of 180 deg)
+    rate = np.radians(ds["rocket_pitch_rate_deg_s"].values) * np.cos(euler[:, 0])
+    assert np.all(np.abs(np.degrees(rate[t > ds.attrs["separation_time_s"] + 0.1])) > 10.0)   # it tumbles
+    after = np.flatnonzero(t > ds.attrs["separation_time_s"] + 0.1)
     for k in (after[0], after[len(after) // 2]):   # two records, 4-5 s apart
-        h = y[k] - ground
-        t_pred = t[k] + (v[k, 1] + math.sqrt(v[k, 1] ** 2 + 2 * G0 * h)) / G0
-        v_pred = math.sqrt(v[k, 0] ** 2 + v[k, 2] ** 2 + v[k, 1] ** 2 + 2 * G0 * h)
-        assert t_g == pytest.approx(t_pred, abs=1e-5), k
-        assert v_g == pytest.approx(v_pred, rel=1e-6), k
-    assert f"ground: reached by the rocket's CG at t = {t_g:.3f} s" in stdout, stdout
+
+        def height(tt, k=k):
+            dt = tt - t[k]
+            y_cg = pos[k, 1] + v[k, 1] * dt - 0.5 * G0 * dt ** 2
+            return _lowest_point(y_cg, math.degrees(math.asin(math.sin(phi[k] + rate[k] * dt))), radius)[0] - ground
+
+        grid = np.arange(t[k], t[-1] + 1.0, 1e-3)
+        first = next(i for i, tt in enumerate(grid) if height(tt) <= 0.0)
+        lo, hi = grid[first - 1], grid[first]
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if height(mid) > 0.0 else (lo, mid)
+        assert t_g == pytest.approx(lo, abs=1e-5), k
+    # the speed is the touching point's: the CG's and the turn rate times its arm
+    # (the lower end's centre, and the radius toward the ground), at the event's record
+    axis = np.array([math.cos(phi[-1]), math.sin(phi[-1])])
+    x_end = ROCKET_NOSE if low[-1][1] == "nose" else ROCKET_NOSE - ROCKET_LENGTH
+    normal = np.array([-axis[1], axis[0]])
+    arm = x_end * axis - radius * normal * math.copysign(1.0, normal[1])
+    v_point = v[-1, :2] + rate[-1] * np.array([-arm[1], arm[0]])
+    assert v_g == pytest.approx(np.linalg.norm(v_point), rel=1e-9)
+    assert abs(v_g - np.linalg.norm(v[-1])) > 1.0      # not the CG's
+    assert f"ground: reached by the rocket's {low[-1][1]} at t = {t_g:.3f} s" in stdout, stdout
     ds.close()
 
 
@@ -77,21 +128,28 @@ def paper_to_ground(airlaunch_exe, tmp_path_factory):
 def test_paper_scenario_ends_on_the_ground(paper_to_ground):
     """The paper scenario over 400 s: the rocket under its parachute reaches
     sea level after ~90 s, and the run completes there (it failed at -2 km
-    before).  Independent check of the event: the rocket's altitude over the
-    records crosses 0 between the last two, and the time is where the
-    straight line through the last two grid records before it crosses the
-    ground, extrapolated to it, within what the curvature of the track allows
-    over the two record intervals (|a_y| (2 dt)^2 / (2 |v_y|) = 8e-6 s with
-    |a_y| < 1 m/s^2 and |v_y| ~ 100 m/s: the parachute holds the fall near
-    its terminal speed, measured |a_y| <= 0.57 m/s^2 over the last second;
-    1e-4 s allowed, measured 6.2e-7 s)."""
+    before).  It hangs from its nose-end tie-down nearly level (nose 3.4 deg
+    up), so its tail's rim touches first, its CG 1.34 m above the sea.
+    Independent check of the event: the envelope's lowest point, computed
+    here from the records' CG and axis elevation, crosses 0 between the last
+    two records, and the time is where the straight line through the last
+    two grid records before it crosses the ground, extrapolated to it, within
+    what the curvature of the track allows over the two record intervals
+    (|a_y| (2 dt)^2 / (2 |v_y|) = 8e-6 s with |a_y| < 1 m/s^2 and |v_y| ~
+    100 m/s: the parachute holds the fall near its terminal speed, measured
+    |a_y| <= 0.57 m/s^2 over the last second, and the pitch changes by
+    < 0.01 deg per record; 1e-4 s allowed, measured 1.4e-6 s)."""
     ds, stdout = paper_to_ground
     assert ds.attrs["status"] == "completed" and ds.attrs["ground_body"] == "rocket"
+    assert ds.attrs["ground_point"] == "tail"
     t_g = ds.attrs["ground_time_s"]
     assert 60.0 < t_g < 120.0
     t = ds["time"].values
-    y = ds["rocket_position"].values[:, 1]
+    y_cg = ds["rocket_position"].values[:, 1]
+    elev = ds["rocket_nose_elevation_deg"].values
+    y = np.array([_lowest_point(y_cg[k], elev[k], 0.8)[0] for k in range(len(t))])
     assert t[-1] == t_g and abs(y[-1]) < 1e-6 and np.all(y[:-1] > 0.0)
+    assert 1.0 < y_cg[-1] < 2.0
     t_lin = t[-2] - y[-2] * (t[-2] - t[-3]) / (y[-2] - y[-3])
     assert t_g == pytest.approx(t_lin, abs=1e-4)
     assert "(the run ends there)" in stdout
@@ -118,6 +176,7 @@ def test_ground_not_reached_is_said(airlaunch_exe, tmp_path):
     speed -1, and the summary says so."""
     ds, stdout = _run(airlaunch_exe, ROOT / "input" / "airlaunch_paper.nml", tmp_path / "p.nc")
     assert ds.attrs["ground_time_s"] == -1.0 and ds.attrs["ground_body"] == "none"
+    assert ds.attrs["ground_point"] == "none"
     assert ds.attrs["ground_speed_m_s"] == -1.0
     assert "ground: not reached" in stdout
     ds.close()
@@ -126,12 +185,14 @@ def test_ground_not_reached_is_said(airlaunch_exe, tmp_path):
 @pytest.mark.parametrize("value, fragment", [
     ("10001.0", "is not allowed (must be in [-1000.0, 10000.0] m: at most &flight altitude)"),
     ("-1500.0", "is not allowed (must be in [-1000.0, 10000.0] m: at most &flight altitude)"),
-    ("9999.0", "is not allowed: the rocket's CG starts at 9998.7")])
+    ("9999.0", "is not allowed: the rocket's lowest point starts at 9997.74")])
 def test_ground_altitude_out_of_range(airlaunch_exe, tmp_path, value, fragment):
     """A ground above the release altitude or less than 1 km above the
     atmosphere model's floor (-2 km) is refused by the reader; one above the
-    rocket's CG at the start (1.26 m below the aircraft's in the paper file)
-    by the set-up, naming where the CGs start: one line, exit 2, no file."""
+    rocket's lowest point at the start (its CG 1.26 m below the aircraft's
+    in the paper file, its rim 0.8 m lower, its tail 0.2 m lower still at
+    1.2 deg nose up) by the set-up, naming where the rocket's lowest point and the
+    aircraft's CG start: one line, exit 2, no file."""
     nml = nml_variant(tmp_path, edits=[(r"^(  altitude = 10000.0 .*)$", rf"\1\n  ground_altitude = {value}")])
     out = tmp_path / "never.nc"
     line = assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out),
@@ -142,19 +203,21 @@ def test_ground_altitude_out_of_range(airlaunch_exe, tmp_path, value, fragment):
 def test_a_low_release_lands(airlaunch_exe, tmp_path):
     """A release 50 m above sea level (the default ground): the rocket reaches
     the sea within the run and the run completes there (before the ground
-    existed it flew on below sea level); a release at sea level itself starts
-    with the rocket's CG below the ground and is refused in one line that says
-    the default is sea level."""
+    existed it flew on below sea level), the envelope's lowest point on the
+    sea at the last record; a release at sea level itself starts with the
+    rocket below the ground and is refused in one line that says the default
+    is sea level."""
     nml = nml_variant(tmp_path, "low", edits=[(r"^  altitude = 10000.0 .*$", "  altitude = 50.0")])
     ds, _ = _run(airlaunch_exe, nml, tmp_path / "low.nc")
     assert ds.attrs["status"] == "completed" and ds.attrs["ground_body"] == "rocket"
     assert 0.0 < ds.attrs["ground_time_s"] < 15.0 and ds["time"].values[-1] == ds.attrs["ground_time_s"]
-    assert abs(ds["rocket_position"].values[-1, 1]) < 1e-6
+    low = _lowest_point(ds["rocket_position"].values[-1, 1], ds["rocket_nose_elevation_deg"].values[-1], 0.8)
+    assert abs(low[0]) < 1e-6 and low[1] == ds.attrs["ground_point"]
     ds.close()
     nml = nml_variant(tmp_path, "sea", edits=[(r"^  altitude = 10000.0 .*$", "  altitude = 0.0")])
     out = tmp_path / "sea.nc"
     line = assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out),
-                              "&flight: ground_altitude = 0.0 m is not allowed: the rocket's CG starts at", out)
+                              "&flight: ground_altitude = 0.0 m is not allowed: the rocket's lowest point starts at", out)
     assert "the default 0 m is sea level" in line, line
 
 
