@@ -10,7 +10,9 @@
 !> group, variable, value and what is allowed), 3 for a numerical failure (the
 !> output written so far is kept, with status="failed"), 4 when the run
 !> completed but its output file could not be written (a full disk): the
-!> milestones are printed, nothing is left under the output's name; 130 or
+!> milestones are printed, nothing is left under the output's name; 4 also
+!> when what it prints (the summary, --check's input, --help) did not reach
+!> the standard output (a full disk, a closed descriptor); 130 or
 !> 143 when SIGINT (Ctrl-C) or SIGTERM interrupted the integration (the output
 !> written so far is kept, with status="interrupted"; a second signal ends the
 !> process at once).
@@ -19,7 +21,7 @@
 !> end): a second run asked to write the same file is refused (exit 2) instead
 !> of both writing OUTPUT.part at once.
 program airlaunch
-  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use, intrinsic :: iso_fortran_env, only: error_unit
   use airlaunch_error, only: error_type, output_failure_note
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_namelist, only: nml_file
@@ -35,10 +37,12 @@ program airlaunch
   use airlaunch_blas_threads, only: use_one_blas_thread
   use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal
   use airlaunch_interrupt, only: catch_interrupts
+  use airlaunch_sweep_files, only: write_bytes
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
   type(error_type), allocatable :: error
+  type(error_type), allocatable :: stdout_error   !< the first line that did not reach stdout
   type(file_lock) :: output_lock
   character(len=:), allocatable :: path, echo, summary, output_override, check_note, arg
   integer :: i, nargs, n_run_echo
@@ -61,10 +65,12 @@ program airlaunch
     select case (arg)
     case ("-h", "--help")
       call usage()
+      call check_stdout("the usage is incomplete")
       stop
     case ("-V", "--version")
-      write(output_unit, '(a)') "airlaunch " // code_version
-      write(output_unit, '(a)') "SUNDIALS: " // sundials_build
+      call say("airlaunch " // code_version)
+      call say("SUNDIALS: " // sundials_build)
+      call check_stdout("the version is incomplete")
       stop
     case ("--check")
       check_only = .true.
@@ -146,7 +152,7 @@ program airlaunch
   if (allocated(error)) then
     if (error%output) then
       ! the run completed: its milestones stand; the file could not be written
-      if (allocated(summary)) write(output_unit, '(a)') summary
+      if (allocated(summary)) call say(summary)
       write(error_unit, '(a)') "airlaunch: error: " // error%message
       write(error_unit, '(a)') "airlaunch: no output written (the run completed; writing " // trim(run%output) // &
         " failed, and nothing is left under that name or " // trim(run%output) // ".part)"
@@ -176,11 +182,32 @@ program airlaunch
     call output_lock%release()
     stop 3, quiet=.true.
   end if
-  write(output_unit, '(a)') summary
-  if (run%trajectory) write(output_unit, '(a)') "output: " // trim(run%output)
+  call say(summary)
+  if (run%trajectory) call say("output: " // trim(run%output))
+  if (run%trajectory) call check_stdout("the run completed, its output is " // trim(run%output))
+  call check_stdout("the run completed")
   call output_lock%release()
 
 contains
+
+  !> One line (or lines) to the standard output, by write(2): gfortran's
+  !> buffered unit 6 drops write errors (a full disk, a closed descriptor)
+  !> without a word; the first failure is kept for check_stdout.
+  subroutine say(text)
+    character(len=*), intent(in) :: text
+    call write_bytes(1, text // new_line("a"), stdout_error)
+  end subroutine say
+
+  !> A line that did not reach the standard output: one line on stderr saying
+  !> what stands (`context`), exit 4 (as a run whose file could not be written).
+  subroutine check_stdout(context)
+    character(len=*), intent(in) :: context
+    if (.not. allocated(stdout_error)) return
+    write(error_unit, '(a)') "airlaunch: error: the standard output could not be written (" // &
+      stdout_error%message // "; " // trim(context) // ")"
+    call output_lock%release()
+    stop 4, quiet=.true.
+  end subroutine check_stdout
 
   !> The run was interrupted (SIGINT, SIGTERM caught between the integrator's
   !> steps): one line, then where its output so far is; exit 128 + the signal,
@@ -383,10 +410,11 @@ contains
   !> --check: the input is valid; print it resolved (every group the scene
   !> reads, defaults included: what the output's `input_namelist` records) and end.
   subroutine print_resolved_input()
-    write(output_unit, '(a)') "! " // path // ": valid input (airlaunch --check; " // &
-      "resolved, defaults included; the run was not started)"
-    if (len(check_note) > 0) write(output_unit, '(a)') "! " // check_note
-    write(output_unit, '(a)') echo
+    call say("! " // path // ": valid input (airlaunch --check; " // &
+      "resolved, defaults included; the run was not started)")
+    if (len(check_note) > 0) call say("! " // check_note)
+    call say(echo)
+    call check_stdout("the resolved input printed is incomplete")
     stop
   end subroutine print_resolved_input
 
@@ -411,9 +439,9 @@ contains
   end subroutine check_trim
 
   subroutine usage()
-    write(output_unit, '(a)') "usage: airlaunch SCENARIO.nml [--output FILE] [--check]"
-    write(output_unit, '(a)') "  runs the scenario of the namelist file; see docs/input.md"
-    write(output_unit, '(a)') "  --check: validate the input and print it resolved (defaults included), without running"
+    call say("usage: airlaunch SCENARIO.nml [--output FILE] [--check]")
+    call say("  runs the scenario of the namelist file; see docs/input.md")
+    call say("  --check: validate the input and print it resolved (defaults included), without running")
   end subroutine usage
 
   !> Command-line argument i, whole (any length).

@@ -10,10 +10,11 @@
 !> writes the summary (sorted by case id) atomically and prints the tally.
 !> Exit status: 0 done (failed cases are results, counted in the tally),
 !> 2 bad input (one line on stderr, before any case runs), 4 a file or MPI
-!> error while running.  --restart discards the journal and the kept
+!> error while running, or printed lines (--check, --case-namelist, the
+!> tally) that did not reach the standard output.  --restart discards the journal and the kept
 !> trajectories of an earlier run.
 program airlaunch_sweep
-  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use, intrinsic :: iso_fortran_env, only: error_unit
   use, intrinsic :: iso_c_binding, only: c_int
   use mpi_f08
   use airlaunch_kinds, only: dp
@@ -21,7 +22,7 @@ program airlaunch_sweep
   use airlaunch_strings, only: str, fixed
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file, write_bytes
   use airlaunch_path, only: process_id, ignore_file_size_signal
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
@@ -42,6 +43,7 @@ program airlaunch_sweep
   integer, parameter :: exit_ok = 0, exit_input = 2, exit_runtime = 4
   type(sweep_setup) :: s
   type(error_type), allocatable :: error
+  type(error_type), allocatable :: stdout_error   !< the first line that did not reach stdout
   character(len=:), allocatable :: path, scratch, tag
   integer :: rank, nranks, status, case_id, n_resumed, k, n_written
   logical :: check_only, restart
@@ -115,9 +117,9 @@ program airlaunch_sweep
     call MPI_Barrier(MPI_COMM_WORLD)
     call run_pass(keep, .true., n_written)
     if (rank == 0) then
-      write(output_unit, '(a)') "trajectories: " // str(n_written) // " written to " // s%def%trajectory_dir()
-      if (n_written < size(keep)) write(output_unit, '(a)') "trajectories: " // str(size(keep) - n_written) // &
-        " of the cases kept end before their first output record (no file; the summary has their failure)"
+      call say("trajectories: " // str(n_written) // " written to " // s%def%trajectory_dir())
+      if (n_written < size(keep)) call say("trajectories: " // str(size(keep) - n_written) // &
+        " of the cases kept end before their first output record (no file; the summary has their failure)")
     end if
   end if
   call finish(exit_ok)
@@ -262,15 +264,14 @@ contains
       call delete_file(s%def%envelope_path())
       call delete_file(s%def%verify_path())
     end if
-    if (n_resumed > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": resuming: " // str(n_resumed) // &
-      " of " // str(s%table%n_cases) // " cases already in the journal"
-    if (bad > 0) write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(bad) // &
-      " torn journal lines ignored (their cases run again)"
-    write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(size(pending)) // " cases to run on " // &
+    if (n_resumed > 0) call say("sweep " // s%def%name // ": resuming: " // str(n_resumed) // &
+      " of " // str(s%table%n_cases) // " cases already in the journal")
+    if (bad > 0) call say("sweep " // s%def%name // ": " // str(bad) // &
+      " torn journal lines ignored (their cases run again)")
+    call say("sweep " // s%def%name // ": " // str(size(pending)) // " cases to run on " // &
       str(nranks) // " rank" // trim(merge("s", " ", nranks > 1)) // " (" // s%def%design // ", " // &
       str(size(s%def%inputs)) // " inputs, t_end " // str(merge(s%def%t_end, s%base%t_end, s%def%t_end > 0)) // &
-      " s)"
-    flush(output_unit)
+      " s)")
   end subroutine prepare_run
 
   !> Rank 0: all rows from the journal; every case must be there.
@@ -304,40 +305,38 @@ contains
     rate = done/max(elapsed, 1.0e-9_dp)
     eta = -1.0_dp
     if (done > 0) eta = (total - done)/rate
-    write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(n_resumed + done) // "/" // &
+    call say("sweep " // s%def%name // ": " // str(n_resumed + done) // "/" // &
       str(s%table%n_cases) // " done, " // str(failed) // " failed, " // fixed(rate, 2) // " cases/s, ETA " // &
-      duration(eta)
-    flush(output_unit)
+      duration(eta))
   end subroutine report_progress
 
   subroutine report_tally(n_run, elapsed)
     integer, intent(in) :: n_run
     real(dp), intent(in) :: elapsed
-    write(output_unit, '(a)') "sweep " // s%def%name // ": " // str(size(rows)) // " cases: " // &
+    call say("sweep " // s%def%name // ": " // str(size(rows)) // " cases: " // &
       str(count(rows%status == status_ok)) // " ok, " // str(count(rows%status == status_failed)) // &
       " failed, " // str(count(rows%status == status_invalid)) // " invalid input; " // str(n_run) // &
       " run now on " // str(nranks) // " rank" // trim(merge("s", " ", nranks > 1)) // " in " // &
       fixed(elapsed, 2) // " s (" // fixed(n_run/max(elapsed, 1.0e-9_dp), 3) // " cases/s), " // str(n_resumed) // &
-      " from the journal"
-    write(output_unit, '(a)') "summary: " // s%def%summary_path()
-    flush(output_unit)
+      " from the journal")
+    call say("summary: " // s%def%summary_path())
   end subroutine report_tally
 
   subroutine report_check()
     integer :: j
     if (case_id >= 0) then
-      write(output_unit, '(a)', advance="no") case_namelist(s%def, s%base, case_id, s%table%values(:, case_id + 1))
+      call say(case_namelist(s%def, s%base, case_id, s%table%values(:, case_id + 1)), newline=.false.)
       return
     end if
-    write(output_unit, '(a)') "airlaunch-sweep: " // path // ": ok: design " // s%def%design // ", " // &
-      str(s%def%n_cases) // " cases, inputs:"
+    call say("airlaunch-sweep: " // path // ": ok: design " // s%def%design // ", " // &
+      str(s%def%n_cases) // " cases, inputs:")
     do j = 1, size(s%def%inputs)
-      write(output_unit, '(a)') "  " // s%def%inputs(j)%name // " (" // s%def%inputs(j)%distribution // ")"
+      call say("  " // s%def%inputs(j)%name // " (" // s%def%inputs(j)%distribution // ")")
     end do
     if (s%table%n_cases > 0) then
-      write(output_unit, '(a)') "table: " // s%def%table_path() // " matches the definition"
+      call say("table: " // s%def%table_path() // " matches the definition")
     else
-      write(output_unit, '(a)') "table: " // s%def%table_path() // " not made yet"
+      call say("table: " // s%def%table_path() // " not made yet")
     end if
   end subroutine report_check
 
@@ -357,8 +356,8 @@ contains
         if (rank == 0) call usage()
         call finish(exit_ok)
       case ("-V", "--version")
-        if (rank == 0) write(output_unit, '(a)') "airlaunch-sweep " // code_version
-        if (rank == 0) write(output_unit, '(a)') "SUNDIALS: " // sundials_build
+        if (rank == 0) call say("airlaunch-sweep " // code_version)
+        if (rank == 0) call say("SUNDIALS: " // sundials_build)
         call finish(exit_ok)
       case ("--check")
         check_only = .true.
@@ -388,9 +387,9 @@ contains
   end subroutine parse_arguments
 
   subroutine usage()
-    write(output_unit, '(a)') "usage: mpirun -np K airlaunch-sweep SWEEP.nml [--restart]"
-    write(output_unit, '(a)') "       airlaunch-sweep SWEEP.nml --check | --case-namelist ID"
-    write(output_unit, '(a)') "  runs the cases of the sweep's table (docs/sweep.md); a rerun resumes"
+    call say("usage: mpirun -np K airlaunch-sweep SWEEP.nml [--restart]")
+    call say("       airlaunch-sweep SWEEP.nml --check | --case-namelist ID")
+    call say("  runs the cases of the sweep's table (docs/sweep.md); a rerun resumes")
   end subroutine usage
 
   !> Bad command line: one line, exit 2.
@@ -423,12 +422,35 @@ contains
     stop exit_runtime, quiet=.true.
   end subroutine die
 
+  !> End every rank with `code`; a rank whose printed lines did not all reach
+  !> the standard output says so and ends with exit_runtime instead of exit_ok.
   subroutine finish(code)
     integer, intent(in) :: code
     call MPI_Finalize()
+    if (code == exit_ok .and. allocated(stdout_error)) then
+      write(error_unit, '(a)') "airlaunch-sweep: error: the standard output could not be written (" // &
+        stdout_error%message // "; what it printed is incomplete)"
+      stop exit_runtime, quiet=.true.
+    end if
     if (code == exit_ok) stop, quiet=.true.
     stop code, quiet=.true.
   end subroutine finish
+
+  !> Text to the standard output by write(2) (a line unless newline is false):
+  !> gfortran's buffered unit 6 drops write errors without a word; the first
+  !> failure is kept for finish.
+  subroutine say(text, newline)
+    character(len=*), intent(in) :: text
+    logical, intent(in), optional :: newline
+    logical :: nl
+    nl = .true.
+    if (present(newline)) nl = newline
+    if (nl) then
+      call write_bytes(1, text // new_line("a"), stdout_error)
+    else
+      call write_bytes(1, text, stdout_error)
+    end if
+  end subroutine say
 
   !> "1 h 02 min", "3 min 07 s", "12 s"; "?" if unknown.
   function duration(t) result(r)
