@@ -64,11 +64,17 @@ program airlaunch_sweep
   status = exit_ok
   n_resumed = 0
   if (rank == 0) then
-    ! --case-namelist is a query that scripts may run many at once: its check file is its own
+    ! --case-namelist is a query that scripts may run many at once, of a
+    ! sweep that may be read-only (an archive): its check file is its own,
+    ! in the temporary directory
     tag = "rank0"
-    if (case_id >= 0) tag = "case_namelist_" // str(process_id())
-    call load_sweep(path, .not. check_only, tag, s, error)
-    if (case_id >= 0 .and. allocated(s%def%output_dir)) call delete_file(s%def%work_dir() // "/check_" // tag // ".nml")
+    if (case_id >= 0) then
+      tag = "airlaunch_sweep_case_namelist_" // str(process_id())
+      call load_sweep(path, .not. check_only, tag, s, error, scratch_dir=temporary_dir())
+      call delete_file(temporary_dir() // "/check_" // tag // ".nml")
+    else
+      call load_sweep(path, .not. check_only, tag, s, error)
+    end if
     if (allocated(error)) status = exit_input
     if (status == exit_ok .and. case_id >= 0) then
       if (case_id >= s%table%n_cases) then
@@ -421,6 +427,19 @@ contains
     call MPI_Abort(MPI_COMM_WORLD, exit_runtime)
     stop exit_runtime, quiet=.true.
   end subroutine die
+
+  !> $TMPDIR, or /tmp where it is unset or empty.
+  function temporary_dir() result(dir)
+    character(len=:), allocatable :: dir
+    integer :: n, stat
+    call get_environment_variable("TMPDIR", length=n, status=stat)
+    if (stat /= 0 .or. n == 0) then
+      dir = "/tmp"
+      return
+    end if
+    allocate(character(len=n) :: dir)
+    call get_environment_variable("TMPDIR", dir)
+  end function temporary_dir
 
   !> End every rank with `code`; a rank whose printed lines did not all reach
   !> the standard output says so and ends with exit_runtime instead of exit_ok.

@@ -304,3 +304,30 @@ def test_envelope_on_a_full_disk_names_the_file_and_the_reason(tmp_path, exes):
         res = run_python(["envelope", definition], tmp_path)
         assert res.returncode == 0, res.stdout + res.stderr
         assert not list(out.rglob("*.part"))
+
+
+def test_case_namelist_of_a_sweep_that_cannot_be_written(exes, tmp_path):
+    """--case-namelist is a query: it reads the definition, the base and the
+    table and prints one case's namelist, so it must work on a finished sweep
+    that cannot be written (an archive, a read-only mount; here a file where
+    its work/ would be, which stops root too).  Reference: the same query
+    while work/ could be made prints the same bytes.  It leaves nothing in
+    $TMPDIR, where its scratch check file goes.  --check still refuses such a
+    sweep in one line naming output_dir: a run needs to write there."""
+    definition = small_definition(tmp_path / "small.nml", n_cases=4)
+    make_table(definition, tmp_path)
+    ref = run_sweep(definition, tmp_path, None, "--case-namelist", 2)
+    assert ref.returncode == 0, ref.stderr
+    assert not (tmp_path / "out" / "work").exists()      # the query made nothing there
+    (tmp_path / "out" / "work").write_text("not a directory\n")
+    scratch = tmp_path / "tmpdir"
+    scratch.mkdir()
+    env = dict(os.environ, TMPDIR=str(scratch), OPENBLAS_NUM_THREADS="1")
+    res = subprocess.run([str(SWEEP_EXE), str(definition), "--case-namelist", "2"], cwd=tmp_path,
+                         capture_output=True, text=True, env=env, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout == ref.stdout and "&run" in res.stdout
+    assert list(scratch.iterdir()) == []
+    res = run_sweep(definition, tmp_path, None, "--check")
+    errors = _errors(res)
+    assert res.returncode == 2 and len(errors) == 1 and "output_dir = 'out' is not usable" in errors[0], res.stderr
