@@ -16,7 +16,7 @@ module airlaunch_ncwrite
   use h5ds
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
-  use airlaunch_path, only: free_bytes, delete_file, parent_directory
+  use airlaunch_path, only: free_bytes, file_size_limit, delete_file, parent_directory
   implicit none
   private
   public :: nc_writer
@@ -229,21 +229,30 @@ contains
   end subroutine nc_abort
 
   !> A failed write to the file: the error names the file and what failed,
-  !> adds that its file system is full when it (nearly) is - HDF5 tells no
-  !> reason - and marks the error as the output's (error_type%output).
+  !> adds the likely reason - HDF5 tells none: its file system full when it
+  !> (nearly) is, else the file size limit when the process has one, else a
+  !> disk quota (what a cluster's scratch space runs out of with room left on
+  !> the device) - and marks the error as the output's (error_type%output).
   subroutine write_failure(self, error, what)
     type(nc_writer), intent(in) :: self
     type(error_type), allocatable, intent(inout) :: error
     character(len=*), intent(in) :: what
-    real(dp) :: free
+    real(dp) :: free, limit
     character(len=24) :: kb
     character(len=:), allocatable :: note
     note = ""
     free = free_bytes(self%tmp_path)
     if (free < 0.0_dp) free = free_bytes(parent_directory(self%tmp_path))
+    limit = file_size_limit()
     if (free >= 0.0_dp .and. free < 1048576.0_dp) then
       write (kb, "(i0)") nint(free/1024.0_dp)
       note = " (no space left on the device: " // trim(kb) // " kB free)"
+    else if (limit >= 0.0_dp) then
+      write (kb, "(i0)") nint(limit/1024.0_dp)
+      note = " (the process has a file size limit, ulimit -f, of " // trim(kb) // " kB)"
+    else if (free >= 0.0_dp) then
+      write (kb, "(i0)") nint(free/1048576.0_dp)
+      note = " (" // trim(kb) // " MB free on the device: a disk quota may be full, see quota -s)"
     end if
     call fatal_error(error, self%tmp_path // ": " // what // note)
     error%output = .true.

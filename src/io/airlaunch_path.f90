@@ -9,7 +9,7 @@ module airlaunch_path
   implicit none
   private
   public :: path_kind, same_file, process_id, kind_missing, kind_regular, kind_directory, kind_other
-  public :: free_bytes, file_lock, lock_held_elsewhere, lock_unavailable, ignore_file_size_signal
+  public :: free_bytes, file_size_limit, file_lock, lock_held_elsewhere, lock_unavailable, ignore_file_size_signal
   public :: delete_file, parent_directory
 
   !> What a path names (airlaunch_path_kind.c).
@@ -48,6 +48,9 @@ module airlaunch_path
       character(kind=c_char), intent(in) :: path(*)
     end function c_lock_file
     !> Past the file size limit a write fails (EFBIG) instead of killing the process (SIGXFSZ).
+    real(c_double) function c_file_size_limit() bind(c, name="airlaunch_file_size_limit")
+      import :: c_double
+    end function c_file_size_limit
     subroutine ignore_file_size_signal() bind(c, name="airlaunch_ignore_file_size_signal")
     end subroutine ignore_file_size_signal
     subroutine c_release_lock(path, fd) bind(c, name="airlaunch_release_output_lock")
@@ -82,6 +85,11 @@ contains
     character(len=*), intent(in) :: path
     free_bytes = real(c_free_bytes(c_string(path)), dp)
   end function free_bytes
+
+  !> The process's file size limit (ulimit -f) [bytes]; -1: none.
+  real(dp) function file_size_limit()
+    file_size_limit = real(c_file_size_limit(), dp)
+  end function file_size_limit
 
   !> Lock the file `path` (made if missing): 0 when held, else
   !> lock_held_elsewhere (another process holds it) or lock_unavailable

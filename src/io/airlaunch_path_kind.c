@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/resource.h>
 #include <sys/statvfs.h>
 #include <sys/types.h>
 #include <unistd.h>
@@ -37,6 +38,14 @@ double airlaunch_free_bytes(const char *path) {
   struct statvfs vfs;
   if (statvfs(path, &vfs) != 0) return -1.0;
   return (double)vfs.f_bavail * (double)vfs.f_frsize;
+}
+
+/* The process's file size limit (ulimit -f, RLIMIT_FSIZE's soft limit) in
+ * bytes, or -1 if there is none. */
+double airlaunch_file_size_limit(void) {
+  struct rlimit lim;
+  if (getrlimit(RLIMIT_FSIZE, &lim) != 0 || lim.rlim_cur == RLIM_INFINITY) return -1.0;
+  return (double)lim.rlim_cur;
 }
 
 /* An exclusive lock on the file `path` (created if missing), held through the

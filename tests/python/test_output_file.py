@@ -153,7 +153,8 @@ def test_a_file_size_limit_is_a_failed_write_not_a_signal(airlaunch_exe, tmp_pat
     """ulimit -f 200 (blocks of 1 kB: 200 kB), the paper scenario's 1.3 MB
     output: SIGXFSZ killed the program (exit 153, a backtrace, the printed
     lines lost, a .part left); now the write fails like on a full disk: exit 4,
-    the milestones on stdout, nothing left."""
+    the milestones on stdout, nothing left, and the error line names the
+    limit (HDF5 tells no reason)."""
     import resource
 
     def limit():
@@ -166,6 +167,7 @@ def test_a_file_size_limit_is_a_failed_write_not_a_signal(airlaunch_exe, tmp_pat
     assert res.returncode == 4, (res.returncode, res.stderr)
     err = res.stderr.strip().splitlines()
     assert len(err) == 2 and err[0].startswith(f"airlaunch: error: {out}.part: cannot "), err
+    assert err[0].endswith("(the process has a file size limit, ulimit -f, of 200 kB)"), err[0]
     assert "separation" in res.stdout
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
