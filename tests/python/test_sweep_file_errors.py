@@ -275,7 +275,7 @@ def test_envelope_on_a_full_disk_names_the_file_and_the_reason(tmp_path, exes):
     sm = tmp_path / "sm"
     definition = small_definition(tmp_path / "s.nml", n_cases=6, output_dir="sm/out",
                                   extra_sweep=f"criteria = '{ROOT}/input/criteria_paper.nml'")
-    with small_tmpfs(sm, free_pages=120, pages=128) as filler:
+    with small_tmpfs(sm, free_pages=248, pages=256) as filler:
         make_table(definition, tmp_path)
         assert run_sweep(definition, tmp_path, None).returncode == 0
         out = sm / "out"

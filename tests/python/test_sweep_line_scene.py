@@ -187,15 +187,16 @@ def absolute_definition(name, tmp_path, extra):
      "&line_scene peak_tension = .false. (the peak tension is not tracked: every case's margin would be NaN, "
      "failing; leave the criterion out or change peak_tension)"),
     ("sweep_paper", "&fixed name = 'line%enabled', value = 'F' /",
-     "line_safety_factor, line_strength_n is not allowed for this sweep: &fixed 'line%enabled' sets &line "
+     "min_line_clearance_m is not allowed for this sweep: &fixed 'line%enabled' sets &line "
      "enabled = .false. (the scene has no line"),
     ("sweep_paper", "&fixed name = 'line%coupling', value = \"'Rigidized'\" /", None),
 ], ids=["peak-tension-off", "no-line", "rigidized-without-line-clearance"])
 def test_criteria_the_base_never_computes_are_refused(tmp_path, name, fixed, refused):
     """A criterion whose metric the base (with the sweep's &fixed) never
     computes would fail every case silently (a NaN margin fails): refused
-    before any case, in one line naming the setting.  criteria_paper.nml has
-    no line-clearance criterion, so the rigidized coupling is accepted."""
+    before any case, in one line naming the setting (the first such
+    criterion of the file).  criteria_paper.nml has a line-clearance
+    criterion, which the rigidized coupling tracks: accepted."""
     definition = absolute_definition(name, tmp_path, fixed + "\n")
     res = run_python(["envelope", definition, "--no-figures", "--check"], tmp_path)
     if refused is None:
