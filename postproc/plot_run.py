@@ -37,8 +37,9 @@ def plot_drop(ds, fig):
 
 
 def _phase_lines(ax, ds):
+    ground = f"ground ({ds.attrs.get('ground_body', '')} {ds.attrs.get('ground_point', '')})"
     for key, label in (("release_time_s", "release"), ("edge_time_s", "Case 1->2"),
-                       ("separation_time_s", "separation")):
+                       ("separation_time_s", "separation"), ("ground_time_s", ground)):
         t = float(ds.attrs.get(key, -1.0))
         if t >= 0:
             ax.axvline(t, color="0.5", ls="--", lw=0.8)
