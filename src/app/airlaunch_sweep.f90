@@ -11,7 +11,8 @@
 !> Exit status: 0 done (failed cases are results, counted in the tally),
 !> 2 bad input (one line on stderr, before any case runs), 4 a file or MPI
 !> error while running, or printed lines (--check, --case-namelist, the
-!> tally) that did not reach the standard output.  --restart discards the journal and the kept
+!> tally) that did not reach the standard output (run alone: under mpirun
+!> the ranks write into its forwarding pipe, which takes every line).  --restart discards the journal and the kept
 !> trajectories of an earlier run.
 program airlaunch_sweep
   use, intrinsic :: iso_fortran_env, only: error_unit
@@ -22,8 +23,8 @@ program airlaunch_sweep
   use airlaunch_strings, only: str, fixed
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file, write_bytes
-  use airlaunch_path, only: process_id, ignore_file_size_signal
+  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
+  use airlaunch_path, only: ignore_file_size_signal
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -66,12 +67,14 @@ program airlaunch_sweep
   if (rank == 0) then
     ! --case-namelist is a query that scripts may run many at once, of a
     ! sweep that may be read-only (an archive): its check file is its own,
-    ! in the temporary directory
+    ! a new file of a unique name in the temporary directory
     tag = "rank0"
     if (case_id >= 0) then
-      tag = "airlaunch_sweep_case_namelist_" // str(process_id())
-      call load_sweep(path, .not. check_only, tag, s, error, scratch_dir=temporary_dir())
-      call delete_file(temporary_dir() // "/check_" // tag // ".nml")
+      call make_temp_file(temporary_dir(), "airlaunch_sweep_check_", ".nml", scratch, error)
+      if (.not. allocated(error)) then
+        call load_sweep(path, .not. check_only, tag, s, error, scratch_file=scratch)
+        call delete_file(scratch)
+      end if
     else
       call load_sweep(path, .not. check_only, tag, s, error)
     end if

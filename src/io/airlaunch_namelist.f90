@@ -65,6 +65,7 @@ module airlaunch_namelist
     !> the end of the file at the last group's '/' (iostat = -1, "End of
     !> file", values read); `position` gives the runtime a terminated copy.
     logical :: unterminated = .false.
+    integer :: nlines = 0   !< lines of the file
   contains
     procedure :: load => nml_load
     procedure :: check_groups => nml_check_groups
@@ -166,10 +167,37 @@ contains
       pos = pos + lt + 1
     end do
     close(unit)
+    self%nlines = lineno
     self%unterminated = .not. ends_with_newline(path)
+    if (self%unterminated) call check_terminated_copy(self, error)
+    if (allocated(error)) return
     call scan_text(self, text(1:pos), line_of(1:pos), col_of(1:pos), error)
     if (.not. allocated(error) .and. size(self%groups) == 0) call fatal_error(error, path // no_group)
   end subroutine nml_load
+
+  !> A file whose last line has no newline is read through a terminated copy
+  !> in a scratch file (nml_open_text), which gfortran puts in $TMPDIR (or
+  !> /tmp) and which loses its lines without an error when that is full: the
+  !> groups would then read as empty.  Make the copy once here and count its
+  !> lines back, so that a full temporary directory is one clear error.
+  subroutine check_terminated_copy(self, error)
+    class(nml_file), intent(in) :: self
+    type(error_type), allocatable, intent(inout) :: error !< set if the copy is short
+    integer :: unit, lines, ios
+    character(len=:), allocatable :: line
+    call self%open_text(unit)
+    lines = 0
+    do
+      call read_line(unit, line, ios)
+      if (ios /= 0) exit
+      lines = lines + 1
+    end do
+    close(unit)
+    if (lines >= self%nlines) return
+    call fatal_error(error, self%path // ": its last line has no newline, and its copy with one could not be " // &
+      "written in the temporary directory ($TMPDIR, else /tmp; " // str(lines) // " of " // str(self%nlines) // &
+      " lines): is it full? (or end the file with a newline)")
+  end subroutine check_terminated_copy
 
   !> One whole line of any length (ios 0; nonzero at the end of the file).
   subroutine read_line(unit, line, ios)

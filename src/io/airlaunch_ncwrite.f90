@@ -14,6 +14,7 @@ module airlaunch_ncwrite
   use hdf5
   use h5lt
   use h5ds
+  use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_path, only: free_bytes, file_size_limit, delete_file, parent_directory
@@ -238,16 +239,20 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     character(len=*), intent(in) :: what
     real(dp) :: free, limit
+    integer(int64) :: written
     character(len=24) :: kb
     character(len=:), allocatable :: note
     note = ""
     free = free_bytes(self%tmp_path)
     if (free < 0.0_dp) free = free_bytes(parent_directory(self%tmp_path))
     limit = file_size_limit()
+    inquire(file=self%tmp_path, size=written)
     if (free >= 0.0_dp .and. free < 1048576.0_dp) then
       write (kb, "(i0)") nint(free/1024.0_dp)
       note = " (no space left on the device: " // trim(kb) // " kB free)"
-    else if (limit >= 0.0_dp) then
+    else if (limit >= 0.0_dp .and. real(written, dp) >= min(0.5_dp*limit, limit - 1048576.0_dp)) then
+      ! (the file has reached the limit, or half of it: a write that would
+      ! have crossed it failed)
       write (kb, "(i0)") nint(limit/1024.0_dp)
       note = " (the process has a file size limit, ulimit -f, of " // trim(kb) // " kB)"
     else if (free >= 0.0_dp) then

@@ -8,8 +8,21 @@ module airlaunch_run_config
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: run_config, read_run_config, run_echo, echo_namelist_unit, scene_names, require_output_directory, &
+  public :: run_config, read_run_config, run_echo, echo_namelist, namelist_writer, echo_record, scene_names, &
+    require_output_directory, &
     refuse_records
+
+  !> Characters per record of a namelist group's echo (gfortran wraps its
+  !> namelist output well inside it: one value list per record or so).
+  integer, parameter :: echo_record = 1024
+
+  abstract interface
+    !> Writes one namelist group: write(lines, nml=group, iostat=ios).
+    subroutine namelist_writer(lines, ios)
+      character(len=*), intent(inout) :: lines(:)   !< internal file, blank
+      integer, intent(out) :: ios                   !< nonzero: too few records
+    end subroutine namelist_writer
+  end interface
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -116,16 +129,20 @@ contains
     real(dp) :: t_end, output_dt, rtol, atol, max_wall_time
     character(len=256) :: output
     logical :: trajectory, stop_when_final
-    integer :: max_order, max_steps, u
+    integer :: max_order, max_steps
     namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps, &
       max_wall_time
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
     rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
     stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps; max_wall_time = cfg%max_wall_time
     text = ""
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=run)
-    call echo_namelist_unit(u, text)
+    call echo_namelist(write_run, text)
+  contains
+    subroutine write_run(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=run, iostat=ios)
+    end subroutine write_run
   end function run_echo
 
   !> The trajectory's records could not be allocated: an input error naming
@@ -208,21 +225,32 @@ contains
     close(u, status="delete")
   end subroutine require_output_directory
 
-  !> Append the text written to scratch unit `u` to `echo`, and close `u`.
-  subroutine echo_namelist_unit(u, echo)
-    integer, intent(in) :: u                              !< scratch unit, written
+  !> Append a namelist group, as `writer` writes it to an internal file
+  !> (write(lines, nml=group, iostat=ios)), to `echo`: in memory, records of
+  !> echo_record characters, as many as the group needs.  (It was a scratch
+  !> file: gfortran puts those in $TMPDIR and loses their lines without an
+  !> error when it is full, which left the resolved input empty.)
+  subroutine echo_namelist(writer, echo)
+    procedure(namelist_writer) :: writer                  !< writes the group: write(lines, nml=...)
     character(len=:), allocatable, intent(inout) :: echo  !< text so far
-    character(len=1024) :: line
-    integer :: ios
+    character(len=echo_record), allocatable :: lines(:)
+    integer :: ios, n, k
     if (.not. allocated(echo)) echo = ""
-    rewind(u)
-    do
-      read(u, '(a)', iostat=ios) line
-      if (ios /= 0) exit
-      echo = echo // squeeze_string_padding(trim(line)) // new_line("a")
+    n = 64
+    do   ! records enough for the group (a list of 4 096 values takes ~100)
+      allocate(lines(n))
+      lines = ""
+      call writer(lines, ios)
+      if (ios == 0 .or. n >= 2**20) exit
+      deallocate(lines)
+      n = 8*n
     end do
-    close(u)
-  end subroutine echo_namelist_unit
+    do k = 1, size(lines)
+      if (len_trim(lines(k)) == 0) exit
+      echo = echo // squeeze_string_padding(trim(lines(k))) // new_line("a")
+      if (trim(lines(k)) == "/") exit
+    end do
+  end subroutine echo_namelist
 
   !> Remove the blank padding the runtime writes inside quoted strings
   !> ("drop      " -> "drop"): only the blanks just before a string's closing

@@ -13,7 +13,7 @@ module airlaunch_drop_scene
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options
   use airlaunch_namelist
-  use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
+  use airlaunch_run_config, only: run_config, echo_namelist, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   implicit none
@@ -60,7 +60,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: mass, drag_area, altitude, mach, fall_height
     logical :: present
-    integer :: unit, ios, u
+    integer :: unit, ios
     character(len=256) :: msg
     namelist /store/ mass, drag_area, altitude, mach, fall_height
     type(nml_var), parameter :: vars(5) = [nml_var("mass", "real"), nml_var("drag_area", "real"), &
@@ -95,9 +95,13 @@ contains
       return
     end if
     cfg = drop_config(mass, drag_area, altitude, mach, fall_height)
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=store)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_store, echo)
+  contains
+    subroutine write_store(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=store, iostat=ios)
+    end subroutine write_store
   end subroutine read_drop_config
 
   subroutine drop_rhs(self, t, y, ydot, status)

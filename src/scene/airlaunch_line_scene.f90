@@ -18,7 +18,7 @@ module airlaunch_line_scene
   use airlaunch_error, only: error_type, fatal_error, add_output_error, run_status
   use airlaunch_strings, only: str, fixed
   use airlaunch_namelist
-  use airlaunch_run_config, only: run_config, echo_namelist_unit, refuse_records
+  use airlaunch_run_config, only: run_config, echo_namelist, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_parachute, only: parachute
@@ -707,7 +707,7 @@ contains
     type(line_scene_config) :: d
     type(parachute) :: chute
     character(len=:), allocatable :: chute_echo
-    integer :: unit, ios, u
+    integer :: unit, ios
     logical :: present
     character(len=256) :: msg
 
@@ -880,11 +880,20 @@ contains
       return
     end if
 
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=line)
-    write(u, nml=line_scene)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_line, echo)
+    call echo_namelist(write_line_scene, echo)
     if (allocated(chute_echo)) echo = echo // chute_echo
+  contains
+    subroutine write_line(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=line, iostat=ios)
+    end subroutine write_line
+    subroutine write_line_scene(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=line_scene, iostat=ios)
+    end subroutine write_line_scene
   end subroutine read_line_scene_config
 
   !> The canopy of a 'canopy' end: the group &parachute (the air-launch

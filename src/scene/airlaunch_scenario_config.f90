@@ -7,7 +7,7 @@ module airlaunch_scenario_config
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_namelist
-  use airlaunch_run_config, only: echo_namelist_unit
+  use airlaunch_run_config, only: echo_namelist
   use airlaunch_atmosphere, only: isa_max_altitude, isa_min_altitude
   use airlaunch_aircraft_aero, only: aircraft_aero
   use airlaunch_rocket_aero, only: rocket_aero
@@ -58,7 +58,7 @@ module airlaunch_scenario_config
     real(dp) :: mach = 0.65_dp
     character(len=16) :: trim_mode = "calibrate"  !< "calibrate" (CL0, Cm0 from trim_alpha) or "fly"
     real(dp) :: trim_alpha = 1.2174_dp*deg2rad    !< [rad]
-    !> [m] geometric: the run ends when the aircraft's or the rocket's CG reaches it
+    !> [m] geometric: the run ends when the aircraft's CG or the rocket's lowest point reaches it
     real(dp) :: ground_altitude = 0.0_dp
   end type flight_config
 
@@ -255,10 +255,14 @@ contains
       isa_min_altitude + ground_margin_below, altitude, "m: at most &flight altitude", error)
     if (allocated(error)) return
     c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad, ground_altitude)
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=flight)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_flight, echo)
     if (.false.) altitude = isa_max_altitude
+  contains
+    subroutine write_flight(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=flight, iostat=ios)
+    end subroutine write_flight
   end subroutine read_flight
 
   subroutine read_aircraft(f, c, echo, error)
@@ -331,9 +335,13 @@ contains
     c%aero%k_theta = k_theta; c%aero%k_q = k_q; c%aero%delta_e_max = delta_e_max_deg*deg2rad
     c%aero%cl_alpha_tail = cl_alpha_tail; c%aero%cy_beta_fin = cy_beta_fin
     c%aero%attitude_hold = control == "attitude_hold"
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=aircraft)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_aircraft, echo)
+  contains
+    subroutine write_aircraft(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=aircraft, iostat=ios)
+    end subroutine write_aircraft
   end subroutine read_aircraft
 
   subroutine read_bay(f, c, echo, error)
@@ -375,9 +383,13 @@ contains
     if (allocated(error)) return
     c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
       tail_x, tail_y)
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=bay)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_bay, echo)
+  contains
+    subroutine write_bay(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=bay, iostat=ios)
+    end subroutine write_bay
   end subroutine read_bay
 
   subroutine read_rocket(f, c, echo, error)
@@ -451,9 +463,13 @@ contains
     c%aero = rocket_aero(length=length, diameter=diameter, cg_from_nose=cg_from_nose, &
       cp_pot_from_nose=cp_pot_from_nose, c_axial=c_axial, c_dn=c_dn, eta=eta, n_strips=n_strips)
     if (fin_count > 0) call barrowman_fins(c)
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=rocket)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_rocket, echo)
+  contains
+    subroutine write_rocket(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=rocket, iostat=ios)
+    end subroutine write_rocket
   end subroutine read_rocket
 
   !> Fin normal-force slope and centre of pressure by Barrowman's equations
@@ -533,9 +549,13 @@ contains
     c%mass = mass; c%drag_area = drag_area; c%cd0 = cd0; c%deploy_time = deploy_time
     c%fill_constant = fill_constant; c%inflation_exponent = inflation_exponent
     c%packed_drag_area = packed_drag_area; c%added_mass_factor = added_mass_factor
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=parachute)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_parachute, echo)
+  contains
+    subroutine write_parachute(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=parachute, iostat=ios)
+    end subroutine write_parachute
   end subroutine read_parachute
 
   !> &gust: a discrete 1 - cosine gust (airlaunch_gust); no gust with both
@@ -575,9 +595,13 @@ contains
     call require_nonnegative(f, "gust", "hit_time", hit_time, "s", error)
     if (allocated(error)) return
     c = gust_config(vertical, lateral, gradient_length, hit_time, penetration, kussner)
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=gust)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_gust, echo)
+  contains
+    subroutine write_gust(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=gust, iostat=ios)
+    end subroutine write_gust
   end subroutine read_gust
 
   subroutine read_line(f, c, echo, error)
@@ -773,7 +797,7 @@ contains
     real(dp) :: length, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential
     real(dp) :: outer_dt, inner_rtol, auto_min_strain, auto_max_strain_change, auto_dwell, auto_min_steps
     real(dp) :: inner_dt, breaking_strength, break_time, weak_link_strength
-    integer :: n_seg, u, break_segment, weak_link_segment
+    integer :: n_seg, break_segment, weak_link_segment
     character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: enabled
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
@@ -790,30 +814,35 @@ contains
     inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
     breaking_strength = c%breaking_strength; break_time = c%break_time; break_segment = c%break_segment
     weak_link_strength = c%weak_link_strength; weak_link_segment = c%weak_link_segment
-    open(newunit=u, status="scratch", action="readwrite")
     select case (coupling)
     case ("per_phase")
-      call write_per_phase(u)
+      call echo_namelist(write_per_phase, echo)
     case ("auto")
-      call write_auto(u)
+      call echo_namelist(write_auto, echo)
     case default
-      write(u, nml=line)
+      call echo_namelist(write_line, echo)
     end select
-    call echo_namelist_unit(u, echo)
   contains
-    subroutine write_per_phase(unit)
-      integer, intent(in) :: unit
+    subroutine write_line(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=line, iostat=ios)
+    end subroutine write_line
+    subroutine write_per_phase(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
         coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, breaking_strength, break_time, break_segment, &
         weak_link_strength, weak_link_segment
-      write(unit, nml=line)
+      write(lines, nml=line, iostat=ios)
     end subroutine write_per_phase
-    subroutine write_auto(unit)
-      integer, intent(in) :: unit
+    subroutine write_auto(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
         coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell, &
         auto_min_steps, breaking_strength, break_time, break_segment, weak_link_strength, weak_link_segment
-      write(unit, nml=line)
+      write(lines, nml=line, iostat=ios)
     end subroutine write_auto
   end subroutine echo_line
 
@@ -1022,9 +1051,13 @@ contains
     end if
     c = line_config(enabled=.false.)
     enabled = .false.
-    open(newunit=u, status="scratch", action="readwrite")
-    write(u, nml=line)
-    call echo_namelist_unit(u, echo)
+    call echo_namelist(write_line, echo)
+  contains
+    subroutine write_line(lines, ios)
+      character(len=*), intent(inout) :: lines(:)
+      integer, intent(out) :: ios
+      write(lines, nml=line, iostat=ios)
+    end subroutine write_line
   end subroutine read_no_line
 
   !> Geometry that cannot work: rocket not fitting the bay, line shorter than

@@ -11,7 +11,7 @@ module airlaunch_sweep_files
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
-  public :: open_for_writing, write_bytes, close_file, remove_case_files, lock_file
+  public :: open_for_writing, write_bytes, close_file, remove_case_files, lock_file, make_temp_file
 
   !> Length of the C library's message buffer.
   integer, parameter :: msg_len = 256
@@ -49,6 +49,12 @@ module airlaunch_sweep_files
       character(kind=c_char), intent(inout) :: msg(*)
       integer(c_int), value :: msglen
     end function c_lock_file
+    integer(c_int) function c_temp_file(templ, suffix_len, msg, msglen) bind(C, name="airlaunch_temp_file")
+      import :: c_int, c_char
+      character(kind=c_char), intent(inout) :: templ(*)
+      integer(c_int), value :: suffix_len, msglen
+      character(kind=c_char), intent(out) :: msg(*)
+    end function c_temp_file
     integer(c_int) function c_file_close(fd, msg, msglen) bind(C, name="airlaunch_file_close")
       import :: c_int, c_char
       integer(c_int), value :: fd, msglen
@@ -135,6 +141,24 @@ contains
     if (c_file_write(int(fd, c_int), text, int(len(text), c_long), msg, int(msg_len, c_int)) /= 0) &
       call fatal_error(error, c_message(msg))
   end subroutine write_bytes
+
+  !> A new empty file of a unique name in `dir`: prefix, six random
+  !> characters, suffix (mkstemps; created exclusively, mode 0600).
+  subroutine make_temp_file(dir, prefix, suffix, path, error)
+    character(len=*), intent(in) :: dir                   !< an existing directory
+    character(len=*), intent(in) :: prefix, suffix        !< around the random part
+    character(len=:), allocatable, intent(out) :: path    !< the file made
+    type(error_type), allocatable, intent(inout) :: error !< set if none can be made: the reason
+    character(kind=c_char, len=msg_len) :: msg
+    character(kind=c_char, len=:), allocatable :: templ
+    templ = dir // "/" // prefix // "XXXXXX" // suffix // c_null_char
+    msg = c_null_char
+    if (c_temp_file(templ, int(len(suffix), c_int), msg, int(msg_len, c_int)) /= 0) then
+      call fatal_error(error, dir // ": cannot make a scratch file (" // c_message(msg) // ")")
+      return
+    end if
+    path = templ(:len(templ) - 1)
+  end subroutine make_temp_file
 
   !> Close `fd`, checking the result; `error`, if already set, is kept.
   subroutine close_file(fd, error)

@@ -28,15 +28,15 @@ contains
   !> Read and check definition, base scenario and table; `need_table` false
   !> skips a missing table (for --check before the table step).  The base's
   !> check goes through a scratch namelist check_TAG.nml in the output
-  !> directory's work/ (made if missing: a run needs it), or in `scratch_dir`
+  !> directory's work/ (made if missing: a run needs it), or `scratch_file`
   !> when given (a query of a sweep that may be read-only; nothing is made).
-  subroutine load_sweep(path, need_table, tag, setup, error, scratch_dir)
+  subroutine load_sweep(path, need_table, tag, setup, error, scratch_file)
     character(len=*), intent(in) :: path                  !< sweep definition
     logical, intent(in) :: need_table                     !< the table must exist
     character(len=*), intent(in) :: tag                   !< names this process's scratch file
     type(sweep_setup), intent(out) :: setup               !< the sweep
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
-    character(len=*), intent(in), optional :: scratch_dir !< an existing writable directory
+    character(len=*), intent(in), optional :: scratch_file !< a writable file of the caller's
     logical :: exists
     call read_sweep_definition(path, setup%def, error)
     if (allocated(error)) return
@@ -46,8 +46,8 @@ contains
     if (allocated(error)) return
     call settle_worst_by(setup%def, setup%base, error)
     if (allocated(error)) return
-    if (present(scratch_dir)) then
-      call check_common_settings(setup%def, setup%base, scratch_dir // "/check_" // tag // ".nml", error)
+    if (present(scratch_file)) then
+      call check_common_settings(setup%def, setup%base, scratch_file, error)
     else
       call make_output_dir(setup%def, setup%def%work_dir(), error)
       if (allocated(error)) return

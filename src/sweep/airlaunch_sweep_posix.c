@@ -62,6 +62,20 @@ int airlaunch_file_write(int fd, const char *data, long n, char *msg, int msglen
   return 0;
 }
 
+/* Make a new empty file from `templ`, a path ending in XXXXXX followed by
+ * `suffix_len` characters (mkstemps: a unique name, created O_EXCL with mode
+ * 0600, so a name in a shared /tmp cannot be a planted symlink); the
+ * X's are replaced in place. */
+int airlaunch_temp_file(char *templ, int suffix_len, char *msg, int msglen) {
+  int fd = mkstemps(templ, suffix_len);
+  if (fd < 0) {
+    set_message(msg, msglen, "mkstemps", errno);
+    return -1;
+  }
+  close(fd);
+  return 0;
+}
+
 /* Close fd; its result is checked (NFS reports write errors here). */
 int airlaunch_file_close(int fd, char *msg, int msglen) {
   if (close(fd) != 0) {   /* no retry on EINTR: on Linux the descriptor is gone */

@@ -30,8 +30,9 @@ def _lowest_point(y_cg, elevation_deg, radius):
     from the tail at ROCKET_NOSE - ROCKET_LENGTH to the nose at ROCKET_NOSE
     on the axis, its elevation from the records), and which end it is on:
     the lower end's centre less the radius times the cosine of the axis
-    elevation (its end face's rim, tilted)."""
-    s, c = math.sin(math.radians(elevation_deg)), math.cos(math.radians(elevation_deg))
+    elevation (its end face's rim, tilted; the output's elevation runs over
+    (-90, 270] deg, so the cosine's magnitude)."""
+    s, c = math.sin(math.radians(elevation_deg)), abs(math.cos(math.radians(elevation_deg)))
     ends = {"nose": ROCKET_NOSE * s, "tail": (ROCKET_NOSE - ROCKET_LENGTH) * s}
     end = min(ends, key=ends.get)
     return y_cg + ends[end] - radius * c, end

@@ -311,9 +311,10 @@ def test_case_namelist_of_a_sweep_that_cannot_be_written(exes, tmp_path):
     table and prints one case's namelist, so it must work on a finished sweep
     that cannot be written (an archive, a read-only mount; here a file where
     its work/ would be, which stops root too).  Reference: the same query
-    while work/ could be made prints the same bytes.  It leaves nothing in
-    $TMPDIR, where its scratch check file goes.  --check still refuses such a
-    sweep in one line naming output_dir: a run needs to write there."""
+    while work/ could be made prints the same bytes, and makes nothing there.
+    Its scratch check file goes to $TMPDIR and leaves nothing there (that
+    it goes there: test_tmpdir.py).  --check still refuses the blocked sweep
+    in one line naming output_dir: a run needs to write there."""
     definition = small_definition(tmp_path / "small.nml", n_cases=4)
     make_table(definition, tmp_path)
     ref = run_sweep(definition, tmp_path, None, "--case-namelist", 2)
@@ -322,9 +323,13 @@ def test_case_namelist_of_a_sweep_that_cannot_be_written(exes, tmp_path):
     (tmp_path / "out" / "work").write_text("not a directory\n")
     scratch = tmp_path / "tmpdir"
     scratch.mkdir()
-    env = dict(os.environ, TMPDIR=str(scratch), OPENBLAS_NUM_THREADS="1")
-    res = subprocess.run([str(SWEEP_EXE), str(definition), "--case-namelist", "2"], cwd=tmp_path,
-                         capture_output=True, text=True, env=env, timeout=120)
+
+    def query(tmpdir):
+        env = dict(os.environ, TMPDIR=str(tmpdir), OPENBLAS_NUM_THREADS="1")
+        return subprocess.run([str(SWEEP_EXE), str(definition), "--case-namelist", "2"], cwd=tmp_path,
+                              capture_output=True, text=True, env=env, timeout=120)
+
+    res = query(scratch)
     assert res.returncode == 0, res.stderr
     assert res.stdout == ref.stdout and "&run" in res.stdout
     assert list(scratch.iterdir()) == []

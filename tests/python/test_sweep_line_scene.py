@@ -190,7 +190,7 @@ def absolute_definition(name, tmp_path, extra):
      "min_line_clearance_m is not allowed for this sweep: &fixed 'line%enabled' sets &line "
      "enabled = .false. (the scene has no line"),
     ("sweep_paper", "&fixed name = 'line%coupling', value = \"'Rigidized'\" /", None),
-], ids=["peak-tension-off", "no-line", "rigidized-without-line-clearance"])
+], ids=["peak-tension-off", "no-line", "rigidized-with-line-clearance"])
 def test_criteria_the_base_never_computes_are_refused(tmp_path, name, fixed, refused):
     """A criterion whose metric the base (with the sweep's &fixed) never
     computes would fail every case silently (a NaN margin fails): refused

@@ -390,12 +390,15 @@ def test_case_namelists_asked_at_once_are_each_the_case_alone(tmp_path, exes):
     make_table(definition, tmp_path)
     alone = [run_sweep(definition, tmp_path, None, "--case-namelist", i).stdout for i in range(8)]
     assert all(text.strip() for text in alone)
+    scratch = tmp_path / "tmpdir"      # where each query's scratch check file goes
+    scratch.mkdir()
     for _ in range(3):
         procs = [subprocess.Popen([str(SWEEP_EXE), str(definition), "--case-namelist", str(i)], cwd=tmp_path,
-                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                  env=dict(ENV, TMPDIR=str(scratch)))
                  for i in range(8)]
         for i, p in enumerate(procs):
             out, err = p.communicate(timeout=120)
             assert p.returncode == 0, err
             assert out == alone[i]
-    assert not list((tmp_path / "out" / "work").glob("check_case_namelist_*"))
+    assert not list(scratch.iterdir())
