@@ -12,8 +12,8 @@
 !> 2 bad input (one line on stderr, before any case runs), 4 a file or MPI
 !> error while running, or printed lines (--check, --case-namelist, the
 !> tally) that did not reach the standard output (run alone: under mpirun
-!> the ranks write into its forwarding pipe, which takes every line).  --restart discards the journal and the kept
-!> trajectories of an earlier run.
+!> the ranks write into its forwarding pipe, which takes every line).
+!> --restart discards the journal and the kept trajectories of an earlier run.
 program airlaunch_sweep
   use, intrinsic :: iso_fortran_env, only: error_unit
   use, intrinsic :: iso_c_binding, only: c_int

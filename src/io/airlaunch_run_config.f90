@@ -241,7 +241,7 @@ contains
       allocate(lines(n))
       lines = ""
       call writer(lines, ios)
-      if (ios == 0 .or. n >= 2**20) exit
+      if (ios == 0 .or. n >= 32768) exit
       deallocate(lines)
       n = 8*n
     end do

@@ -57,7 +57,8 @@ module airlaunch_sweep_row
     "the segment that parted first (1: at the rocket's tie-down, n_seg: at the parachute; 0: none, or no line)", &
     "largest aircraft pitch excursion from trim", "largest aircraft load factor excursion from 1", &
     "largest cut-joint position residual", &
-    "the aircraft's CG or the rocket's lowest point reached &flight ground_altitude; the run ended there (NaN: not reached)", &
+    "the aircraft's CG or the rocket's lowest point reached &flight ground_altitude; the run ended there " // &
+    "(NaN: not reached)", &
     "that point's speed there, earth frame (NaN: not reached)", "simulated time reached", &
     "CVODE steps", "right-hand-side evaluations", "Jacobian evaluations", "Newton iterations", &
     "Newton convergence failures", "error-test failures", "wall time of the case on its rank"]

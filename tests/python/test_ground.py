@@ -218,7 +218,8 @@ def test_a_low_release_lands(airlaunch_exe, tmp_path):
     nml = nml_variant(tmp_path, "sea", edits=[(r"^  altitude = 10000.0 .*$", "  altitude = 0.0")])
     out = tmp_path / "sea.nc"
     line = assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out),
-                              "&flight: ground_altitude = 0.0 m is not allowed: the rocket's lowest point starts at", out)
+                              "&flight: ground_altitude = 0.0 m is not allowed: the rocket's lowest point starts at",
+                              out)
     assert "the default 0 m is sea level" in line, line
 
 
