@@ -10,6 +10,7 @@ Scenes register a drawing function in PLOTTERS.
 """
 import os
 import pathlib
+import re
 import sys
 
 import matplotlib
@@ -46,6 +47,15 @@ def _phase_lines(ax, ds):
             ax.text(t, ax.get_ylim()[1], " " + label, rotation=90, va="top", fontsize=7, color="0.3")
 
 
+def _ground_altitude(ds):
+    """&flight ground_altitude [m] of a run that ended on the ground (from the
+    resolved input it records), else None."""
+    if float(ds.attrs.get("ground_time_s", -1.0)) < 0:
+        return None
+    found = re.search(r"GROUND_ALTITUDE\s*=\s*([-+0-9.EeDd]+)", str(ds.attrs.get("input_namelist", "")), re.I)
+    return float(found.group(1).replace("D", "E").replace("d", "e")) if found else None
+
+
 def plot_airlaunch(ds, fig):
     """Analogues of the paper's Figs. 9-11: rocket pitch and pitch rate with the
     phase changes; 3-D track and 2-D (x-y) track of aircraft, rocket, parachute."""
@@ -80,6 +90,10 @@ def plot_airlaunch(ds, fig):
             continue
         p = ds[f"{name}_position"]
         ax3.plot(p.sel(xyz=0), p.sel(xyz=1), style, label=name)
+    ground = _ground_altitude(ds)
+    if ground is not None:
+        ax3.axhline(ground, color="0.4", lw=1.5)
+        ax3.text(ax3.get_xlim()[0], ground, f" ground ({ground:g} m)", va="bottom", fontsize=7, color="0.3")
     ax3.set_xlabel("x [m]")
     ax3.set_ylabel("altitude y [m]")
     ax3.set_title("2-D track (Fig. 11)")

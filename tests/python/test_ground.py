@@ -281,3 +281,17 @@ def test_line_scene_ground_bad_input(airlaunch_exe, tmp_path, edit, fragment):
     out = tmp_path / "never.nc"
     line = assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out), fragment, out)
     assert "&line_scene: ground_altitude = " in line and str(nml) in line, line
+
+
+def test_the_figure_draws_the_ground_where_the_run_ended_on_it():
+    """plot_run's 2-D track draws the ground of a run that ended on it, at the
+    &flight ground_altitude the file's resolved input records (as the
+    program writes it: upper case, padded), and none for a run that did
+    not reach it."""
+    from postproc.plot_run import _ground_altitude
+
+    echo = "&FLIGHT\n ALTITUDE=  10000.000000000000     ,\n GROUND_ALTITUDE= -250.00000000000000     ,\n/\n"
+    landed = xr.Dataset(attrs={"ground_time_s": 89.5, "input_namelist": echo})
+    assert _ground_altitude(landed) == -250.0
+    above = xr.Dataset(attrs={"ground_time_s": -1.0, "input_namelist": echo})
+    assert _ground_altitude(above) is None
