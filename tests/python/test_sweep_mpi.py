@@ -388,14 +388,18 @@ def test_case_namelists_asked_at_once_are_each_the_case_alone(tmp_path, exes):
     Eight at once, three times: each the sequential answer, no scratch left."""
     definition = small_definition(tmp_path / "q.nml", n_cases=8)
     make_table(definition, tmp_path)
-    alone = [run_sweep(definition, tmp_path, None, "--case-namelist", i).stdout for i in range(8)]
-    assert all(text.strip() for text in alone)
     scratch = tmp_path / "tmpdir"      # where each query's scratch check file goes
     scratch.mkdir()
+    # Open MPI keeps its session directory in $TMPDIR too, and eight singletons
+    # starting at once where it does not exist yet race to make it ("File
+    # exists", MPI_Init fails): keep it in /tmp, made by the sequential queries
+    env = dict(ENV, TMPDIR=str(scratch), OMPI_MCA_orte_tmpdir_base="/tmp")
+    alone = [subprocess.run([str(SWEEP_EXE), str(definition), "--case-namelist", str(i)], cwd=tmp_path,
+                            capture_output=True, text=True, env=env, timeout=120).stdout for i in range(8)]
+    assert all(text.strip() for text in alone)
     for _ in range(3):
         procs = [subprocess.Popen([str(SWEEP_EXE), str(definition), "--case-namelist", str(i)], cwd=tmp_path,
-                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                  env=dict(ENV, TMPDIR=str(scratch)))
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
                  for i in range(8)]
         for i, p in enumerate(procs):
             out, err = p.communicate(timeout=120)
