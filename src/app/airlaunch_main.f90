@@ -184,8 +184,11 @@ program airlaunch
   end if
   call say(summary)
   if (run%trajectory) call say("output: " // trim(run%output))
-  if (run%trajectory) call check_stdout("the run completed, its output is " // trim(run%output))
-  call check_stdout("the run completed")
+  if (run%trajectory) then
+    call check_stdout("the run completed, its output is " // trim(run%output))
+  else
+    call check_stdout("the run completed")
+  end if
   call output_lock%release()
 
 contains

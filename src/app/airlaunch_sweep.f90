@@ -45,7 +45,7 @@ program airlaunch_sweep
   type(sweep_setup) :: s
   type(error_type), allocatable :: error
   type(error_type), allocatable :: stdout_error   !< the first line that did not reach stdout
-  character(len=:), allocatable :: path, scratch, tag
+  character(len=:), allocatable :: path, scratch, check_file
   integer :: rank, nranks, status, case_id, n_resumed, k, n_written
   logical :: check_only, restart
   integer, allocatable :: pending(:), keep(:)
@@ -68,15 +68,14 @@ program airlaunch_sweep
     ! --case-namelist is a query that scripts may run many at once, of a
     ! sweep that may be read-only (an archive): its check file is its own,
     ! a new file of a unique name in the temporary directory
-    tag = "rank0"
     if (case_id >= 0) then
-      call make_temp_file(temporary_dir(), "airlaunch_sweep_check_", ".nml", scratch, error)
+      call make_temp_file(temporary_dir(), "airlaunch_sweep_check_", ".nml", check_file, error)
       if (.not. allocated(error)) then
-        call load_sweep(path, .not. check_only, tag, s, error, scratch_file=scratch)
-        call delete_file(scratch)
+        call load_sweep(path, .not. check_only, "rank0", s, error, scratch_file=check_file)
+        call delete_file(check_file)
       end if
     else
-      call load_sweep(path, .not. check_only, tag, s, error)
+      call load_sweep(path, .not. check_only, "rank0", s, error)
     end if
     if (allocated(error)) status = exit_input
     if (status == exit_ok .and. case_id >= 0) then

@@ -497,11 +497,11 @@ contains
     !> body_state_size + 1: CG position, velocity, quaternion).
     real(dp) function rocket_lowest(y) result(h)
       real(dp), intent(in) :: y(:)
-      real(dp) :: c(3, 3), p(3)
-      integer :: o, which_end
+      real(dp) :: c(3, 3)
+      integer :: o
       o = body_state_size
       c = quat_to_dcm(y(o + 7:o + 10))
-      call self%rocket_lowest_point(y(o + 2), c(2, :), h, which_end, p)
+      call self%rocket_lowest_point(y(o + 2), c(2, :), h)
     end function rocket_lowest
   end subroutine sep_roots
 
@@ -584,26 +584,30 @@ contains
   !> to the nose at nose_x), the lowest point of the lower end's rim.  From the
   !> CG's height and the earth's vertical in rocket axes (the second row of the
   !> body-to-earth matrix): that point's height, which end (ground_at_nose or
-  !> ground_at_tail; the nose when the axis is level) and the point, rocket axes.
+  !> ground_at_tail; the nose when the axis is level) and the point, rocket axes
+  !> (those two optional: the event function needs the height alone).
   pure subroutine sep_rocket_lowest_point(self, cg_height, up, height, which_end, point)
     class(separation_system), intent(in) :: self   !< the scene
     real(dp), intent(in) :: cg_height              !< the rocket's CG, earth y [m]
     real(dp), intent(in) :: up(3)                  !< the earth's unit vertical, rocket axes
     real(dp), intent(out) :: height                !< the lowest point's earth y [m]
-    integer, intent(out) :: which_end              !< ground_at_nose or ground_at_tail
-    real(dp), intent(out) :: point(3)              !< the lowest point, rocket axes [m]
-    real(dp) :: x_end(2), s
+    integer, intent(out), optional :: which_end    !< ground_at_nose or ground_at_tail
+    real(dp), intent(out), optional :: point(3)    !< the lowest point, rocket axes [m]
+    real(dp) :: x_end(2), s, p(3)
+    integer :: e
     associate(geo => self%joint%geo)
       x_end(ground_at_nose) = geo%nose_x
       x_end(ground_at_tail) = geo%nose_x - geo%rocket_length
-      which_end = merge(ground_at_nose, ground_at_tail, up(1)*x_end(ground_at_nose) <= up(1)*x_end(ground_at_tail))
-      point = [x_end(which_end), 0.0_dp, 0.0_dp]
+      e = merge(ground_at_nose, ground_at_tail, up(1)*x_end(ground_at_nose) <= up(1)*x_end(ground_at_tail))
+      p = [x_end(e), 0.0_dp, 0.0_dp]
       ! the end face's rim point furthest down: the radius along the face's
       ! steepest downward direction (none when the axis is vertical)
       s = hypot(up(2), up(3))
-      if (s > 0.0_dp) point(2:3) = -geo%rocket_radius*up(2:3)/s
+      if (s > 0.0_dp) p(2:3) = -geo%rocket_radius*up(2:3)/s
     end associate
-    height = cg_height + dot_product(up, point)
+    height = cg_height + dot_product(up, p)
+    if (present(which_end)) which_end = e
+    if (present(point)) point = p
   end subroutine sep_rocket_lowest_point
 
   !> A body has reached the ground (event g5): the scene is over.

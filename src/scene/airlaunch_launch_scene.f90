@@ -67,8 +67,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     type(launch_system) :: fresh
     type(air_state) :: air
-    real(dp) :: v0, pull, f_tie(3), f_new(3), tol, y_low, low_point(3)
-    integer :: pass, low_end
+    real(dp) :: v0, pull, f_tie(3), f_new(3), tol, y_low
+    integer :: pass
     integer, parameter :: max_pass = 6
 
     air = isa(cfg%flight%altitude)
@@ -100,7 +100,7 @@ contains
     end do
     ! the aircraft's CG and the rocket's lowest point start above the ground
     ! (its event watches for a crossing only)
-    call sys%sep%rocket_lowest_point(sys%sep%bodies(1)%r(2), sys%sep%bodies(1)%c(2, :), y_low, low_end, low_point)
+    call sys%sep%rocket_lowest_point(sys%sep%bodies(1)%r(2), sys%sep%bodies(1)%c(2, :), y_low)
     associate(y_air => sys%sep%bodies(0)%r(2))
       if (.not. min(y_air, y_low) > cfg%flight%ground_altitude) then
         call fatal_error(error, "&flight: ground_altitude = " // str(cfg%flight%ground_altitude) // &
