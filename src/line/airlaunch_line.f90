@@ -13,7 +13,7 @@ module airlaunch_line
   use airlaunch_line_cvode, only: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, &
     line_force_jacobian
   use airlaunch_line_marching, only: line_marching, new_line_marching
-  use airlaunch_rigidization, only: rigid_equivalent, rigidize
+  use airlaunch_rigidization, only: rigid_equivalent, rigidize, whole_piece
   implicit none
   private
   public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
@@ -23,7 +23,7 @@ module airlaunch_line
   public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options
   public :: line_system, line_cvode, new_line_cvode, line_band_upper, line_band_lower, line_force_jacobian
   public :: line_marching, new_line_marching
-  public :: rigid_equivalent, rigidize
+  public :: rigid_equivalent, rigidize, whole_piece
   public :: new_line_scheme
 
 contains

@@ -67,7 +67,7 @@ module airlaunch_rigidization
   use airlaunch_line_model, only: line_model
   implicit none
   private
-  public :: rigid_equivalent, rigidize
+  public :: rigid_equivalent, rigidize, whole_piece
 
   !> The virtual rigid body of a line state (earth frame unless "body").
   type :: rigid_equivalent
@@ -90,6 +90,8 @@ module airlaunch_rigidization
     real(dp) :: m_rigid_eq31 = 0.0_dp      !< (31) as printed, with |V_rigid|^2 [kg]
     real(dp) :: j_rigid(3) = 0.0_dp        !< (32) body-axis moments of inertia [kg m^2]
     real(dp) :: line_mass = 0.0_dp         !< sum of the node masses [kg]
+    integer :: first_node = 0              !< the line (or piece of a parted line) is nodes first_node..last_node
+    integer :: last_node = 0
     logical :: degenerate = .false.        !< the ends coincide: no axis
     logical :: m_fallback = .false.        !< |V_rigid| ~ 0: m_rigid = line mass
     logical :: j_fallback(3) = .false.     !< omega_i ~ 0 (always for i = 3, the chord): geometric J_i
@@ -105,22 +107,52 @@ module airlaunch_rigidization
 
 contains
 
+  !> The nodes first..last of the piece a parted line's equivalent rigid body
+  !> describes: the whole line (0..N) while no segment has parted; after a
+  !> break, the piece that still holds end a (nodes 0..j-1, j the parted segment
+  !> nearest end a) or the one that holds end b (nodes j'..N, j' the parted
+  !> segment nearest end b), whichever has more segments (end a's on a tie).
+  !> Eqs. (18)-(32) describe one connected line; over two pieces flying apart
+  !> they mean nothing (docs/line.md §3).
+  pure subroutine whole_piece(model, first, last)
+    type(line_model), intent(in) :: model   !< the line
+    integer, intent(out) :: first, last     !< node indices
+    integer :: j_a, j_b
+    first = 0
+    last = model%n
+    if (model%n_parted == 0) return
+    j_a = findloc(model%parted, .true., dim=1)
+    j_b = findloc(model%parted, .true., dim=1, back=.true.)
+    if (j_a - 1 >= model%n - j_b) then
+      last = j_a - 1
+    else
+      first = j_b
+    end if
+  end subroutine whole_piece
+
   !> The equivalent rigid body of the line `model` in the state x(3,0:N),
-  !> v(3,0:N) (earth frame).
-  function rigidize(model, x, v) result(q)
+  !> v(3,0:N) (earth frame): of the whole line, or with `first` and `last` of
+  !> the piece between those nodes (whole_piece), as a line of its own.
+  function rigidize(model, x, v, first, last) result(q)
     type(line_model), intent(in) :: model   !< the line
     real(dp), intent(in) :: x(:, 0:)        !< node positions [m]
     real(dp), intent(in) :: v(:, 0:)        !< node velocities [m/s]
+    integer, intent(in), optional :: first, last  !< the piece's end nodes (default 0, N)
     type(rigid_equivalent) :: q
-    integer :: k, n, i
+    integer :: k, n, i, n0
     real(dp) :: dx(3), ell, t(3), epsdot, w_half, rxy, dvb(3), dv(3), vmax, u(3), rk(3), rkb(3)
     real(dp) :: wk(3), wkb(3), ke, ke_t, jnum(3), jgeo(3), wmax, r2, s_lo, w_chord(3), dv_max, r_max, d2(3)
 
+    n0 = 0
     n = model%n
-    q%length0 = model%p%length
-    q%line_mass = sum(model%node_mass(0:n))
+    if (present(first)) n0 = first
+    if (present(last)) n = last
+    q%first_node = n0
+    q%last_node = n
+    q%length0 = (n - n0)*model%l0
+    q%line_mass = sum(model%node_mass(n0:n))
     ! (18), (19), (25), (30)
-    do k = 1, n
+    do k = n0 + 1, n
       dx = x(:, k) - x(:, k-1)
       ell = norm2(dx)
       q%d = q%d + ell
@@ -128,11 +160,11 @@ contains
       t = dx/ell
       epsdot = dot_product(t, v(:, k) - v(:, k-1))/model%l0
       q%v_eps = q%v_eps + epsdot*model%l0*t
-      s_lo = (k - 1)*model%l0
+      s_lo = (k - 1 - n0)*model%l0
       w_half = min(1.0_dp, max(0.0_dp, (0.5_dp*q%length0 - s_lo)/model%l0))
       q%v_o_eps = q%v_o_eps + w_half*epsdot*model%l0*t
     end do
-    q%r = x(:, n) - x(:, 0)
+    q%r = x(:, n) - x(:, n0)
     q%d_rigid = norm2(q%r)                                   ! (20)
     q%degenerate = q%d_rigid <= 1.0e-12_dp*q%length0
     if (q%degenerate .or. q%d <= 0.0_dp) then
@@ -140,7 +172,7 @@ contains
     else
       q%r_o = q%r*q%d_rigid/(2.0_dp*q%d)                     ! (21)
     end if
-    q%centre = x(:, 0) + q%r_o
+    q%centre = x(:, n0) + q%r_o
 
     ! (22)-(24): Euler angles of the axis
     if (q%degenerate) then
@@ -158,7 +190,7 @@ contains
     ! (26)-(28): angular velocity from the end velocities
     q%spin_fallback = .false.
     if (.not. q%degenerate) then
-      dv = v(:, n) - v(:, 0) - q%v_eps                       ! (28) Delta V
+      dv = v(:, n) - v(:, n0) - q%v_eps                      ! (28) Delta V
       dvb = matmul(q%b, dv)
       q%omega_body(1) = -dvb(2)/q%d_rigid
       q%omega_body(2) = dvb(1)/q%d_rigid
@@ -172,7 +204,7 @@ contains
     q%omega = matmul(transpose(q%b), q%omega_body)
 
     ! (29)
-    q%v_rigid = v(:, 0) + q%v_o_eps + cross(q%omega, q%r_o)
+    q%v_rigid = v(:, n0) + q%v_o_eps + cross(q%omega, q%r_o)
 
     ! (31) kinetic-energy equivalence; the rotation taken out is the chord's,
     ! omega without the frame spin omega_z of (27) (no motion of the mass)
@@ -180,7 +212,7 @@ contains
     vmax = 0.0_dp
     ke = 0.0_dp
     ke_t = 0.0_dp
-    do k = 0, n
+    do k = n0, n
       vmax = max(vmax, norm2(v(:, k)))
       ke = ke + model%node_mass(k)*dot_product(v(:, k), v(:, k))
       u = v(:, k) - cross(w_chord, x(:, k) - q%centre)
@@ -203,7 +235,7 @@ contains
     jgeo = 0.0_dp
     dv_max = 0.0_dp
     r_max = 0.0_dp
-    do k = 0, n
+    do k = n0, n
       rk = x(:, k) - q%centre
       r2 = dot_product(rk, rk)
       rkb = matmul(q%b, rk)

@@ -573,7 +573,7 @@ contains
   subroutine record(self, error)
     type(line_scene), intent(inout) :: self                !< scene
     type(error_type), allocatable, intent(inout) :: error  !< set on a non-finite state
-    integer :: n, k, st, m, i
+    integer :: n, k, st, m, i, first, last
     real(dp) :: t, ek(2)
     type(line_energy) :: e
     type(line_end) :: en
@@ -611,7 +611,10 @@ contains
       e%potential = e%potential + ek(2)
     end do
     self%energy(:, m) = [e%kinetic, e%elastic, e%potential]
-    self%rigid(m) = rigidize(self%model, self%x, self%v)
+    ! after a break, of the larger piece still holding an end (Eqs. (18)-(32)
+    ! describe one connected line)
+    call whole_piece(self%model, first, last)
+    self%rigid(m) = rigidize(self%model, self%x, self%v, first, last)
     if (allocated(self%nodes)) self%nodes(:, :, m) = self%x
     if (allocated(self%tensions)) self%tensions(:, m) = self%tension
     self%n_out = m
@@ -1005,7 +1008,8 @@ contains
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
       merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records)" // &
       peak_note(scene) // nl // break_note(scene) // ground_note(scene) // &
-      "equivalent rigid body at the end: d_rigid " // str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
+      "equivalent rigid body at the end" // piece_note(scene%rigid(m), scene%model%n) // ": d_rigid " // &
+      str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg" // m_rigid_note(scene%rigid(m)) // ", theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &
       str(scene%rigid(m)%phi*rad2deg) // " deg" // nl // energy_summary(scene)
     if (allocated(run_error)) then
@@ -1104,6 +1108,18 @@ contains
     end if
   end function end_note
 
+  !> Which piece of a parted line the equivalent rigid body describes
+  !> (whole_piece); nothing for the whole line.
+  function piece_note(q, n) result(s)
+    type(rigid_equivalent), intent(in) :: q
+    integer, intent(in) :: n                !< the line's segments
+    character(len=:), allocatable :: s
+    s = ""
+    if (q%first_node == 0 .and. q%last_node == n) return
+    s = " (of the piece at end " // merge("a", "b", q%first_node == 0) // ", nodes " // str(q%first_node) // &
+      " to " // str(q%last_node) // ": the line has parted)"
+  end function piece_note
+
   !> What the printed m_rigid is against the line's own mass: the line mass
   !> itself when the centre does not move (the guard), else their ratio, with a
   !> word when it is large: Eq. (31) divides by |V_rigid|^2, so a deforming
@@ -1165,6 +1181,10 @@ contains
     r1 = scene%energy(3, 1:m)
     call w%add_var_1d("line_energy_potential", ["time"], r1, "J", &
       "gravitational potential energy (zero level y = 0)", error)
+    call w%add_int_var_1d("rigid_first_node", ["time"], [(scene%rigid(i)%first_node, i = 1, m)], "1", &
+      "first node of the line the rigid_* variables describe: 0, or after a break the piece at end b's", error)
+    call w%add_int_var_1d("rigid_last_node", ["time"], [(scene%rigid(i)%last_node, i = 1, m)], "1", &
+      "last node of the line the rigid_* variables describe: N, or after a break the piece at end a's", error)
     r1 = [(scene%rigid(i)%d, i = 1, m)]
     call w%add_var_1d("rigid_d", ["time"], r1, "m", "deformed arc length d of the line, Eq. (18)", error)
     r1 = [(scene%rigid(i)%d_rigid, i = 1, m)]

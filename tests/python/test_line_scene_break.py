@@ -319,3 +319,44 @@ def test_scheduled_cut_of_a_line_with_no_node_to_integrate(airlaunch_exe, tmp_pa
     assert tension[t < 0.0123] == pytest.approx(EA * 0.01, rel=1e-12)
     assert (tension[t > 0.0123] == 0.0).all()
     ds.close()
+
+
+@pytest.mark.parametrize("cut, first, last", [(5, 5, 12), (9, 0, 8)], ids=["piece-at-b", "piece-at-a"])
+def test_equivalent_rigid_body_of_a_parted_line_is_one_piece(airlaunch_exe, tmp_path, cut, first, last):
+    """Eqs. (18)-(32) describe one connected line.  A 12-segment line taut
+    between two fixed points, falling under gravity, cut at `cut` at 20 ms:
+    from then on the rigid_* variables describe the larger piece still holding
+    an end (docs/line.md §3) - nodes 5..12 for a cut at segment 5, 0..8 for a
+    cut at segment 9 - and before it the whole line, 0..12.  Reference: the
+    recorded node positions.  d (Eq. (18)) is the sum of the piece's chords,
+    d_rigid (Eq. (20)) its end-to-end distance, theta and phi (Eq. (24)) its
+    axis's angles, to round-off (1e-9 relative); over both pieces, as before,
+    d_rigid was the distance between the line's ends, 60.6 m for as long as
+    the fixed ends hold them."""
+    n = 12
+    nml, out = line_nml(tmp_path, f"cut{cut}", n, line=["break_time = 0.02", f"break_segment = {cut}"],
+                        scene=[f"b_kind = 'fixed', b_position = {LENGTH * (1 + EPS0)}, 0.0, 0.0"],
+                        t_end=0.3, output_dt=0.01, gravity=True)
+    ds, stdout = run(airlaunch_exe, nml, out)
+    t = ds["time"].values
+    x = ds["line_node_position"].values          # (time, node, xyz)
+    before, after = t < 0.02 - 1e-12, t > 0.02 + 1e-12
+    assert before.sum() >= 2 and after.sum() >= 20
+    assert np.all(ds["rigid_first_node"].values[before] == 0) and np.all(ds["rigid_last_node"].values[before] == n)
+    assert np.all(ds["rigid_first_node"].values[after] == first)
+    assert np.all(ds["rigid_last_node"].values[after] == last)
+    piece = x[after][:, first:last + 1, :]
+    chords = np.linalg.norm(np.diff(piece, axis=1), axis=2).sum(axis=1)
+    r = piece[:, -1, :] - piece[:, 0, :]
+    d_rigid = np.linalg.norm(r, axis=1)
+    assert np.allclose(ds["rigid_d"].values[after], chords, rtol=1e-9, atol=0)
+    assert np.allclose(ds["rigid_d_rigid"].values[after], d_rigid, rtol=1e-9, atol=0)
+    theta = np.degrees(np.arctan2(np.hypot(r[:, 0], r[:, 1]), r[:, 2]))
+    phi = np.degrees(np.arctan2(r[:, 0], -r[:, 1]))
+    assert np.allclose(ds["rigid_theta_deg"].values[after], theta, rtol=1e-9, atol=1e-9)
+    assert np.allclose(ds["rigid_phi_deg"].values[after], phi, rtol=1e-9, atol=1e-9)
+    # the piece falls and folds: it is shorter than the span, unlike the two pieces' chord
+    assert np.all(d_rigid < LENGTH * (last - first) / n * (1 + EPS0))
+    side = "a" if first == 0 else "b"
+    assert f"equivalent rigid body at the end (of the piece at end {side}, nodes {first} to {last}: " in stdout
+    ds.close()
