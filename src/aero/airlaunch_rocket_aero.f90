@@ -20,7 +20,11 @@
 !>   C_N,fin = cn_alpha_fin sin(a) |cos(a)| + cn_fin_90 sin^2(a)
 !> (the linear Barrowman slope at small angles and the flat-plate cross-flow
 !> normal force at 90 deg, Hoerner, Fluid-Dynamic Drag, 1965: C_N = 1.28 on the
-!> projected fin area), opposite to the local cross-flow velocity.
+!> projected fin area), opposite to the local cross-flow velocity.  While the
+!> fins pass the ramp edge (tail first) their force is scaled by the share of
+!> their planform outside the bay (fin_exposed_fraction; it acts at the fins'
+!> centre of pressure throughout): it grows continuously from 0 to 1 over the
+!> root chord, as the hull's and the nose's shares do over the length.
 !>
 !> In a gust the caller may pass the gust field with the body's pose: each
 !> station then reads the gust at its own place (gust penetration), as a
@@ -40,7 +44,7 @@ module airlaunch_rocket_aero
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
-  public :: rocket_aero, rocket_aero_eval
+  public :: rocket_aero, rocket_aero_eval, fin_exposed_fraction
 
   !> Geometry and coefficients of the rocket.
   type :: rocket_aero
@@ -54,6 +58,13 @@ module airlaunch_rocket_aero
     real(dp) :: cn_alpha_fin = 0.0_dp     !< fin normal-force slope on S_ref [1/rad]; 0 = no fins
     real(dp) :: x_fin_from_nose = 17.5_dp !< fin centre of pressure [m]
     real(dp) :: cn_fin_90 = 0.0_dp        !< fin normal-force coefficient at 90 deg on S_ref
+    ! the fins' trapezoidal planform (for their exposure at the ramp edge); a
+    ! root chord of 0 makes the fins a point at x_fin_from_nose, in the air
+    ! once that point is out of the bay
+    real(dp) :: fin_root_le_from_nose = 0.0_dp !< root leading edge aft of the nose [m]
+    real(dp) :: fin_root_chord = 0.0_dp   !< [m]
+    real(dp) :: fin_tip_chord = 0.0_dp    !< [m]
+    real(dp) :: fin_sweep = 0.0_dp        !< leading-edge offset root to tip [m]
     integer :: n_strips = 16              !< strips of the cross-flow integral
   end type rocket_aero
 
@@ -73,7 +84,7 @@ contains
     real(dp), intent(in), optional :: r_cg(3)        !< the CG, earth frame [m] (with gust)
     real(dp), intent(in), optional :: c(3, 3)        !< body-to-earth rotation (with gust)
     real(dp) :: s_ref, dx, x, v_loc(3), vp(3), vpn, f(3), v, alpha, exposed, x_nose, x_tail
-    real(dp) :: x_lo, x_hi, w_cg(3)
+    real(dp) :: x_lo, x_hi, w_cg(3), fin_share
     logical :: penetrating
     integer :: i
     force = 0; moment = 0
@@ -126,14 +137,15 @@ contains
     end if
     if (p%cn_alpha_fin > 0.0_dp) then
       x = x_nose - p%x_fin_from_nose
-      if (x <= x_shield) then
+      fin_share = fin_exposed_fraction(p, x_shield)
+      if (fin_share > 0.0_dp) then
         v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]
         if (penetrating) v_loc = v_loc - gust_change(x)
         vp = [0.0_dp, v_loc(2), v_loc(3)]
         vpn = norm2(vp)
         if (vpn > 0.0_dp) then
           ! C_N,fin q S_ref along -vp/|vp|, with sin(a) = |vp|/|v|, |cos(a)| = |v_x|/|v|
-          f = -0.5_dp*rho*s_ref*(p%cn_alpha_fin*abs(v_loc(1)) + p%cn_fin_90*vpn)*vp
+          f = -0.5_dp*rho*s_ref*(p%cn_alpha_fin*abs(v_loc(1)) + p%cn_fin_90*vpn)*fin_share*vp
           force = force + f
           moment = moment + [0.0_dp, -x*f(3), x*f(2)]
         end if
@@ -153,4 +165,52 @@ contains
       end do
     end function gust_change
   end subroutine rocket_aero_eval
+
+  !> Share of the fins' planform outside the bay, body x <= x_shield (the
+  !> rocket leaves tail first): the trapezoid (root chord c_r from its leading
+  !> edge, tip chord c_t offset aft by the sweep x_r at the semi-span) cut by
+  !> the edge's line across the span.  At span fraction e the chord runs from
+  !> x_r e to x_r e + c_r + (c_t - c_r) e aft of the root's leading edge; the
+  !> exposed chord, the part aft of the edge, is linear in e between the points
+  !> where the edge meets the leading or the trailing edge, so the trapezoidal
+  !> rule on those pieces integrates it exactly.  Continuous and
+  !> non-decreasing in x_shield, 0 with the trailing edge in the bay, 1 with
+  !> the root's leading edge out.  Without a root chord, 1 or 0 as the centre
+  !> of pressure is out or in.
+  pure real(dp) function fin_exposed_fraction(p, x_shield) result(share)
+    type(rocket_aero), intent(in) :: p
+    real(dp), intent(in) :: x_shield     !< the ramp edge, body x from the CG [m]
+    real(dp) :: s_e, e(4), cr, ct, xr, exposed
+    integer :: i
+    if (p%fin_root_chord <= 0.0_dp) then
+      share = merge(1.0_dp, 0.0_dp, p%cg_from_nose - p%x_fin_from_nose <= x_shield)
+      return
+    end if
+    cr = p%fin_root_chord; ct = p%fin_tip_chord; xr = p%fin_sweep
+    s_e = (p%cg_from_nose - p%fin_root_le_from_nose) - x_shield   ! the edge, aft of the root's leading edge
+    ! the kinks of the exposed chord: where the edge meets the leading edge
+    ! (x_r e = s_e) and the trailing edge (c_r + (x_r + c_t - c_r) e = s_e)
+    e = [0.0_dp, 1.0_dp, 1.0_dp, 1.0_dp]
+    if (xr > 0.0_dp) e(2) = min(1.0_dp, max(0.0_dp, s_e/xr))
+    if (abs(xr + ct - cr) > 0.0_dp) e(3) = min(1.0_dp, max(0.0_dp, (s_e - cr)/(xr + ct - cr)))
+    call sort_ascending(e(2:3))
+    exposed = 0.0_dp
+    do i = 1, 3
+      exposed = exposed + 0.5_dp*(e(i+1) - e(i))*(chord_aft(e(i)) + chord_aft(e(i+1)))
+    end do
+    share = min(1.0_dp, max(0.0_dp, exposed/(0.5_dp*(cr + ct))))
+  contains
+    !> The chord aft of the edge at span fraction e.
+    pure real(dp) function chord_aft(e) result(c)
+      real(dp), intent(in) :: e
+      real(dp) :: le, te
+      le = xr*e
+      te = le + cr + (ct - cr)*e
+      c = te - min(te, max(le, s_e))
+    end function chord_aft
+    pure subroutine sort_ascending(a)
+      real(dp), intent(inout) :: a(2)
+      if (a(1) > a(2)) a = a([2, 1])
+    end subroutine sort_ascending
+  end function fin_exposed_fraction
 end module airlaunch_rocket_aero

@@ -493,6 +493,10 @@ contains
     c%aero%cn_alpha_fin = (1 + r/(s + r))*4*c%fin_count*(s/d)**2/(1 + sqrt(1 + (2*lf/(cr + ct))**2))
     c%aero%x_fin_from_nose = c%fin_root_le_from_nose + xr*(cr + 2*ct)/(3*(cr + ct)) + &
       (cr + ct - cr*ct/(cr + ct))/6
+    c%aero%fin_root_le_from_nose = c%fin_root_le_from_nose
+    c%aero%fin_root_chord = cr
+    c%aero%fin_tip_chord = ct
+    c%aero%fin_sweep = xr
     area = s*(cr + ct)/2
     s_ref = 4.0_dp*atan(1.0_dp)*d**2/4
     if (c%fin_count == 4) then

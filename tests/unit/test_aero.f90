@@ -149,6 +149,59 @@ program test_aero
   end do
   rk = rocket_aero()
 
+  call section("rocket: fins passing the ramp edge, against a clipped polygon")
+  ! The share of the fin planform outside the bay (aft of the edge) against an
+  ! independent computation: the trapezoid clipped by the edge's line
+  ! (Sutherland-Hodgman) and its area by the shoelace formula, over 201 edge
+  ! positions from before the trailing edge to past the leading edge, for the
+  ! paper's fins (trailing edge swept back), a trailing edge swept forward, and
+  ! a sweep longer than the root chord.  Both are exact: 1e-12 allowed.  Then
+  ! the fin force of a pitching rocket at half exposure is half the force in
+  ! the open (cross-flow drag off; the potential term has no cross-flow).
+  block
+    real(dp), parameter :: geo(3, 3) = reshape([2.0_dp, 1.0_dp, 1.0_dp, 2.0_dp, 0.5_dp, 0.3_dp, &
+      1.0_dp, 1.0_dp, 1.5_dp], [3, 3])   ! (root chord, tip chord, sweep) per case
+    real(dp) :: s_e, share, worst, x_shield, lo, hi, fopen(3), mopen(3)
+    integer :: c, i
+    do c = 1, 3
+      rk = rocket_aero()
+      rk%fin_root_le_from_nose = 16.0_dp
+      rk%fin_root_chord = geo(1, c); rk%fin_tip_chord = geo(2, c); rk%fin_sweep = geo(3, c)
+      lo = -0.5_dp; hi = max(geo(1, c), geo(3, c) + geo(2, c)) + 0.5_dp
+      worst = 0.0_dp
+      do i = 0, 200
+        s_e = lo + (hi - lo)*i/200.0_dp      ! the edge, aft of the root's leading edge
+        x_shield = rk%cg_from_nose - rk%fin_root_le_from_nose - s_e
+        share = fin_exposed_fraction(rk, x_shield)
+        worst = max(worst, abs(share - clipped_share(geo(:, c), 1.34_dp, s_e)))
+      end do
+      call check(worst <= 1.0e-12_dp, "exposed share of fin " // str(c) // " against the clipped polygon: worst " // &
+        str(worst))
+    end do
+    rk = rocket_aero()
+    rk%cn_alpha_fin = 6.4734_dp; rk%x_fin_from_nose = 17.3333_dp; rk%cn_fin_90 = 3.6193_dp
+    rk%fin_root_le_from_nose = 16.5_dp; rk%fin_root_chord = 2.0_dp; rk%fin_tip_chord = 1.0_dp; rk%fin_sweep = 1.0_dp
+    rk%c_dn = 0.0_dp
+    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, fopen, mopen)
+    ! the edge where half the planform is out: bisection on the share
+    lo = rk%cg_from_nose - rk%length; hi = rk%cg_from_nose - rk%fin_root_le_from_nose
+    do i = 1, 200
+      x_shield = 0.5_dp*(lo + hi)
+      if (fin_exposed_fraction(rk, x_shield) < 0.5_dp) then
+        lo = x_shield
+      else
+        hi = x_shield
+      end if
+    end do
+    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
+    call check_close(f(2), 0.5_dp*fopen(2), "half the planform out: half the fin force", rel=1e-12_dp)
+    call check_close(m(3), 0.5_dp*mopen(3), "half the planform out: half the fin moment", rel=1e-12_dp)
+    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], &
+      rk%cg_from_nose - rk%length, f, m)
+    call check(f(2) == 0.0_dp .and. m(3) == 0.0_dp, "fins with their trailing edge at the edge: no fin force")
+  end block
+  rk = rocket_aero()
+
   call section("parachute: inflation law and apparent mass")
   pc%deploy_time = 1.0_dp; pc%fill_time = 0.4_dp
   call check_close(parachute_drag_area(pc, 0.5_dp), pc%packed_drag_area, "packed before deployment", rel=1e-15_dp)
@@ -275,6 +328,35 @@ program test_aero
   end block
   call finish()
 contains
+  !> The share of a trapezoidal fin (root chord, tip chord, sweep; semi-span b)
+  !> aft of s_e (measured aft from the root's leading edge): the planform
+  !> clipped by the half-plane s >= s_e (Sutherland-Hodgman), areas by the
+  !> shoelace formula.
+  function clipped_share(geo, b, s_e) result(share)
+    real(dp), intent(in) :: geo(3), b, s_e
+    real(dp) :: share, p(2, 4), q(2, 8), a, d
+    integer :: i, j, nq
+    p(:, 1) = [0.0_dp, 0.0_dp]; p(:, 2) = [geo(1), 0.0_dp]
+    p(:, 3) = [geo(3) + geo(2), b]; p(:, 4) = [geo(3), b]
+    nq = 0
+    do i = 1, 4
+      j = modulo(i, 4) + 1                   ! the edge p_i -> p_j
+      if (p(1, i) >= s_e) then
+        nq = nq + 1; q(:, nq) = p(:, i)
+      end if
+      if ((p(1, i) >= s_e) .neqv. (p(1, j) >= s_e)) then
+        d = (s_e - p(1, i))/(p(1, j) - p(1, i))
+        nq = nq + 1; q(:, nq) = p(:, i) + d*(p(:, j) - p(:, i))
+      end if
+    end do
+    a = 0.0_dp
+    do i = 1, nq
+      j = modulo(i, nq) + 1
+      a = a + q(1, i)*q(2, j) - q(1, j)*q(2, i)
+    end do
+    share = abs(0.5_dp*a)/(0.5_dp*b*(geo(1) + geo(2)))
+  end function clipped_share
+
   !> The unit vector along axis k.
   pure function unit(k) result(e)
     integer, intent(in) :: k
