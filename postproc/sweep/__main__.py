@@ -36,6 +36,7 @@ def interrupted(exc=None) -> int:
 
 try:   # an interrupt while the modules load is one line too (SIGTERM: its default, below)
     import argparse
+    import os
     import pathlib
 
     import numpy as np
@@ -301,6 +302,10 @@ def cmd_verify(args) -> int:
         warn_stale_figures(defn)
         return 0
     exe_dir = pathlib.Path(args.exe_dir)
+    for exe in (exe_dir / "airlaunch-sweep", exe_dir / "airlaunch"):
+        if not (exe.is_file() and os.access(exe, os.X_OK)):
+            raise DefinitionError(f"{exe}: no such program to rerun the cases with (build it with scripts/setup "
+                                  "release, or give --exe-dir)")
     out_dir = pathlib.Path(defn.output_dir)
     # an earlier verification's reruns (other cases, other settings) go: verify/ holds this one's only
     for old in (out_dir / "verify").glob("case_*"):

@@ -442,9 +442,12 @@ contains
   end subroutine check_trim
 
   subroutine usage()
-    call say("usage: airlaunch SCENARIO.nml [--output FILE] [--check]")
+    call say("usage: airlaunch SCENARIO.nml [-o FILE | --output FILE] [--check]")
+    call say("       airlaunch -h | --help | -V | --version")
     call say("  runs the scenario of the namelist file; see docs/input.md")
+    call say("  -o, --output FILE: write the output there instead of &run output")
     call say("  --check: validate the input and print it resolved (defaults included), without running")
+    call say("  -V, --version: the code version and the SUNDIALS it was built with")
   end subroutine usage
 
   !> Command-line argument i, whole (any length).

@@ -110,8 +110,15 @@ program airlaunch_sweep
   call run_pass(pending, .false., n_written)
   if (rank == 0) then
     call collect_rows()
-    call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
-    if (allocated(error)) call die(error%message)
+    if (size(pending) > 0 .or. .not. file_exists(s%def%summary_path())) then
+      call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
+      if (allocated(error)) call die(error%message)
+    else
+      ! no case ran and the journal's summary is there (prepare_run removes one
+      ! whenever a case is to run): written again, it would be the same rows
+      ! with a new `created`, which makes the figures drawn from it stale
+      call say("summary: " // s%def%summary_path() // " is already the journal's (no case ran): left as it is")
+    end if
     call report_tally(size(pending), MPI_Wtime() - t_run)
     keep = trajectory_ids(s%def, s%base%metrics, rows)
     keep = pack(keep, [(.not. file_exists(s%def%trajectory_path(keep(k))), k = 1, size(keep))])

@@ -837,3 +837,19 @@ def test_store_altitude_stays_inside_the_atmosphere(airlaunch_exe, tmp_path, alt
         assert res.returncode == 0, res.stderr
     else:
         assert_input_error(res, f"altitude = {altitude}", out)
+
+
+def test_help_names_every_documented_option(airlaunch_exe):
+    """`airlaunch --help` names every option of the command line that
+    docs/input.md documents ("The command line is ..."): the reference is the
+    documentation, read here, not a copy of the usage text.  It once showed
+    `--output FILE` and `--check` only."""
+    text = (ROOT / "docs" / "input.md").read_text()
+    m = re.search(r"The command line is (.*?)both print to stdout", text, re.S)
+    assert m, "docs/input.md lost its command-line sentence"
+    options = set(re.findall(r"(?<![\w-])(--?[a-zA-Z][\w-]*)", m.group(1)))
+    assert {"-o", "--output", "--check", "-h", "--help", "-V", "--version"} <= options, options
+    res = subprocess.run([str(airlaunch_exe), "--help"], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0 and res.stderr == ""
+    shown = set(re.findall(r"(?<![\w-])(--?[a-zA-Z][\w-]*)", res.stdout))
+    assert options <= shown, f"--help does not name {sorted(options - shown)}"

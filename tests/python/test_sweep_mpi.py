@@ -265,6 +265,13 @@ def test_figures_of_an_earlier_summary_are_known_stale(tmp_path, exes):
     step("envelope", d)
     assert (figures / "passfail_map.png").is_file()
     assert_drawn_from_the_files_beside_them()
+    # a rerun with no case left keeps the journal's summary byte for byte (it was
+    # written again with a new `created`, which made these figures stale)
+    before = (out / "summary.nc").read_bytes()
+    res = run_sweep(d, tmp_path)
+    assert res.returncode == 0 and "0 cases to run" in res.stdout and "left as it is" in res.stdout, res.stdout
+    assert (out / "summary.nc").read_bytes() == before
+    assert_drawn_from_the_files_beside_them()
     # the cases run again at another setting: a new summary; airlaunch-sweep removes envelope.nc, not figures/
     d = small_definition(tmp_path / "s.nml", n_cases=4, extra_sweep=crit,
                          fixed="&fixed name = 'line%n_seg', value = '12' /")

@@ -159,6 +159,21 @@ def test_bad_arguments_are_one_line(paper_sweep, args, match):
     assert len(res.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("present", [[], ["airlaunch-sweep"]], ids=["empty-dir", "no-airlaunch"])
+def test_exe_dir_without_the_programs_is_one_line(paper_sweep, tmp_path, present):
+    """--exe-dir naming a directory without airlaunch-sweep or airlaunch: one
+    line naming the missing program, exit 2, as for every bad argument (it was
+    a FileNotFoundError traceback, exit 1, once the first rerun started)."""
+    tmp, definition = paper_sweep
+    for name in present:
+        (tmp_path / name).symlink_to(ROOT / "build" / "release" / "bin" / name)
+    res = verify(tmp, definition, "--ids", "0", "--exe-dir", str(tmp_path))
+    missing = "airlaunch" if present else "airlaunch-sweep"
+    assert res.returncode == 2, res.stderr
+    assert f"{tmp_path / missing}: no such program to rerun the cases with" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
+
+
 def test_segment_factor_is_capped_at_1000_segments():
     """--segments 1000 on 15 segments multiplies them by 66 (990 segments), and
     verify.nc records that factor per case (it recorded the 1000 asked for)."""
