@@ -780,7 +780,7 @@ contains
     call require_set(f, group, name, x, unit, error)
     if (allocated(error)) return
     if (.not. (x > 0.0_dp)) call fatal_error(error, f%path // ": &" // group // ": " // name // &
-      " = " // str(x) // " is not allowed (must be > 0 " // unit // ")")
+      " = " // str(x) // " is not allowed (must be > 0" // with_unit(unit) // ")")
   end subroutine require_positive
 
   !> x >= 0 required.
@@ -793,8 +793,16 @@ contains
     call require_set(f, group, name, x, unit, error)
     if (allocated(error)) return
     if (.not. (x >= 0.0_dp)) call fatal_error(error, f%path // ": &" // group // ": " // name // &
-      " = " // str(x) // " is not allowed (must be >= 0 " // unit // ")")
+      " = " // str(x) // " is not allowed (must be >= 0" // with_unit(unit) // ")")
   end subroutine require_nonnegative
+
+  !> " UNIT", or nothing for a quantity without a unit.
+  pure function with_unit(unit) result(s)
+    character(len=*), intent(in) :: unit
+    character(len=:), allocatable :: s
+    s = ""
+    if (len_trim(unit) > 0) s = " " // trim(unit)
+  end function with_unit
 
   !> lo <= x <= hi required.
   subroutine require_range(f, group, name, x, lo, hi, unit, error)
@@ -807,7 +815,7 @@ contains
     if (allocated(error)) return
     if (.not. (x >= lo .and. x <= hi)) call fatal_error(error, f%path // ": &" // group // ": " // &
       name // " = " // str(x) // " is not allowed (must be in [" // str(lo) // ", " // str(hi) // &
-      "] " // unit // ")")
+      "]" // with_unit(unit) // ")")
   end subroutine require_range
 
   !> lo <= i <= hi required.
@@ -847,8 +855,13 @@ contains
     real(dp), intent(in) :: x
     type(error_type), allocatable, intent(inout) :: error
     if (allocated(error)) return
-    if (x == unset_real) call fatal_error(error, f%path // ": &" // group // &
-      ": missing required value " // name // " (" // unit // ")")
+    if (x /= unset_real) return
+    if (len_trim(unit) > 0) then
+      call fatal_error(error, f%path // ": &" // group // ": missing required value " // name // " (" // &
+        trim(unit) // ")")
+    else
+      call fatal_error(error, f%path // ": &" // group // ": missing required value " // name)
+    end if
   end subroutine require_set
 
   ! ---------------------------------------------------------------------

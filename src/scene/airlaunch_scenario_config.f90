@@ -449,8 +449,11 @@ contains
       call fatal_error(error, f%path // ": &rocket: fin_count = " // str(fin_count) // &
         " is not allowed (0 = no fins, 3, or 4 in X configuration)")
     if (fin_count > 0) then
-      call require_positive(f, "rocket", "fin_semi_span", fin_semi_span, "m", error)
-      call require_positive(f, "rocket", "fin_root_chord", fin_root_chord, "m", error)
+      ! both default to 0: a finned rocket must give them
+      call require_positive(f, "rocket", "fin_semi_span", fin_semi_span, "m; required with fin_count = " // &
+        str(fin_count), error)
+      call require_positive(f, "rocket", "fin_root_chord", fin_root_chord, "m; required with fin_count = " // &
+        str(fin_count), error)
       call require_nonnegative(f, "rocket", "fin_tip_chord", fin_tip_chord, "m", error)
       call require_nonnegative(f, "rocket", "fin_sweep", fin_sweep, "m", error)
       call require_range(f, "rocket", "fin_root_le_from_nose", fin_root_le_from_nose, 0.0_dp, &

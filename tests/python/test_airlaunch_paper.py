@@ -144,6 +144,9 @@ def test_defaults_within_0p1_percent_of_the_paper_discretization(paper_run, pape
     ([(r"^  drag_area = 10.0 .*$", "  drag_area = 0.0")], "&parachute: drag_area = 0.0 is not allowed"),
     ([(r"^  l0 = 10.0 .*$", "  l0 = 5.0")], "&bay: l0 = 5.0 is not allowed"),
     ([(r"^  fin_semi_span = 1.34 .*$", "  fin_semi_span = 2.0")], "&rocket: fin_semi_span = 2.0 is not allowed"),
+    # fins without a span (its default, 0): the message says the span is required, not only "> 0"
+    ([(r"^  fin_semi_span = 1.34 .*$", "")],
+     "&rocket: fin_semi_span = 0.0 is not allowed (must be > 0 m; required with fin_count = 4)"),
     ([(r"^  deploy_time = -1.0 .*$", "  deploy_time = 20.0")], "the parachute would never inflate"),
     # an aircraft that cannot fly the trim: the paper's aircraft (C_L0, C_m0 of
     # its calibration, as input/sweep_paper.nml freezes them) flown too slowly

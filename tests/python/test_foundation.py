@@ -87,7 +87,7 @@ def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
     ("mass = -5.0", "mass = -5.0 is not allowed (must be > 0 kg)"),
     ("mass = 'heavy'", "variable 'mass' = 'heavy' is not a real number"),
     ("drag_area = 1.0", "missing required value mass (kg)"),
-    ("mass = 100.0, mach = 0.0", "mach = 0.0 is not allowed (must be in [0.001, 5.0] )"),
+    ("mass = 100.0, mach = 0.0", "mach = 0.0 is not allowed (must be in [0.001, 5.0])"),
     # NaN and Inf read as reals; variables without a range check (e.g. the tail's
     # position in the air-launch scene) accepted them before the ninth session
     ("mass = nan", "'mass' = nan is not allowed (not a finite number)"),
