@@ -149,7 +149,8 @@ contains
     if (present(last)) n = last
     q%first_node = n0
     q%last_node = n
-    q%length0 = (n - n0)*model%l0
+    q%length0 = model%p%length
+    if (n - n0 < model%n) q%length0 = (n - n0)*model%l0   ! a piece
     q%line_mass = sum(model%node_mass(n0:n))
     ! (18), (19), (25), (30)
     do k = n0 + 1, n
