@@ -33,6 +33,7 @@ program airlaunch
   use airlaunch_launch_system, only: launch_system
   use airlaunch_kinds, only: dp
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
+  use airlaunch_line_model, only: cascade_note
   use airlaunch_strings, only: str
   use airlaunch_blas_threads, only: use_one_blas_thread
   use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal
@@ -328,7 +329,8 @@ contains
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s, parted
     parted = "line break: segment " // str(r%line_break_segment) // " parted at " // at(r%line_break_time) // &
-      ", " // str(r%line_breaks) // " segment(s) in all" // new_line("a")
+      ", " // str(r%line_breaks) // " segment(s) in all" // &
+      cascade_note(r%line_breaks) // new_line("a")
     s = "line break: none" // new_line("a")
     if (r%line_break_segment > 0) s = parted
   end function break_note

@@ -5,7 +5,7 @@ module airlaunch_line
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type
   use airlaunch_line_model, only: line_params, line_model, line_energy, node_state_name, marching_stable_step, &
-    marching_diverged, far_end_not_converged, weakest_segment, segment_strengths
+    marching_diverged, far_end_not_converged, weakest_segment, segment_strengths, cascade_note
   use airlaunch_line_ends, only: line_end, end_kind_code, end_kind_name, end_fixed, end_prescribed, &
     end_free, end_point_mass, end_body
   use airlaunch_line_shape, only: straight_shape, sagged_shape, parabola_length, parabola_sag_for_length
@@ -17,7 +17,7 @@ module airlaunch_line
   implicit none
   private
   public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
-    far_end_not_converged, weakest_segment, segment_strengths
+    far_end_not_converged, weakest_segment, segment_strengths, cascade_note
   public :: line_end, end_kind_code, end_kind_name, end_fixed, end_prescribed, end_free, end_point_mass, end_body
   public :: straight_shape, sagged_shape, parabola_length, parabola_sag_for_length
   public :: line_scheme, line_scheme_options, line_scheme_stats, check_scheme_options

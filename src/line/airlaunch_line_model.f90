@@ -89,7 +89,7 @@ module airlaunch_line_model
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
-  public :: weakest_segment, segment_strengths, outside_atmosphere_message
+  public :: weakest_segment, segment_strengths, outside_atmosphere_message, cascade_note
   public :: line_params, line_model, line_energy, node_state_name, marching_stable_step, marching_diverged, &
     far_end_not_converged
 
@@ -719,4 +719,15 @@ contains
     write(buf, '(i0)') k
     name = "line node " // trim(buf) // merge(" position ", " velocity ", j <= 3) // xyz(modulo(j - 1, 3) + 1)
   end function node_state_name
+  !> The summaries' word on a line that parted in more than one segment:
+  !> every segment has the line's strength, so after the first break the count,
+  !> the later peaks and the recoil depend on N (docs/model.md, "Line break").
+  pure function cascade_note(n_parted) result(s)
+    integer, intent(in) :: n_parted   !< segments parted
+    character(len=:), allocatable :: s
+    s = ""
+    if (n_parted > 1) s = " (after the first, a cascade: every segment has the line's strength, so the " // &
+      "count, the later peaks and the recoil depend on n_seg; docs/model.md, 'Line break')"
+  end function cascade_note
+
 end module airlaunch_line_model

@@ -1063,7 +1063,8 @@ contains
     if (.not. (allocated(scene%strength) .or. scene%cfg%break_time > 0.0_dp)) return
     text = "line break: none" // new_line("a")
     if (scene%line_breaks > 0) text = "line break: segment " // str(scene%line_break_segment) // " parted at t = " // &
-      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all; recoil " // &
+      str(scene%line_break_time) // " s, " // str(scene%line_breaks) // " segment(s) in all" // &
+      cascade_note(scene%line_breaks) // "; recoil " // &
       str(scene%recoil_speed) // " m/s (the largest change of a node's velocity within 2 L/c of it)" // &
       new_line("a")
   end function break_note
