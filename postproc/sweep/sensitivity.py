@@ -95,18 +95,27 @@ def rank_regression(x: np.ndarray, y: np.ndarray):
     rank variance that input j explains and their sum is R^2; a small R^2 says
     that no monotone, additive model explains the response (interactions or
     non-monotone effects).  Returns (srrc of length k, r2); NaN where y or an
-    input does not vary."""
+    input does not vary, and for an input whose ranks are a linear combination
+    of the others' (two inputs that move together over the cases): the fit
+    cannot tell their shares apart, and least squares would return an
+    arbitrary split of their sum (even of the wrong sign).  R^2 stays."""
     rx = _rank_columns(x)
     ry = _ranks(np.asarray(y, dtype=float))
     n, k = rx.shape
     sx, sy = rx.std(axis=0), ry.std()
     if sy == 0.0 or np.any(sx == 0.0):
         return np.full(k, np.nan), np.nan
-    basis = np.hstack([np.ones((n, 1)), rx])
+    ones = np.ones((n, 1))
+    basis = np.hstack([ones, rx])
     coef, *_ = np.linalg.lstsq(basis, ry, rcond=None)
     residual = ry - basis @ coef
     r2 = 1.0 - (residual @ residual) / (n * sy**2)
-    return coef[1:] * sx / sy, float(r2)
+    srrc = coef[1:] * sx / sy
+    for j in range(k):
+        # identifiable only if some of its ranks' variation is its own
+        if not np.any(_residual(rx[:, j], np.hstack([ones, np.delete(rx, j, axis=1)]))):
+            srrc[j] = np.nan
+    return srrc, float(r2)
 
 
 def fisher_interval(r, n: int, p: int, z=Z95):
@@ -143,6 +152,8 @@ def sensitivity(env: xr.Dataset) -> xr.Dataset:
         # 'all': the smallest relative margin (-inf where a metric is NaN); the others: the margin
         var = "relative_margin" if c == "all" else "margin"
         y = np.asarray(env[var].sel(criterion=c).values, dtype=float)[ok]
+        if _constant_to_roundoff(y):
+            continue   # ranks of round-off would call noise a driver
         if k >= 1 and n >= k + 2:   # the regressions need a residual degree of freedom
             spearman[i, varies], prcc[i, varies] = rank_correlations(x[:, varies], y)
             srrc[i, varies], r2[i] = rank_regression(x[:, varies], y)
@@ -169,6 +180,17 @@ def sensitivity(env: xr.Dataset) -> xr.Dataset:
     return ds
 
 
+#: A margin whose values differ by no more than this fraction of its size does
+#: not vary: the differences are round-off and solver noise (far below any
+#: sweep's tolerance), and their ranks would make any input look like a driver.
+ROUNDOFF = 1e-9
+
+
+def _constant_to_roundoff(y: np.ndarray) -> bool:
+    """All finite and within ROUNDOFF of each other, relative to their size."""
+    return bool(y.size and np.all(np.isfinite(y)) and np.ptp(y) <= ROUNDOFF * np.max(np.abs(y)))
+
+
 def significant(env: xr.Dataset, criterion) -> np.ndarray:
     """Per input: the partial rank correlation's 95 % interval excludes 0."""
     low = env["prcc_low"].sel(criterion=criterion).values
@@ -182,6 +204,16 @@ def by_importance(env: xr.Dataset, criterion) -> np.ndarray:
     return np.argsort(-np.nan_to_num(np.abs(srrc), nan=-1.0), kind="stable")
 
 
+def _why_none(env: xr.Dataset, j: int) -> str:
+    """Why input j has no coefficient: it is constant over the computed cases,
+    or it moves with the other inputs there (rank_regression)."""
+    ok = env["status"].values == 0
+    values = np.asarray(env[str(env["input"].values[j])].values, dtype=float)[ok]
+    if values.size and np.ptp(values) > 0:
+        return "(moves with the other inputs over the computed cases: its share cannot be told apart)"
+    return "(constant over the computed cases)"
+
+
 DRIVERS_HEADING = ("drivers (standardised rank regression coefficient of each margin on the inputs, largest first: "
                    "its square is the input's share of the margin's rank variance; R^2 of that regression; "
                    "'not significant': the partial rank correlation's 95% interval holds 0)")
@@ -193,11 +225,12 @@ def drivers_table(env: xr.Dataset) -> str:
     lines = []
     for c in env["criterion"].values:
         srrc = env["srrc"].sel(criterion=c).values
-        if np.all(np.isnan(srrc)):
-            lines.append(f"  {str(c):16s} (none: the margin does not vary over the computed cases, or they are too few)")
+        if np.isnan(float(env["rank_r2"].sel(criterion=c))):
+            lines.append(f"  {str(c):16s} (none: the margin does not vary over the computed cases (beyond "
+                         f"{ROUNDOFF:.0e} of its size), or they are too few)")
             continue
         sig = significant(env, c)
-        cells = [f"{env['input'].values[j]!s} " + ("(constant over the computed cases)" if np.isnan(srrc[j]) else
+        cells = [f"{env['input'].values[j]!s} " + (_why_none(env, j) if np.isnan(srrc[j]) else
                                                    f"{srrc[j]:+.2f}" + ("" if sig[j] else " (not significant)"))
                  for j in by_importance(env, c)]
         r2 = float(env["rank_r2"].sel(criterion=c))

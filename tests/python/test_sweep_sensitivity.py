@@ -187,3 +187,51 @@ def test_an_input_constant_over_the_computed_cases_is_left_out():
     for var in ("srrc", "prcc", "spearman", "prcc_low"):
         assert np.isnan(float(env[var].sel(criterion="clearance", input="b"))), var
     assert "b (constant over the computed cases)" in drivers_table(env)
+
+
+def test_inputs_that_move_together_have_no_coefficient():
+    """b = -a over the computed cases (ranks reversed): the regression cannot
+    tell their shares apart, and least squares returned an arbitrary split of
+    the sum (an audit found SRRC +0.265 for an input whose Spearman
+    correlation was -0.632).  Both get NaN, the drivers line says why, and the
+    regression's R^2 is still the fit's: the response is a function of a alone,
+    so R^2 equals the one-input regression's, Spearman's rho squared (SciPy)."""
+    rng = np.random.default_rng(5)
+    n = 40
+    a = rng.random(n)
+    b = -a
+    clearance = 1.0 + 2.0 * a + 0.3 * rng.standard_normal(n)
+    env = evaluate(synthetic_summary(a, b, clearance), parse_criteria(CRITERIA))
+    srrc = env["srrc"].sel(criterion="clearance")
+    assert np.isnan(srrc.values).all(), srrc.values
+    rho = st.spearmanr(a, clearance).statistic
+    assert float(env["rank_r2"].sel(criterion="clearance")) == pytest.approx(rho**2, abs=1e-12)
+    assert float(env["spearman"].sel(criterion="clearance", input="b")) == pytest.approx(-rho, abs=1e-12)
+    text = drivers_table(env)
+    assert "a (moves with the other inputs over the computed cases: its share cannot be told apart)" in text, text
+    # a third, independent input keeps its coefficient: the same as without the pair's twin
+    x3 = np.column_stack([a, b, rng.random(n)])
+    y = clearance + 0.5 * x3[:, 2]
+    srrc3, r2 = rank_regression(x3, y)
+    srrc2, r2_2 = rank_regression(x3[:, [0, 2]], y)
+    assert np.isnan(srrc3[:2]).all() and srrc3[2] == pytest.approx(srrc2[1], abs=1e-12)
+    assert r2 == pytest.approx(r2_2, abs=1e-12)
+
+
+def test_a_margin_constant_to_roundoff_has_no_drivers():
+    """The steady tow's peak tension moved by 3e-6 N out of 1e5 N with the
+    release time (solver noise, below 1e-10 of it): its ranks made the release
+    time a 'significant' driver with PRCC 1.000.  A margin within 1e-9 of its
+    size is constant: NaN sensitivities and the drivers line says so; a
+    variation of 1e-6 of it is kept."""
+    n = 20
+    rng = np.random.default_rng(3)
+    a, b = rng.uniform(0.4, 1.0, n), rng.uniform(7.0, 13.0, n)
+    for step, kept in ((1e-5, False), (1.0, True)):
+        ds = synthetic_summary(a, b, 1.0 + a)
+        ds["peak_line_tension_N"] = ("case", 1.0e5 + step * a)
+        env = evaluate(ds, parse_criteria(CRITERIA))
+        prcc = env["prcc"].sel(criterion="line_tension").values
+        assert np.isfinite(prcc).any() == kept, (step, prcc)
+        text = drivers_table(env)
+        assert ("line_tension     (none: the margin does not vary" in text) != kept, text
