@@ -172,3 +172,23 @@ def test_contradictory_input_gives_one_clear_line(airlaunch_exe, tmp_path, edits
     out = tmp_path / "x.nc"
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert str(nml) in assert_input_error(res, fragment, out)
+
+
+def test_fins_leave_the_bay_without_a_step(airlaunch_exe, tmp_path):
+    """The fins' force grows with the share of their planform out of the bay
+    (model.md, "Rocket"): the end-to-end wiring of the fin geometry into the
+    aerodynamics (a scenario whose fins lost their chord would fall back to
+    the all-or-nothing rule silently).  Reference: a force on a body moving
+    continuously through a continuous field is continuous.  Records every
+    2 ms over the fins' passage (1.5-2.6 s): the ramp edge's normal force
+    changes by at most 200 N between records (its steady rate is ~7 N per
+    record; the all-or-nothing fins made it jump 2 585 N at 2.086 s, the
+    moment the fins' centre of pressure passed the edge; measured now 24 N)."""
+    nml = nml_variant(tmp_path, base=EXAMPLE, edits=[(r"^  output_dt = .*$", "  output_dt = 0.002")])
+    ds, _ = _run(airlaunch_exe, nml, tmp_path / "fins.nc")
+    t = ds["time"].values
+    assert t[1] - t[0] == pytest.approx(0.002)
+    window = (t > 1.5) & (t < 2.6)
+    jump = np.abs(np.diff(ds["edge_normal_force_N"].values[window]))
+    assert jump.size > 500 and jump.max() < 200.0, (jump.max(), t[window][np.argmax(jump)])
+    ds.close()
