@@ -4,7 +4,9 @@
     python -m postproc.sweep envelope SWEEP.nml [--criteria FILE] [--summary FILE] [--no-figures] [--check]
     python -m postproc.sweep verify SWEEP.nml [--cases K | --ids I,J,...] [--segments F] [--tolerance F] [--jobs J]
 
-Exit status 0 on success, 2 for bad input (one line on stderr), 130 when
+Exit status 0 on success, 2 for bad input or a file that cannot be read or
+written (one line on stderr), 4 when the step completed but its standard output
+could not be written (a full disk, a closed pipe: one line on stderr), 130 when
 interrupted (SIGINT, Ctrl-C: one line, ``sweep: interrupted``), 143 on SIGTERM
 (``sweep: interrupted (SIGTERM)``); every file is written under a temporary
 name and renamed once whole, so none is left cut short under its final name.
@@ -14,6 +16,47 @@ from __future__ import annotations
 import sys
 
 INTERRUPTED = 130
+STDOUT_LOST = 4
+
+
+class CheckedStdout:
+    """sys.stdout that keeps the step going when its output cannot be written
+    (a full disk, `| head` that has closed the pipe): the first error is kept
+    and later output dropped, so the step finishes its files; main() then
+    reports it in one line (exit 4), as airlaunch and airlaunch-sweep do."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.error = None
+
+    def write(self, text):
+        if self.error is None:
+            try:
+                return self._stream.write(text)
+            except OSError as exc:
+                self.error = exc
+        return len(text)
+
+    def flush(self):
+        if self.error is None:
+            try:
+                self._stream.flush()
+            except OSError as exc:
+                self.error = exc
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _silence_stdout():
+    """Point file descriptor 1 at /dev/null: the interpreter's last flush of
+    what could not be written then neither fails nor prints a traceback."""
+    import os
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.__stdout__.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 class Terminated(BaseException):
@@ -402,14 +445,29 @@ def main(argv=None) -> int:
     p.add_argument("--jobs", type=_positive_int, default=2, help="cases run at once (default 2)")
     _exe_dir_option(p, "where airlaunch and airlaunch-sweep are (default build/release/bin)")
     p.set_defaults(func=cmd_verify)
+    out = sys.stdout = CheckedStdout(sys.stdout)
     try:
         args = parser.parse_args(argv)
-        return args.func(args)
+        status = args.func(args)
     except DefinitionError as exc:
         print(f"sweep: error: {exc}", file=sys.stderr)
-        return 2
+        status = 2
+    except OSError as exc:
+        # a path the step could not use that no check named: one line, not a traceback
+        where = f"{exc.filename}: " if exc.filename is not None else ""
+        print(f"sweep: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        status = 2
     except (KeyboardInterrupt, Terminated) as exc:
         return interrupted(exc)
+    out.flush()
+    if out.error is not None:
+        print(f"sweep: error: the standard output could not be written ({out.error.strerror or out.error}; "
+              "the step's files are complete)" if status == 0 else
+              f"sweep: error: the standard output could not be written ({out.error.strerror or out.error})",
+              file=sys.stderr)
+        _silence_stdout()
+        return STDOUT_LOST if status == 0 else status
+    return status
 
 
 if __name__ == "__main__":

@@ -193,18 +193,25 @@ def case_namelist(case_id, definition, sweep_exe, timeout):
     return res.stdout
 
 
+def _path_arg(path) -> str:
+    """A path as a program argument: one starting with '-' (an output_dir '-x')
+    would be taken for an option."""
+    text = str(path)
+    return "./" + text if text.startswith("-") else text
+
+
 def rerun_case(case_id, text, exe, work: pathlib.Path, segments, tolerance, timeout, run=_run):
     """One case (its namelist `text`) at refined settings: (status, message,
     the output's path, changes)."""
     case_nml = write_text_atomic(work / f"case_{case_id:06d}.nml", text)
     out = work / f"case_{case_id:06d}.nc"
-    res = run([str(exe), str(case_nml), "--check", "--output", str(out)], None, timeout)
+    res = run([str(exe), _path_arg(case_nml), "--check", "--output", _path_arg(out)], None, timeout)
     if res.returncode != 0:
         return "invalid_input", res.stderr.strip(), out, [], 1
     resolved = res.stdout.split("\n", 1)[1]   # without the leading comment line
     text, changes, factor = refine_namelist(resolved, segments, tolerance)
     refined = write_text_atomic(work / f"case_{case_id:06d}_refined.nml", text)
-    res = run([str(exe), str(refined), "--output", str(out)], None, timeout)
+    res = run([str(exe), _path_arg(refined), "--output", _path_arg(out)], None, timeout)
     status = "ok" if res.returncode == 0 else ("failed" if res.returncode == 3 else "error")
     return status, res.stderr.strip().splitlines()[-1] if res.returncode else "", out, changes, factor
 
@@ -235,6 +242,13 @@ def verify(env, criteria, scene, ids, definition, sweep_exe, exe, work, segments
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+    # a case the sweep computed whose rerun airlaunch refuses (its --check) is
+    # verify's own failure (a path airlaunch cannot take, say), not a flip
+    status = env["status"].sel(case=list(ids)).values
+    for case_id, st, r in zip(ids, status, runs):
+        if st == 0 and r[0] == "invalid_input":
+            lines = r[1].splitlines() or ["no message"]
+            raise DefinitionError(f"the rerun of case {int(case_id)} was refused: {lines[-1]}")
     names = [c.name for c in criteria]
     metrics = sorted({m for c in criteria for m in c.metrics})
     attrs = [attributes(r[2]) if r[0] == "ok" else {} for r in runs]

@@ -81,6 +81,9 @@ program airlaunch
       if (i > nargs) call fail_input("--output needs a file name")
       arg = argument(i)
       if (len_trim(arg) == 0) call fail_input("--output needs a file name (it is empty)")
+      ! Fortran pads a name with blanks: one ending in a blank would be written without it
+      if (arg(len(arg):len(arg)) == " ") call fail_input("--output '" // arg // "' ends with a blank, " // &
+        "which the file name would lose (give the name without trailing blanks)")
       if (len(arg) > len(run%output)) call fail_input("--output is " // str(len(arg)) // &
         " characters long; at most " // str(len(run%output)) // " are allowed")
       output_override = trim(arg)

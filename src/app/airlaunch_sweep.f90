@@ -23,7 +23,8 @@ program airlaunch_sweep
   use airlaunch_strings, only: str, fixed
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: file_exists, delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
+  use airlaunch_path, only: path_kind, kind_regular
+  use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
   use airlaunch_path, only: ignore_file_size_signal
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
@@ -110,7 +111,7 @@ program airlaunch_sweep
   call run_pass(pending, .false., n_written)
   if (rank == 0) then
     call collect_rows()
-    if (size(pending) > 0 .or. .not. file_exists(s%def%summary_path())) then
+    if (size(pending) > 0 .or. path_kind(s%def%summary_path()) /= kind_regular) then
       call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
       if (allocated(error)) call die(error%message)
     else
@@ -121,7 +122,9 @@ program airlaunch_sweep
     end if
     call report_tally(size(pending), MPI_Wtime() - t_run)
     keep = trajectory_ids(s%def, s%base%metrics, rows)
-    keep = pack(keep, [(.not. file_exists(s%def%trajectory_path(keep(k))), k = 1, size(keep))])
+    ! a kept case's file that exists is not rewritten; anything else in its place is
+    ! the writer's to report (a directory there: exit 4, naming it)
+    keep = pack(keep, [(path_kind(s%def%trajectory_path(keep(k))) /= kind_regular, k = 1, size(keep))])
   end if
 
   ! --- full trajectories of the cases the definition keeps

@@ -315,15 +315,18 @@ def test_missing_output_directory_is_an_input_error(airlaunch_exe, tmp_path):
     assert "HDF5" not in res.stderr
 
 
-@pytest.mark.parametrize("kind", ["empty", "too long"])
+@pytest.mark.parametrize("kind", ["empty", "too long", "trailing blank"])
 def test_an_output_option_the_run_cannot_hold_is_an_input_error(airlaunch_exe, tmp_path, kind):
     """`--output ""` was ignored (the namelist's file written instead) and a path
     longer than the 256 characters &run output holds was cut silently (exit 0, a
-    file under the first 256 characters); both are refused like the namelist's."""
+    file under the first 256 characters); both are refused like the namelist's.
+    So is a name ending in a blank, which Fortran's blank-padded name lost (an
+    audit's `-o "out/trail.nc "` wrote and replaced out/trail.nc, exit 0)."""
     nml, _ = drop_nml(tmp_path)
     long = tmp_path / ("x" * (300 - len(str(tmp_path))) + ".nc")
     out, fragment = {"empty": ("", "--output needs a file name (it is empty)"),
-                     "too long": (long, f"--output is {len(str(long))} characters long; at most 256 are allowed")}[kind]
+                     "too long": (long, f"--output is {len(str(long))} characters long; at most 256 are allowed"),
+                     "trailing blank": (f"{tmp_path / 'x.nc'} ", "ends with a blank, which the file name would lose")}[kind]
     res = run_airlaunch(airlaunch_exe, nml, "--output", out)
     assert_input_error(res, fragment, tmp_path / "drop.nc")
     assert not list(tmp_path.glob("x*"))

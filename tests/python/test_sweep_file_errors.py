@@ -207,6 +207,36 @@ def test_unwritable_trajectories_are_an_error_not_written_files(tmp_path, exes):
     assert sorted(p.name for p in traj.glob("*.nc")) == [f"case_{k:06d}.nc" for k in (1, 2, 3)]
 
 
+def test_directories_in_place_of_the_summary_or_a_trajectory_are_errors_on_every_rerun(tmp_path, exes):
+    """A directory named summary.nc, or named like a kept trajectory: the first
+    run ends with exit 4 naming it; so must the rerun, which has no case left
+    to run.  An audit found the rerun taking the directory for the journal's
+    summary ("left as it is", exit 0, no summary) and for a written trajectory
+    (nothing written, nothing said, exit 0).  Once the way is clear, the rerun
+    writes both."""
+    definition = small_definition(tmp_path / "s.nml", n_cases=4, extra_sweep="keep_ids = 1")
+    make_table(definition, tmp_path)
+    out = tmp_path / "out"
+    (out / "summary.nc").mkdir(parents=True)
+    for attempt in ("first", "rerun"):
+        res = run_sweep(definition, tmp_path, 1)
+        assert res.returncode == 4, (attempt, res.stdout + res.stderr)
+        errors = _errors(res)
+        assert len(errors) == 1 and "summary.nc" in errors[0], (attempt, res.stderr)
+        assert "left as it is" not in res.stdout
+    (out / "summary.nc").rmdir()
+    (out / "trajectories" / "case_000001.nc").mkdir(parents=True)
+    res = run_sweep(definition, tmp_path, 1)
+    assert res.returncode == 4, res.stdout + res.stderr
+    assert (out / "summary.nc").is_file()
+    errors = _errors(res)
+    assert len(errors) == 1 and "case_000001.nc" in errors[0], res.stderr
+    (out / "trajectories" / "case_000001.nc").rmdir()
+    res = run_sweep(definition, tmp_path, 1)
+    assert res.returncode == 0 and "trajectories: 1 written" in res.stdout, res.stdout + res.stderr
+    assert (out / "trajectories" / "case_000001.nc").is_file()
+
+
 def test_restart_removes_every_kept_trajectory(tmp_path, exes):
     """--restart removed the kept trajectories only for ids below the new
     sweep's n_cases: a restart with fewer cases left the earlier sweep's

@@ -1,0 +1,84 @@
+"""The sweep's Python steps and verify with paths a cluster user may have
+(found by an audit, thirtieth session), each against the project's rule: the
+step succeeds, or says what went wrong in one line with a non-zero exit.
+
+- an output_dir starting with '-': verify's reruns passed their namelist to
+  airlaunch unprotected, which took it for an option; the refused reruns were
+  reported as pass/fail flips with exit 0;
+- an output_dir long enough that a rerun's output name passes airlaunch's 256
+  characters: the same false flips, exit 0; now one line naming the refusal;
+- a step's standard output that cannot be written (/dev/full): a traceback
+  after envelope.nc was written and before the figures; now the step
+  finishes its files and says so in one line, exit 4 (as airlaunch does);
+- OUTPUT_DIR/verify an existing file: a traceback; now one line, exit 2.
+"""
+import pathlib
+
+import pytest
+
+from test_sweep_support import ROOT, ENV, make_table, run_python, run_sweep, small_definition
+
+CRITERIA = f"criteria = '{ROOT}/input/criteria_paper.nml'"
+
+
+def finished_sweep(tmp_path, output_dir):
+    d = small_definition(tmp_path / "s.nml", n_cases=3, t_end=1.0, output_dir=output_dir, extra_sweep=CRITERIA)
+    make_table(d, tmp_path)
+    res = run_sweep(d, tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    res = run_python(["envelope", d, "--no-figures"], tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    return d
+
+
+def test_verify_with_an_output_dir_starting_with_a_dash(tmp_path):
+    d = finished_sweep(tmp_path, "-dash")
+    res = run_python(["verify", d, "--ids", "0", "--jobs", "1"], tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    import xarray as xr
+    with xr.open_dataset(tmp_path / "-dash" / "verify.nc") as ds:
+        assert list(ds["refined_status"].values) == ["ok"], ds["refined_message"].values
+        assert not ds["flipped"].values.any()
+
+
+def test_verify_whose_reruns_airlaunch_refuses_is_one_line(tmp_path):
+    """output_dir of 240 characters: the sweep runs (its files fit), but a
+    rerun's output, OUTPUT_DIR/verify/case_000000.nc, has 262 characters
+    against airlaunch's 256."""
+    long_dir = "d" * 240
+    d = finished_sweep(tmp_path, long_dir)
+    res = run_python(["verify", d, "--ids", "0", "--jobs", "1"], tmp_path)
+    assert res.returncode == 2, res.stdout + res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("sweep: error: the rerun of case 0 was refused: "), lines
+    assert "characters long" in lines[0] and "flip" not in res.stdout
+    assert not (tmp_path / long_dir / "verify.nc").exists()
+
+
+@pytest.mark.parametrize("step", ["table", "envelope"])
+def test_a_step_whose_stdout_is_full_finishes_and_says_so(tmp_path, step):
+    d = finished_sweep(tmp_path, "out")
+    (tmp_path / "out" / "envelope.nc").unlink()
+    args = [step, d] + (["--exe-dir", str(ROOT / "build" / "release" / "bin")] if step == "table" else [])
+    import subprocess
+    import sys
+    with open("/dev/full", "w") as full:
+        res = subprocess.run([sys.executable, "-m", "postproc.sweep", *map(str, args)], cwd=tmp_path, env=ENV,
+                             stdout=full, stderr=subprocess.PIPE, text=True, timeout=600)
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 4, res.stderr
+    assert len(lines) == 1 and lines[0].startswith("sweep: error: the standard output could not be written ("), lines
+    assert "Traceback" not in res.stderr
+    made = tmp_path / "out" / ("table.nc" if step == "table" else "envelope.nc")
+    assert made.is_file()
+    if step == "envelope":
+        assert (tmp_path / "out" / "figures" / "drawn_from.txt").is_file()
+
+
+def test_verify_dir_in_the_way_is_one_line(tmp_path):
+    d = finished_sweep(tmp_path, "out")
+    (tmp_path / "out" / "verify").write_text("in the way\n")
+    res = run_python(["verify", d, "--ids", "0", "--jobs", "1"], tmp_path)
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 2 and len(lines) == 1 and lines[0].startswith("sweep: error: "), res.stderr
+    assert "verify" in lines[0] and "Traceback" not in res.stderr
