@@ -164,10 +164,13 @@ contains
   !> The output file must be one that can be created: not a directory nor a
   !> device, FIFO or socket (which the run would replace or block on), not the
   !> scenario file itself, in an existing directory where a file can be
-  !> written.  Checked before the run (by the program, after any command-line
-  !> override), not found missing after it: a probe file of this process's own
-  !> (`output`.probe-PID) is created and removed, so that no other file
-  !> (another run's `output`.part) is touched.  `what` names where the value
+  !> written, with a name short enough for the files the run makes beside it
+  !> (`output`.part and `output`.part.lock: 10 bytes more, within the file
+  !> system's 255).  Checked before the run (by the program, after any
+  !> command-line override), not found missing after it: a probe file of this
+  !> process's own (DIR/.airlaunch-probe-PID, whatever the output's name) is
+  !> created and removed, so that no other file (another run's `output`.part)
+  !> is touched.  `what` names where the value
   !> came from, e.g. "case.nml: &run: output"; `input`, the scenario file.
   subroutine require_output_directory(what, output, error, input)
     character(len=*), intent(in) :: what                  !< origin of the value, for the message
@@ -175,7 +178,9 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set if no file can be written there
     character(len=*), intent(in), optional :: input       !< the scenario file (must not be the output)
     character(len=:), allocatable :: name, dir, probe
-    character(len=256) :: msg
+    character(len=1024) :: msg
+    !> NAME_MAX of Linux's file systems, less the longest suffix the run adds (.part.lock)
+    integer, parameter :: longest_name = 255 - len(".part.lock")
     integer :: slash, u, ios, what_is_there
     logical :: exists
     name = trim(output)
@@ -215,7 +220,13 @@ contains
         return
       end if
     end if
-    probe = name // ".probe-" // str(int(process_id()))
+    if (len(name) - slash > longest_name) then
+      call fatal_error(error, what // " = '" // name // "' is not allowed: its file name is " // &
+        str(len(name) - slash) // " bytes long; at most " // str(longest_name) // " are allowed (the run " // &
+        "also writes it with '.part' and '.part.lock' appended, within the file system's 255)")
+      return
+    end if
+    probe = name(1:slash) // ".airlaunch-probe-" // str(int(process_id()))
     open(newunit=u, file=probe, status="new", action="write", iostat=ios, iomsg=msg)
     if (ios /= 0) then
       call fatal_error(error, what // " = '" // name // "' is not allowed: no file can be written there (" // &

@@ -332,6 +332,24 @@ def test_an_output_option_the_run_cannot_hold_is_an_input_error(airlaunch_exe, t
     assert not list(tmp_path.glob("x*"))
 
 
+def test_the_longest_output_file_name_the_run_can_write(airlaunch_exe, tmp_path):
+    """The run writes OUTPUT.part and holds OUTPUT.part.lock beside its output:
+    a file name of 255 - 10 = 245 bytes (NAME_MAX of Linux's file systems) is
+    the longest it can use, and it works, whole run; one of 246 is refused
+    before the run, in one line giving the limit and why.  An audit found names
+    from ~241 bytes refused with the reason cut off: the check's probe file,
+    OUTPUT.probe-PID, was up to 14 bytes longer than the output."""
+    nml, _ = drop_nml(tmp_path, t_end=1.0)
+    ok = "b" * 242 + ".nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", ok, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / ok).is_file() and sorted(p.name for p in tmp_path.iterdir()) == sorted(["drop.nml", ok])
+    bad = "b" * 243 + ".nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", bad, cwd=tmp_path)
+    assert_input_error(res, "its file name is 246 bytes long; at most 245 are allowed (the run also writes it with "
+                       "'.part' and '.part.lock' appended", tmp_path / bad)
+
+
 @pytest.mark.parametrize("edit", [("edge_contact = 'bilateral'", "edge_contact = 'one_sided       bilateral'"),
                                   ("dynamics = 'free'", "dynamics = 'prescribed       junk'")])
 def test_a_choice_longer_than_its_variable_is_an_input_error(airlaunch_exe, tmp_path, edit):
