@@ -89,6 +89,18 @@ except KeyboardInterrupt:
     sys.exit(interrupted())
 
 
+def require_programs(exe_dir, names, purpose) -> list:
+    """The programs `names` of `exe_dir`, each an executable file, or a
+    DefinitionError naming the first missing one (before the step changes
+    any file)."""
+    exes = [pathlib.Path(exe_dir) / name for name in names]
+    for exe in exes:
+        if not (exe.is_file() and os.access(exe, os.X_OK)):
+            raise DefinitionError(f"{exe}: no such program {purpose} (build it with scripts/setup release, or "
+                                  "give --exe-dir)")
+    return exes
+
+
 def cmd_table(args) -> int:
     """Draw the case table (or check an existing one against the definition);
     either way, refuse what airlaunch-sweep --check refuses, with its message."""
@@ -96,7 +108,7 @@ def cmd_table(args) -> int:
 
     defn = read_definition(args.definition)
     check_base(defn)
-    sweep_exe = pathlib.Path(args.exe_dir) / "airlaunch-sweep"
+    sweep_exe, = require_programs(args.exe_dir, ["airlaunch-sweep"], "to check the definition with")
     if args.check:
         check_table(defn)
         check_with_sweep(defn, sweep_exe)
@@ -221,7 +233,9 @@ def load_summary(defn, summary_arg, criteria, criteria_path):
 
     summary_path = pathlib.Path(summary_arg or defn.summary_path)
     if not summary_path.is_file():
-        raise DefinitionError(f"{summary_path}: summary does not exist (run airlaunch-sweep first)")
+        from .definition import not_a_file
+        reason = "summary does not exist" if not summary_path.exists() else not_a_file(summary_path)
+        raise DefinitionError(f"{summary_path}: {reason} (run airlaunch-sweep first)")
     hint = "give the summary.nc that airlaunch-sweep writes"
     summary = open_netcdf(summary_path, "summary", hint)
     names = [s.name for s in defn.inputs]
@@ -344,17 +358,13 @@ def cmd_verify(args) -> int:
               "case): nothing near the boundary to verify; choose cases with --ids")
         warn_stale_figures(defn)
         return 0
-    exe_dir = pathlib.Path(args.exe_dir)
-    for exe in (exe_dir / "airlaunch-sweep", exe_dir / "airlaunch"):
-        if not (exe.is_file() and os.access(exe, os.X_OK)):
-            raise DefinitionError(f"{exe}: no such program to rerun the cases with (build it with scripts/setup "
-                                  "release, or give --exe-dir)")
+    sweep_exe, exe = require_programs(args.exe_dir, ["airlaunch-sweep", "airlaunch"], "to rerun the cases with")
     out_dir = pathlib.Path(defn.output_dir)
     # an earlier verification's reruns (other cases, other settings) go: verify/ holds this one's only
     for old in (out_dir / "verify").glob("case_*"):
         old.unlink()
-    ds = verify(env, criteria, base_scene(defn.base) or "airlaunch", ids, defn.path, exe_dir / "airlaunch-sweep",
-                exe_dir / "airlaunch", out_dir / "verify", segments=args.segments, tolerance=args.tolerance,
+    ds = verify(env, criteria, base_scene(defn.base) or "airlaunch", ids, defn.path, sweep_exe,
+                exe, out_dir / "verify", segments=args.segments, tolerance=args.tolerance,
                 jobs=args.jobs)
     try:
         path = write_atomic(ds, out_dir / "verify.nc")

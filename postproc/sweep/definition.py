@@ -148,12 +148,21 @@ class NamelistText(str):
     encoding = "utf-8"
 
 
+def not_a_file(path: pathlib.Path) -> str:
+    """Why `path`, which is not a regular file, cannot be read as one."""
+    if path.is_dir():
+        return "is a directory, not a file"
+    if path.exists():
+        return "is not a regular file (a device, FIFO or socket)"
+    return "file does not exist"
+
+
 def read_namelist_text(path, what):
     """The text of a namelist file; any byte is accepted (UTF-8, else Latin-1:
     a comment in any encoding just works)."""
     p = pathlib.Path(path)
     if not p.is_file():
-        raise DefinitionError(f"{path}: file does not exist (give the path of {what})")
+        raise DefinitionError(f"{path}: {not_a_file(p)} (give the path of {what})")
     try:
         data = p.read_bytes()
     except OSError as exc:

@@ -247,6 +247,22 @@ def test_leading_blank_in_a_string_is_kept(tmp_path):
     assert_error(res, "sweep: error:  c.nml: file does not exist")
 
 
+def test_a_directory_given_as_a_file_is_named_as_such(tmp_path):
+    """A directory given as the criteria file or the summary was reported as
+    "file does not exist" (an audit, thirtieth session); the line now says what
+    is there."""
+    d = definition(tmp_path)
+    (tmp_path / "crit.d").mkdir()
+    (tmp_path / "summary.d").mkdir()
+    res = run_python(["envelope", d, "--criteria", tmp_path / "crit.d"], tmp_path)
+    assert_error(res, "crit.d: is a directory, not a file (give the path of")
+    crit = tmp_path / "c.nml"
+    crit.write_text("&criteria min_clearance_m = 1 /\n")
+    assert table(tmp_path, d).returncode == 0
+    res = run_python(["envelope", d, "--criteria", crit, "--summary", tmp_path / "summary.d"], tmp_path)
+    assert_error(res, "summary.d: is a directory, not a file (run airlaunch-sweep first)")
+
+
 # 7. empty output_dir ---------------------------------------------------------
 
 def test_empty_output_dir(tmp_path):
@@ -788,6 +804,13 @@ def test_a_refused_definition_keeps_no_earlier_table(tmp_path, case):
 
 
 def test_table_step_without_airlaunch_sweep_is_one_line(tmp_path):
+    """One line naming the missing program; and an existing table stays: the
+    step checks for the program before it removes the table it would replace
+    (it removed it first, an audit found, thirtieth session)."""
     d = definition(tmp_path)
     assert_error(table(tmp_path, d, "--exe-dir", tmp_path / "nowhere"), "nowhere/airlaunch-sweep",
-                 "cannot run airlaunch-sweep to check", "give --exe-dir", tmp_path=tmp_path)
+                 "no such program to check the definition with", "give --exe-dir", tmp_path=tmp_path)
+    assert table(tmp_path, d).returncode == 0
+    before = (tmp_path / "out" / "table.nc").read_bytes()
+    assert_error(table(tmp_path, d, "--exe-dir", tmp_path / "nowhere"), "nowhere/airlaunch-sweep")
+    assert (tmp_path / "out" / "table.nc").read_bytes() == before
