@@ -51,7 +51,6 @@ class CheckedStdout:
 def _silence_stdout():
     """Point file descriptor 1 at /dev/null: the interpreter's last flush of
     what could not be written then neither fails nor prints a traceback."""
-    import os
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.__stdout__.fileno())
@@ -84,7 +83,7 @@ try:   # an interrupt while the modules load is one line too (SIGTERM: its defau
 
     import numpy as np
 
-    from .definition import DefinitionError, check_base, read_definition
+    from .definition import DefinitionError, check_base, not_a_file, read_definition
 except KeyboardInterrupt:
     sys.exit(interrupted())
 
@@ -233,7 +232,6 @@ def load_summary(defn, summary_arg, criteria, criteria_path):
 
     summary_path = pathlib.Path(summary_arg or defn.summary_path)
     if not summary_path.is_file():
-        from .definition import not_a_file
         reason = "summary does not exist" if not summary_path.exists() else not_a_file(summary_path)
         raise DefinitionError(f"{summary_path}: {reason} (run airlaunch-sweep first)")
     hint = "give the summary.nc that airlaunch-sweep writes"
@@ -471,9 +469,8 @@ def main(argv=None) -> int:
         return interrupted(exc)
     out.flush()
     if out.error is not None:
-        print(f"sweep: error: the standard output could not be written ({out.error.strerror or out.error}; "
-              "the step's files are complete)" if status == 0 else
-              f"sweep: error: the standard output could not be written ({out.error.strerror or out.error})",
+        done = "; the step's files are complete" if status == 0 else ""
+        print(f"sweep: error: the standard output could not be written ({out.error.strerror or out.error}{done})",
               file=sys.stderr)
         _silence_stdout()
         return STDOUT_LOST if status == 0 else status

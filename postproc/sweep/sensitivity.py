@@ -71,6 +71,11 @@ def _rank_columns(x: np.ndarray) -> np.ndarray:
     return np.column_stack([_ranks(x[:, j]) for j in range(x.shape[1])])
 
 
+def _basis_without(rx: np.ndarray, j: int) -> np.ndarray:
+    """A constant and every rank column but column j."""
+    return np.hstack([np.ones((rx.shape[0], 1)), np.delete(rx, j, axis=1)])
+
+
 def rank_correlations(x: np.ndarray, y: np.ndarray):
     """Spearman and partial rank correlations of y with each column of x.
 
@@ -78,12 +83,11 @@ def rank_correlations(x: np.ndarray, y: np.ndarray):
     (spearman, prcc), each of length k."""
     rx = _rank_columns(x)
     ry = _ranks(np.asarray(y, dtype=float))
-    n, k = rx.shape
+    k = rx.shape[1]
     spearman = np.array([_correlation(rx[:, j], ry) for j in range(k)])
     prcc = np.empty(k)
-    ones = np.ones((n, 1))
     for j in range(k):
-        basis = np.hstack([ones, np.delete(rx, j, axis=1)])
+        basis = _basis_without(rx, j)
         prcc[j] = _correlation(_residual(rx[:, j], basis), _residual(ry, basis))
     return spearman, prcc
 
@@ -105,15 +109,14 @@ def rank_regression(x: np.ndarray, y: np.ndarray):
     sx, sy = rx.std(axis=0), ry.std()
     if sy == 0.0 or np.any(sx == 0.0):
         return np.full(k, np.nan), np.nan
-    ones = np.ones((n, 1))
-    basis = np.hstack([ones, rx])
+    basis = np.hstack([np.ones((n, 1)), rx])
     coef, *_ = np.linalg.lstsq(basis, ry, rcond=None)
     residual = ry - basis @ coef
     r2 = 1.0 - (residual @ residual) / (n * sy**2)
     srrc = coef[1:] * sx / sy
     for j in range(k):
         # identifiable only if some of its ranks' variation is its own
-        if not np.any(_residual(rx[:, j], np.hstack([ones, np.delete(rx, j, axis=1)]))):
+        if not np.any(_residual(rx[:, j], _basis_without(rx, j))):
             srrc[j] = np.nan
     return srrc, float(r2)
 

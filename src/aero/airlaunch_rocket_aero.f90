@@ -193,7 +193,7 @@ contains
     e = [0.0_dp, 1.0_dp, 1.0_dp, 1.0_dp]
     if (xr > 0.0_dp) e(2) = min(1.0_dp, max(0.0_dp, s_e/xr))
     if (abs(xr + ct - cr) > 0.0_dp) e(3) = min(1.0_dp, max(0.0_dp, (s_e - cr)/(xr + ct - cr)))
-    call sort_ascending(e(2:3))
+    e(2:3) = [minval(e(2:3)), maxval(e(2:3))]
     exposed = 0.0_dp
     do i = 1, 3
       exposed = exposed + 0.5_dp*(e(i+1) - e(i))*(chord_aft(e(i)) + chord_aft(e(i+1)))
@@ -208,9 +208,5 @@ contains
       te = le + cr + (ct - cr)*e
       c = te - min(te, max(le, s_e))
     end function chord_aft
-    pure subroutine sort_ascending(a)
-      real(dp), intent(inout) :: a(2)
-      if (a(1) > a(2)) a = a([2, 1])
-    end subroutine sort_ascending
   end function fin_exposed_fraction
 end module airlaunch_rocket_aero

@@ -23,9 +23,8 @@ program airlaunch_sweep
   use airlaunch_strings, only: str, fixed
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_path, only: path_kind, kind_regular
   use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
-  use airlaunch_path, only: ignore_file_size_signal
+  use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -48,7 +47,7 @@ program airlaunch_sweep
   type(error_type), allocatable :: stdout_error   !< the first line that did not reach stdout
   character(len=:), allocatable :: path, scratch, check_file
   integer :: rank, nranks, status, case_id, n_resumed, k, n_written
-  logical :: check_only, restart
+  logical :: check_only, restart, summary_kept
   integer, allocatable :: pending(:), keep(:)
   type(sweep_row), allocatable :: rows(:)
   real(dp) :: t_start, t_run
@@ -111,13 +110,14 @@ program airlaunch_sweep
   call run_pass(pending, .false., n_written)
   if (rank == 0) then
     call collect_rows()
-    if (size(pending) > 0 .or. path_kind(s%def%summary_path()) /= kind_regular) then
+    ! no case ran and the journal's summary is there (prepare_run removes one
+    ! whenever a case is to run): written again, it would be the same rows
+    ! with a new `created`, which makes the figures drawn from it stale
+    summary_kept = path_kind(s%def%summary_path()) == kind_regular .and. size(pending) == 0
+    if (.not. summary_kept) then
       call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
       if (allocated(error)) call die(error%message)
     else
-      ! no case ran and the journal's summary is there (prepare_run removes one
-      ! whenever a case is to run): written again, it would be the same rows
-      ! with a new `created`, which makes the figures drawn from it stale
       call say("summary: " // s%def%summary_path() // " is already the journal's (no case ran): left as it is")
     end if
     call report_tally(size(pending), MPI_Wtime() - t_run)

@@ -12,9 +12,11 @@ step succeeds, or says what went wrong in one line with a non-zero exit.
   finishes its files and says so in one line, exit 4 (as airlaunch does);
 - OUTPUT_DIR/verify an existing file: a traceback; now one line, exit 2.
 """
-import pathlib
+import subprocess
+import sys
 
 import pytest
+import xarray as xr
 
 from test_sweep_support import ROOT, ENV, make_table, run_python, run_sweep, small_definition
 
@@ -35,7 +37,6 @@ def test_verify_with_an_output_dir_starting_with_a_dash(tmp_path):
     d = finished_sweep(tmp_path, "-dash")
     res = run_python(["verify", d, "--ids", "0", "--jobs", "1"], tmp_path)
     assert res.returncode == 0, res.stdout + res.stderr
-    import xarray as xr
     with xr.open_dataset(tmp_path / "-dash" / "verify.nc") as ds:
         assert list(ds["refined_status"].values) == ["ok"], ds["refined_message"].values
         assert not ds["flipped"].values.any()
@@ -58,10 +59,9 @@ def test_verify_whose_reruns_airlaunch_refuses_is_one_line(tmp_path):
 @pytest.mark.parametrize("step", ["table", "envelope"])
 def test_a_step_whose_stdout_is_full_finishes_and_says_so(tmp_path, step):
     d = finished_sweep(tmp_path, "out")
-    (tmp_path / "out" / "envelope.nc").unlink()
+    made = tmp_path / "out" / ("table.nc" if step == "table" else "envelope.nc")
+    made.unlink()   # the step must write it again
     args = [step, d] + (["--exe-dir", str(ROOT / "build" / "release" / "bin")] if step == "table" else [])
-    import subprocess
-    import sys
     with open("/dev/full", "w") as full:
         res = subprocess.run([sys.executable, "-m", "postproc.sweep", *map(str, args)], cwd=tmp_path, env=ENV,
                              stdout=full, stderr=subprocess.PIPE, text=True, timeout=600)
@@ -69,7 +69,6 @@ def test_a_step_whose_stdout_is_full_finishes_and_says_so(tmp_path, step):
     assert res.returncode == 4, res.stderr
     assert len(lines) == 1 and lines[0].startswith("sweep: error: the standard output could not be written ("), lines
     assert "Traceback" not in res.stderr
-    made = tmp_path / "out" / ("table.nc" if step == "table" else "envelope.nc")
     assert made.is_file()
     if step == "envelope":
         assert (tmp_path / "out" / "figures" / "drawn_from.txt").is_file()
