@@ -36,7 +36,7 @@ program airlaunch
   use airlaunch_line_model, only: cascade_note
   use airlaunch_strings, only: str
   use airlaunch_blas_threads, only: use_one_blas_thread
-  use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal
+  use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal, command_argument
   use airlaunch_interrupt, only: catch_interrupts
   use airlaunch_sweep_files, only: write_bytes
   implicit none
@@ -48,6 +48,7 @@ program airlaunch
   character(len=:), allocatable :: path, echo, summary, output_override, check_note, arg
   integer :: i, nargs, n_run_echo
   logical :: written, kept, check_only
+  logical :: options_done   !< "--" seen: the arguments after it are file names
   !> longest path the system takes (PATH_MAX less its NUL)
   integer, parameter :: path_max = 4095
 
@@ -61,9 +62,18 @@ program airlaunch
   check_only = .false.
   check_note = ""
   i = 1
+  options_done = .false.
   do while (i <= nargs)
-    arg = argument(i)
+    arg = command_argument(i)
+    if (options_done) then
+      ! after "--" every argument is a file name, also one starting with "-"
+      call take_scenario_path(arg)
+      i = i + 1
+      cycle
+    end if
     select case (arg)
+    case ("--")
+      options_done = .true.
     case ("-h", "--help")
       call usage()
       call check_stdout("the usage is incomplete")
@@ -79,7 +89,7 @@ program airlaunch
       if (len(output_override) > 0) call fail_input("--output given more than once (give one output file)")
       i = i + 1
       if (i > nargs) call fail_input("--output needs a file name")
-      arg = argument(i)
+      arg = command_argument(i)
       if (len_trim(arg) == 0) call fail_input("--output needs a file name (it is empty)")
       ! Fortran pads a name with blanks: one ending in a blank would be written without it
       if (arg(len(arg):len(arg)) == " ") call fail_input("--output '" // arg // "' ends with a blank, " // &
@@ -88,12 +98,11 @@ program airlaunch
         " characters long; at most " // str(len(run%output)) // " are allowed")
       output_override = trim(arg)
     case default
-      if (len(arg) == 0) call fail_input("the scenario file's name is empty")
-      if (arg(1:1) == "-") call fail_input("unknown option " // arg // " (see airlaunch --help)")
-      if (len(path) > 0) call fail_input("more than one scenario file given")
-      if (len(arg) > path_max) call fail_input("the scenario file's name is " // str(len(arg)) // &
-        " characters long; the system takes at most " // str(path_max))
-      path = arg
+      if (len(arg) > 0) then
+        if (arg(1:1) == "-") call fail_input("unknown option " // arg // &
+          " (see airlaunch --help; a file whose name starts with '-' goes after --)")
+      end if
+      call take_scenario_path(arg)
     end select
     i = i + 1
   end do
@@ -447,23 +456,25 @@ contains
   end subroutine check_trim
 
   subroutine usage()
-    call say("usage: airlaunch SCENARIO.nml [-o FILE | --output FILE] [--check]")
+    call say("usage: airlaunch [-o FILE | --output FILE] [--check] [--] SCENARIO.nml")
     call say("       airlaunch -h | --help | -V | --version")
     call say("  runs the scenario of the namelist file; see docs/input.md")
     call say("  -o, --output FILE: write the output there instead of &run output")
     call say("  --check: validate the input and print it resolved (defaults included), without running")
     call say("  -V, --version: the code version and the SUNDIALS it was built with")
+    call say("  --: the arguments after it are file names (a scenario named -x.nml: airlaunch -- -x.nml)")
   end subroutine usage
 
-  !> Command-line argument i, whole (any length).
-  function argument(i) result(a)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: a
-    integer :: n
-    call get_command_argument(i, length=n)
-    allocate(character(len=n) :: a)
-    if (n > 0) call get_command_argument(i, a)
-  end function argument
+  !> The scenario file's name from the command line (one, not empty, not
+  !> longer than the system takes).
+  subroutine take_scenario_path(arg)
+    character(len=*), intent(in) :: arg
+    if (len(arg) == 0) call fail_input("the scenario file's name is empty")
+    if (len(path) > 0) call fail_input("more than one scenario file given")
+    if (len(arg) > path_max) call fail_input("the scenario file's name is " // str(len(arg)) // &
+      " characters long; the system takes at most " // str(path_max))
+    path = arg
+  end subroutine take_scenario_path
 
   subroutine fail_input(msg)
     character(len=*), intent(in) :: msg

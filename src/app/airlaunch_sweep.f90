@@ -24,7 +24,7 @@ program airlaunch_sweep
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
-  use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular
+  use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular, command_argument
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
   use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
@@ -359,17 +359,26 @@ contains
   end subroutine report_check
 
   subroutine parse_arguments()
-    character(len=4096) :: arg
+    character(len=:), allocatable :: arg
     integer :: i, nargs, ios
+    logical :: options_done   ! "--" seen: the arguments after it are file names
     path = ""
     check_only = .false.
     restart = .false.
     case_id = -1
+    options_done = .false.
     nargs = command_argument_count()
     i = 1
     do while (i <= nargs)
-      call get_command_argument(i, arg)
-      select case (trim(arg))
+      arg = command_argument(i)
+      if (options_done) then
+        call take_definition_path(arg)
+        i = i + 1
+        cycle
+      end if
+      select case (arg)
+      case ("--")
+        options_done = .true.
       case ("-h", "--help")
         if (rank == 0) call usage()
         call finish(exit_ok)
@@ -384,17 +393,20 @@ contains
       case ("--case-namelist")
         if (case_id >= 0) call fail_input("--case-namelist given twice (one case id per call)")
         i = i + 1
-        call get_command_argument(i, arg)
+        arg = ""
+        if (i <= nargs) arg = command_argument(i)
         ! digits only: list-directed reading would take "1,2" or "0 0" as 1 and 0
         ios = 1
-        if (len_trim(arg) > 0 .and. len_trim(arg) <= 9 .and. verify(trim(arg), "0123456789") == 0) &
+        if (len(arg) > 0 .and. len(arg) <= 9 .and. verify(arg, "0123456789") == 0) &
           read(arg, *, iostat=ios) case_id
-        if (ios /= 0 .or. i > nargs) call fail_input("--case-namelist " // trim(arg) // &
+        if (ios /= 0 .or. i > nargs) call fail_input("--case-namelist " // arg // &
           " is not allowed (a case id: an integer in [0, 999999999])")
       case default
-        if (arg(1:1) == "-") call fail_input("unknown option " // trim(arg) // " (see airlaunch-sweep --help)")
-        if (len(path) > 0) call fail_input("more than one sweep definition given")
-        path = trim(arg)
+        if (len(arg) > 0) then
+          if (arg(1:1) == "-") call fail_input("unknown option " // arg // &
+            " (see airlaunch-sweep --help; a file whose name starts with '-' goes after --)")
+        end if
+        call take_definition_path(arg)
       end select
       i = i + 1
     end do
@@ -404,10 +416,19 @@ contains
     end if
   end subroutine parse_arguments
 
+  !> The sweep definition's name from the command line (one, not empty).
+  subroutine take_definition_path(arg)
+    character(len=*), intent(in) :: arg
+    if (len(arg) == 0) call fail_input("the sweep definition's name is empty")
+    if (len(path) > 0) call fail_input("more than one sweep definition given")
+    path = arg
+  end subroutine take_definition_path
+
   subroutine usage()
-    call say("usage: mpirun -np K airlaunch-sweep SWEEP.nml [--restart]")
-    call say("       airlaunch-sweep SWEEP.nml --check | --case-namelist ID")
+    call say("usage: mpirun -np K airlaunch-sweep [--restart] [--] SWEEP.nml")
+    call say("       airlaunch-sweep --check | --case-namelist ID [--] SWEEP.nml")
     call say("  runs the cases of the sweep's table (docs/sweep.md); a rerun resumes")
+    call say("  --: the arguments after it are file names (a definition named -x.nml)")
   end subroutine usage
 
   !> Bad command line: one line, exit 2.

@@ -10,7 +10,7 @@ module airlaunch_path
   private
   public :: path_kind, same_file, process_id, kind_missing, kind_regular, kind_directory, kind_other
   public :: free_bytes, file_size_limit, file_lock, lock_held_elsewhere, lock_unavailable, ignore_file_size_signal
-  public :: delete_file, parent_directory
+  public :: delete_file, parent_directory, command_argument
 
   !> What a path names (airlaunch_path_kind.c).
   integer, parameter :: kind_missing = 0, kind_regular = 1, kind_directory = 2, kind_other = 3
@@ -139,4 +139,14 @@ contains
     character(kind=c_char, len=:), allocatable :: c
     c = trim(s) // c_null_char
   end function c_string
+
+  !> Command-line argument i, whole (any length, trailing blanks kept).
+  function command_argument(i) result(a)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: a
+    integer :: n
+    call get_command_argument(i, length=n)
+    allocate(character(len=n) :: a)
+    if (n > 0) call get_command_argument(i, a)
+  end function command_argument
 end module airlaunch_path

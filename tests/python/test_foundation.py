@@ -874,3 +874,31 @@ def test_help_names_every_documented_option(airlaunch_exe):
     assert res.returncode == 0 and res.stderr == ""
     shown = set(re.findall(r"(?<![\w-])(--?[a-zA-Z][\w-]*)", res.stdout))
     assert options <= shown, f"--help does not name {sorted(options - shown)}"
+
+
+def test_a_scenario_named_like_an_option_runs_after_a_double_dash(airlaunch_exe, tmp_path):
+    """POSIX's `--` ends the options: a scenario file named `-drop.nml` is
+    refused as an unknown option (the message says how to give it) and runs
+    after `--`, with `-o` before it.  The run is checked against the
+    parabola of a drop without drag, so the file read is the one named."""
+    nml, _ = drop_nml(tmp_path, store="mass = 500.0, drag_area = 0.0", t_end=2.0,
+                      run_extra=", rtol = 1e-11, atol = 1e-9")
+    dashed = tmp_path / "-drop.nml"
+    nml.rename(dashed)
+    out = tmp_path / "dashed.nc"
+    res = subprocess.run([str(airlaunch_exe), "-drop.nml"], capture_output=True, text=True, cwd=tmp_path,
+                         timeout=60)
+    assert res.returncode == 2 and res.stdout == "", res.stdout + res.stderr
+    assert res.stderr.count("\n") == 1 and "unknown option -drop.nml" in res.stderr and " -- " not in res.stderr
+    assert "goes after --" in res.stderr
+    res = subprocess.run([str(airlaunch_exe), "-o", str(out), "--", "-drop.nml"], capture_output=True,
+                         text=True, cwd=tmp_path, timeout=60)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        # as test_drop_without_drag_is_a_parabola: rtol 1e-11 on 1e4 m is far below 1e-3 m
+        np.testing.assert_allclose(ds["store_position"].values[:, 1], 10000.0 - 0.5*G0*ds["time"].values**2,
+                                   atol=1e-3)
+    # after "--" an option is a file name: two scenario files
+    res = subprocess.run([str(airlaunch_exe), "--", "-drop.nml", "--check"], capture_output=True, text=True,
+                         cwd=tmp_path, timeout=60)
+    assert res.returncode == 2 and "more than one scenario file given" in res.stderr

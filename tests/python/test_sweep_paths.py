@@ -10,7 +10,10 @@ step succeeds, or says what went wrong in one line with a non-zero exit.
 - a step's standard output that cannot be written (/dev/full): a traceback
   after envelope.nc was written and before the figures; now the step
   finishes its files and says so in one line, exit 4 (as airlaunch does);
-- OUTPUT_DIR/verify an existing file: a traceback; now one line, exit 2.
+- OUTPUT_DIR/verify an existing file: a traceback; now one line, exit 2;
+- a definition named like an option (-s.nml): refused by airlaunch-sweep and
+  scripts/sweep with no way to give it; now it goes after `--` (thirty-first
+  session).
 """
 import subprocess
 import sys
@@ -18,7 +21,7 @@ import sys
 import pytest
 import xarray as xr
 
-from test_sweep_support import ROOT, ENV, make_table, run_python, run_sweep, small_definition
+from test_sweep_support import ROOT, ENV, SWEEP_EXE, make_table, run_python, run_sweep, small_definition
 
 CRITERIA = f"criteria = '{ROOT}/input/criteria_paper.nml'"
 
@@ -81,3 +84,35 @@ def test_verify_dir_in_the_way_is_one_line(tmp_path):
     lines = res.stderr.strip().splitlines()
     assert res.returncode == 2 and len(lines) == 1 and lines[0].startswith("sweep: error: "), res.stderr
     assert "verify" in lines[0] and "Traceback" not in res.stderr
+
+
+def test_a_definition_named_like_an_option_goes_after_a_double_dash(tmp_path):
+    """airlaunch-sweep, like airlaunch, ends its options at `--`: a definition
+    named `-s.nml` is refused as an unknown option with the way to give it,
+    and read after `--` (its check names the file and its 3 cases)."""
+    small_definition(tmp_path / "-s.nml", n_cases=3, t_end=1.0)
+    res = subprocess.run([str(SWEEP_EXE), "-s.nml"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
+                         timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stdout + res.stderr
+    assert "unknown option -s.nml" in res.stderr and "goes after --" in res.stderr
+    res = subprocess.run([str(SWEEP_EXE), "--check", "--", "-s.nml"], cwd=tmp_path, capture_output=True,
+                         text=True, env=ENV, timeout=60)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert res.stdout.startswith("airlaunch-sweep: -s.nml: ok: design lhs, 3 cases"), res.stdout
+
+
+def test_scripts_sweep_takes_a_definition_named_like_an_option_after_a_double_dash(tmp_path):
+    """scripts/sweep: `-s.nml` alone is an unknown option (exit 2, the way to
+    give it named); after `--` every step (table, check, run, envelope) reads
+    it, passed on as ./-s.nml, and the sweep's files are all there."""
+    small_definition(tmp_path / "-s.nml", n_cases=3, t_end=1.0, extra_sweep=CRITERIA)
+    script = str(ROOT / "scripts" / "sweep")
+    res = subprocess.run([script, "-n", "1", "-s.nml"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
+                         timeout=60)
+    assert res.returncode == 2 and "unknown option -s.nml" in res.stderr and "goes after --" in res.stderr
+    res = subprocess.run([script, "-n", "1", "--", "-s.nml"], cwd=tmp_path, capture_output=True, text=True,
+                         env=ENV, timeout=600)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "3 cases: 3 ok" in res.stdout, res.stdout
+    for name in ("table.nc", "summary.nc", "envelope.nc"):
+        assert (tmp_path / "out" / name).is_file(), name
