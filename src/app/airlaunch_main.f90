@@ -34,7 +34,7 @@ program airlaunch
   use airlaunch_kinds, only: dp
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene
   use airlaunch_line_model, only: cascade_note
-  use airlaunch_strings, only: str
+  use airlaunch_strings, only: str, escaped
   use airlaunch_blas_threads, only: use_one_blas_thread
   use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal, command_argument
   use airlaunch_interrupt, only: catch_interrupts
@@ -94,6 +94,9 @@ program airlaunch
       ! Fortran pads a name with blanks: one ending in a blank would be written without it
       if (arg(len(arg):len(arg)) == " ") call fail_input("--output '" // arg // "' ends with a blank, " // &
         "which the file name would lose (give the name without trailing blanks)")
+      ! a scenario cannot hold a line break in a string: --check's print of it would not read back
+      if (scan(arg, achar(10) // achar(13)) > 0) call fail_input("--output '" // arg // "' holds a line " // &
+        "break, which no scenario file can hold (give a name without newlines)")
       if (len(arg) > len(run%output)) call fail_input("--output is " // str(len(arg)) // &
         " characters long; at most " // str(len(run%output)) // " are allowed")
       output_override = trim(arg)
@@ -166,14 +169,14 @@ program airlaunch
     if (error%output) then
       ! the run completed: its milestones stand; the file could not be written
       if (allocated(summary)) call say(summary)
-      write(error_unit, '(a)') "airlaunch: error: " // error%message
+      write(error_unit, '(a)') "airlaunch: error: " // escaped(error%message)
       write(error_unit, '(a)') "airlaunch: no output written (the run completed; writing " // trim(run%output) // &
         " failed, and nothing is left under that name or " // trim(run%output) // ".part)"
       call output_lock%release()
       stop 4, quiet=.true.
     end if
     if (error%signal /= 0) call report_interrupt()
-    write(error_unit, '(a)') "airlaunch: error: " // error%message
+    write(error_unit, '(a)') "airlaunch: error: " // escaped(error%message)
     if (allocated(summary)) write(error_unit, '(a)') summary
     if (run%trajectory) then
       ! (a .part left: the writer could not rename it, and kept it)
@@ -427,7 +430,7 @@ contains
   !> --check: the input is valid; print it resolved (every group the scene
   !> reads, defaults included: what the output's `input_namelist` records) and end.
   subroutine print_resolved_input()
-    call say("! " // path // ": valid input (airlaunch --check; " // &
+    call say("! " // escaped(path) // ": valid input (airlaunch --check; " // &
       "resolved, defaults included; the run was not started)")
     if (len(check_note) > 0) call say("! " // check_note)
     call say(echo)
@@ -448,7 +451,7 @@ contains
     call setup_launch(cfg, sys, y0, res, setup_error)
     if (allocated(setup_error)) then
       if (res%status == "invalid_input") call fail_input(path // ": " // setup_error%message)
-      write(error_unit, '(a)') "airlaunch: error: " // setup_error%message
+      write(error_unit, '(a)') "airlaunch: error: " // escaped(setup_error%message)
       stop 3, quiet=.true.
     end if
     check_note = "trim: alpha " // fx(res%trim_alpha_deg, 4) // " deg, elevator " // &
@@ -478,7 +481,7 @@ contains
 
   subroutine fail_input(msg)
     character(len=*), intent(in) :: msg
-    write(error_unit, '(a)') "airlaunch: error: " // msg
+    write(error_unit, '(a)') "airlaunch: error: " // escaped(msg)
     call output_lock%release()   ! (only a lock of this run's)
     stop 2, quiet=.true.
   end subroutine fail_input

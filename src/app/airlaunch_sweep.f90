@@ -20,7 +20,7 @@ program airlaunch_sweep
   use mpi_f08
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
-  use airlaunch_strings, only: str, fixed
+  use airlaunch_strings, only: str, fixed, escaped
   use airlaunch_version, only: code_version, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
@@ -89,7 +89,7 @@ program airlaunch_sweep
   end if
   call MPI_Bcast(status, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
   if (status /= exit_ok) then
-    if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // error%message
+    if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // escaped(error%message)
     call finish(status)
   end if
   if (check_only .or. case_id >= 0) then
@@ -221,7 +221,7 @@ contains
     call MPI_Allreduce(MPI_IN_PLACE, written, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
     if (first < nranks) then
       if (rank == first) then
-        write(error_unit, '(a)') "airlaunch-sweep: error: " // file_error%message
+        write(error_unit, '(a)') "airlaunch-sweep: error: " // escaped(file_error%message)
         flush(error_unit)
       end if
       call finish(exit_runtime)
@@ -434,7 +434,7 @@ contains
   !> Bad command line: one line, exit 2.
   subroutine fail_input(msg)
     character(len=*), intent(in) :: msg
-    if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // msg
+    if (rank == 0) write(error_unit, '(a)') "airlaunch-sweep: error: " // escaped(msg)
     call finish(exit_input)
   end subroutine fail_input
 
@@ -455,7 +455,7 @@ contains
   !> A file or MPI failure while running: stop every rank.
   subroutine die(msg)
     character(len=*), intent(in) :: msg
-    write(error_unit, '(a)') "airlaunch-sweep: error: " // msg
+    write(error_unit, '(a)') "airlaunch-sweep: error: " // escaped(msg)
     flush(error_unit)
     call MPI_Abort(MPI_COMM_WORLD, exit_runtime)
     stop exit_runtime, quiet=.true.

@@ -3,7 +3,7 @@ module airlaunch_strings
   use airlaunch_kinds, only: dp
   implicit none
   private
-  public :: str, lower, fixed
+  public :: str, lower, fixed, escaped
 
   !> Format a number as a compact string.
   interface str
@@ -83,4 +83,29 @@ contains
       if (c >= iachar('A') .and. c <= iachar('Z')) t(i:i) = achar(c + 32)
     end do
   end function lower
+
+  !> The text on one line: each ASCII control character written as \n, \t,
+  !> \r or \xHH, so a message naming it stays one line.
+  pure function escaped(s) result(t)
+    character(len=*), intent(in) :: s   !< text
+    character(len=:), allocatable :: t
+    character(len=*), parameter :: hex = "0123456789abcdef"
+    integer :: i, c
+    t = ""
+    do i = 1, len(s)
+      c = iachar(s(i:i))
+      select case (c)
+      case (10)
+        t = t // "\n"
+      case (9)
+        t = t // "\t"
+      case (13)
+        t = t // "\r"
+      case (0:8, 11:12, 14:31, 127)
+        t = t // "\x" // hex(c/16+1:c/16+1) // hex(mod(c, 16)+1:mod(c, 16)+1)
+      case default
+        t = t // s(i:i)
+      end select
+    end do
+  end function escaped
 end module airlaunch_strings

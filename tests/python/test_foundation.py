@@ -902,3 +902,32 @@ def test_a_scenario_named_like_an_option_runs_after_a_double_dash(airlaunch_exe,
     res = subprocess.run([str(airlaunch_exe), "--", "-drop.nml", "--check"], capture_output=True, text=True,
                          cwd=tmp_path, timeout=60)
     assert res.returncode == 2 and "more than one scenario file given" in res.stderr
+
+
+def test_a_line_break_in_a_name_keeps_messages_and_the_check_print_whole(airlaunch_exe, tmp_path):
+    """A newline in a file name (legal on Linux) split the one-line error in
+    two and made --check's print, whose first comment names the scenario,
+    a file that does not read back; an --output name with a newline was
+    echoed into a string no scenario can hold.  Now messages write it as \\n,
+    the print reads back as a valid scenario, and such an --output is
+    refused in one line (exit 2) before anything is written."""
+    nml, out = drop_nml(tmp_path, t_end=1.0)
+    odd = tmp_path / "drop\nfile.nml"
+    nml.rename(odd)
+    res = subprocess.run([str(airlaunch_exe), str(odd), "--check"], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.splitlines()[0] == f"! {tmp_path}/drop\\nfile.nml: valid input (airlaunch --check; " \
+        "resolved, defaults included; the run was not started)"
+    printed = write(tmp_path / "printed.nml", res.stdout)
+    res = subprocess.run([str(airlaunch_exe), str(printed), "--check"], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
+    bad = tmp_path / "bad\nscene.nml"
+    write(bad, "&run scene = 'bogus' /\n")
+    res = subprocess.run([str(airlaunch_exe), str(bad)], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert res.stderr.startswith(f"airlaunch: error: {tmp_path}/bad\\nscene.nml: &run: scene = 'bogus'"), res.stderr
+    res = subprocess.run([str(airlaunch_exe), str(odd), "-o", str(tmp_path / "a\nb.nc")], capture_output=True,
+                         text=True, timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert "holds a line break" in res.stderr and "a\\nb.nc" in res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["drop\nfile.nml", "printed.nml", "bad\nscene.nml"])

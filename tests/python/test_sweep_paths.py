@@ -116,3 +116,13 @@ def test_scripts_sweep_takes_a_definition_named_like_an_option_after_a_double_da
     assert "3 cases: 3 ok" in res.stdout, res.stdout
     for name in ("table.nc", "summary.nc", "envelope.nc"):
         assert (tmp_path / "out" / name).is_file(), name
+
+
+def test_a_line_break_in_the_definitions_name_keeps_the_error_on_one_line(tmp_path):
+    """airlaunch-sweep writes a control character of a name it reports as \\n
+    (thirty-first session): the one-line error stays one line."""
+    odd = tmp_path / "s\nx.nml"
+    odd.write_text("&sweep name = 'x' /\n")
+    res = subprocess.run([str(SWEEP_EXE), str(odd)], capture_output=True, text=True, env=ENV, timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert res.stderr.startswith(f"airlaunch-sweep: error: {tmp_path}/s\\nx.nml: no &input group"), res.stderr
