@@ -175,3 +175,23 @@ def test_term_to_the_script_reaches_the_ranks(tmp_path, script):
     res = run_sweep(definition, tmp_path, 2)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "resuming:" in res.stdout and "1000 cases: 1000 ok" in res.stdout, res.stdout
+
+
+def test_the_batch_script_names_what_it_misses_in_one_line(tmp_path):
+    """scripts/sweep.slurm submitted from another directory, or run outside
+    Slurm, ended with bash's 'command not found' (exit 127) after its first
+    step's name; now one line says what is missing and what to do, exit 2,
+    before any step runs."""
+    script = str(ROOT / "scripts" / "sweep.slurm")
+    definition = small_definition(tmp_path / "d.nml", n_cases=2)
+    res = subprocess.run(["bash", script, str(definition)], cwd=tmp_path, capture_output=True, text=True,
+                         env=ENV, timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert f"{tmp_path}/.venv/bin/python is missing: submit from the repository root" in res.stderr
+    no_srun = dict(ENV, PATH="/usr/bin:/bin")
+    assert subprocess.run(["sh", "-c", "command -v srun"], env=no_srun, capture_output=True).returncode != 0
+    res = subprocess.run(["bash", script, str(definition)], cwd=ROOT, capture_output=True, text=True,
+                         env=no_srun, timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert "srun is not on PATH" in res.stderr and "scripts/sweep" in res.stderr
+    assert not (tmp_path / "out").exists()
