@@ -22,9 +22,10 @@
 !> normal force at 90 deg, Hoerner, Fluid-Dynamic Drag, 1965: C_N = 1.28 on the
 !> projected fin area), opposite to the local cross-flow velocity.  While the
 !> fins pass the ramp edge (tail first) their force is scaled by the share of
-!> their planform outside the bay (fin_exposed_fraction; it acts at the fins'
-!> centre of pressure throughout): it grows continuously from 0 to 1 over the
-!> root chord, as the hull's and the nose's shares do over the length.
+!> their planform outside the bay, acting at the exposed part's centre of
+!> pressure (fin_exposure, thirty-first session: before, at the whole fins'):
+!> it grows continuously from 0 to 1 over the root chord, as the hull's and
+!> the nose's shares do over the length.
 !>
 !> In a gust the caller may pass the gust field with the body's pose: each
 !> station then reads the gust at its own place (gust penetration), as a
@@ -44,7 +45,7 @@ module airlaunch_rocket_aero
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
-  public :: rocket_aero, rocket_aero_eval, fin_exposed_fraction
+  public :: rocket_aero, rocket_aero_eval, fin_exposed_fraction, fin_exposure
 
   !> Geometry and coefficients of the rocket.
   type :: rocket_aero
@@ -136,8 +137,7 @@ contains
       moment = moment + [0.0_dp, -x*f(3), x*f(2)]
     end if
     if (p%cn_alpha_fin > 0.0_dp) then
-      x = x_nose - p%x_fin_from_nose
-      fin_share = fin_exposed_fraction(p, x_shield)
+      call fin_exposure(p, x_shield, fin_share, x)
       if (fin_share > 0.0_dp) then
         v_loc = v_b + [0.0_dp, w_b(3)*x, -w_b(2)*x]
         if (penetrating) v_loc = v_loc - gust_change(x)
@@ -167,23 +167,43 @@ contains
   end subroutine rocket_aero_eval
 
   !> Share of the fins' planform outside the bay, body x <= x_shield (the
-  !> rocket leaves tail first): the trapezoid (root chord c_r from its leading
-  !> edge, tip chord c_t offset aft by the sweep x_r at the semi-span) cut by
-  !> the edge's line across the span.  At span fraction e the chord runs from
-  !> x_r e to x_r e + c_r + (c_t - c_r) e aft of the root's leading edge; the
-  !> exposed chord, the part aft of the edge, is linear in e between the points
-  !> where the edge meets the leading or the trailing edge, so the trapezoidal
-  !> rule on those pieces integrates it exactly.  Continuous and
-  !> non-decreasing in x_shield, 0 with the trailing edge in the bay, 1 with
-  !> the root's leading edge out.  Without a root chord, 1 or 0 as the centre
-  !> of pressure is out or in.
+  !> rocket leaves tail first): fin_exposure's share.
   pure real(dp) function fin_exposed_fraction(p, x_shield) result(share)
     type(rocket_aero), intent(in) :: p
     real(dp), intent(in) :: x_shield     !< the ramp edge, body x from the CG [m]
-    real(dp) :: s_e, e(4), cr, ct, xr, exposed
+    real(dp) :: x_cp
+    call fin_exposure(p, x_shield, share, x_cp)
+  end function fin_exposed_fraction
+
+  !> The fins' planform outside the bay, body x <= x_shield (the rocket leaves
+  !> tail first): its share of the whole planform and its centre of pressure.
+  !> The trapezoid (root chord c_r from its leading edge, tip chord c_t offset
+  !> aft by the sweep x_r at the semi-span) is cut by the edge's line across
+  !> the span.  At span fraction e the chord runs from x_r e to
+  !> x_r e + c_r + (c_t - c_r) e aft of the root's leading edge; the exposed
+  !> chord c(e), the part aft of the edge, and its front a(e) are linear in e
+  !> between the points where the edge meets the leading or the trailing edge,
+  !> so the trapezoidal rule integrates the area, and Simpson's rule the
+  !> strips' quarter-chord moment c (a + c/4) (quadratic), exactly on those
+  !> pieces.  The centre of pressure is that moment over the area: strip
+  !> theory, whose value for the whole trapezoid,
+  !>   x_r (c_r + 2 c_t)/(3 (c_r + c_t)) + (c_r^2 + c_r c_t + c_t^2)/(6 (c_r + c_t)),
+  !> is Barrowman's (the same two terms), so the exposed part's centre is
+  !> x_fin_from_nose shifted by the difference: the fins' centre of pressure
+  !> once all of them are out.  Share and centre are continuous and the share
+  !> non-decreasing in x_shield: 0 with the trailing edge in the bay, 1 with
+  !> the root's leading edge out.  Without a root chord, 1 or 0 as the centre
+  !> of pressure (x_fin_from_nose) is out or in.
+  pure subroutine fin_exposure(p, x_shield, share, x_cp)
+    type(rocket_aero), intent(in) :: p
+    real(dp), intent(in) :: x_shield     !< the ramp edge, body x from the CG [m]
+    real(dp), intent(out) :: share       !< the share of the planform outside the bay
+    real(dp), intent(out) :: x_cp        !< its centre of pressure, body x from the CG [m]
+    real(dp) :: s_e, e(4), cr, ct, xr, area, moment, whole
     integer :: i
+    x_cp = p%cg_from_nose - p%x_fin_from_nose
     if (p%fin_root_chord <= 0.0_dp) then
-      share = merge(1.0_dp, 0.0_dp, p%cg_from_nose - p%x_fin_from_nose <= x_shield)
+      share = merge(1.0_dp, 0.0_dp, x_cp <= x_shield)
       return
     end if
     cr = p%fin_root_chord; ct = p%fin_tip_chord; xr = p%fin_sweep
@@ -194,11 +214,18 @@ contains
     if (xr > 0.0_dp) e(2) = min(1.0_dp, max(0.0_dp, s_e/xr))
     if (abs(xr + ct - cr) > 0.0_dp) e(3) = min(1.0_dp, max(0.0_dp, (s_e - cr)/(xr + ct - cr)))
     e(2:3) = [minval(e(2:3)), maxval(e(2:3))]
-    exposed = 0.0_dp
+    area = 0.0_dp; moment = 0.0_dp
     do i = 1, 3
-      exposed = exposed + 0.5_dp*(e(i+1) - e(i))*(chord_aft(e(i)) + chord_aft(e(i+1)))
+      area = area + 0.5_dp*(e(i+1) - e(i))*(chord_aft(e(i)) + chord_aft(e(i+1)))
+      moment = moment + (e(i+1) - e(i))/6*(strip_moment(e(i)) + 4*strip_moment(0.5_dp*(e(i) + e(i+1))) + &
+        strip_moment(e(i+1)))
     end do
-    share = min(1.0_dp, max(0.0_dp, exposed/(0.5_dp*(cr + ct))))
+    share = min(1.0_dp, max(0.0_dp, area/(0.5_dp*(cr + ct))))
+    if (area > 0.0_dp) then
+      ! the whole trapezoid's strip-theory centre, aft of the root's leading edge
+      whole = xr*(cr + 2*ct)/(3*(cr + ct)) + (cr**2 + cr*ct + ct**2)/(6*(cr + ct))
+      x_cp = x_cp - (moment/area - whole)
+    end if
   contains
     !> The chord aft of the edge at span fraction e.
     pure real(dp) function chord_aft(e) result(c)
@@ -208,5 +235,15 @@ contains
       te = le + cr + (ct - cr)*e
       c = te - min(te, max(le, s_e))
     end function chord_aft
-  end function fin_exposed_fraction
+    !> The exposed strip's chord times its quarter-chord point, aft of the
+    !> root's leading edge, at span fraction e.
+    pure real(dp) function strip_moment(e) result(g)
+      real(dp), intent(in) :: e
+      real(dp) :: le, te, front
+      le = xr*e
+      te = le + cr + (ct - cr)*e
+      front = min(te, max(le, s_e))
+      g = (te - front)*(front + (te - front)/4)
+    end function strip_moment
+  end subroutine fin_exposure
 end module airlaunch_rocket_aero

@@ -157,7 +157,8 @@ program test_aero
   ! paper's fins (trailing edge swept back), a trailing edge swept forward, and
   ! a sweep longer than the root chord.  Both are exact: 1e-12 allowed.  Then
   ! the fin force of a pitching rocket at half exposure is half the force in
-  ! the open (cross-flow drag off; the potential term has no cross-flow).
+  ! the open of the same fins at the exposed part's centre (cross-flow drag
+  ! off; the potential term has no cross-flow).
   block
     real(dp), parameter :: geo(3, 3) = reshape([2.0_dp, 1.0_dp, 1.0_dp, 2.0_dp, 0.5_dp, 0.3_dp, &
       1.0_dp, 1.0_dp, 1.5_dp], [3, 3])   ! (root chord, tip chord, sweep) per case
@@ -182,7 +183,6 @@ program test_aero
     rk%cn_alpha_fin = 6.4734_dp; rk%x_fin_from_nose = 17.3333_dp; rk%cn_fin_90 = 3.6193_dp
     rk%fin_root_le_from_nose = 16.5_dp; rk%fin_root_chord = 2.0_dp; rk%fin_tip_chord = 1.0_dp; rk%fin_sweep = 1.0_dp
     rk%c_dn = 0.0_dp
-    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, fopen, mopen)
     ! the edge where half the planform is out: bisection on the share
     lo = rk%cg_from_nose - rk%length; hi = rk%cg_from_nose - rk%fin_root_le_from_nose
     do i = 1, 200
@@ -194,11 +194,77 @@ program test_aero
       end if
     end do
     call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
+    ! in the open: the same fins as a point at the exposed part's centre (it
+    ! sets the local velocity of the pitching rocket and the moment's arm)
+    block
+      type(rocket_aero) :: point_fin
+      real(dp) :: share, x_cp
+      call fin_exposure(rk, x_shield, share, x_cp)
+      point_fin = rk
+      point_fin%fin_root_chord = 0.0_dp
+      point_fin%x_fin_from_nose = rk%cg_from_nose - x_cp
+      call rocket_aero_eval(point_fin, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, fopen, mopen)
+    end block
     call check_close(f(2), 0.5_dp*fopen(2), "half the planform out: half the fin force", rel=1e-12_dp)
     call check_close(m(3), 0.5_dp*mopen(3), "half the planform out: half the fin moment", rel=1e-12_dp)
     call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], &
       rk%cg_from_nose - rk%length, f, m)
     call check(f(2) == 0.0_dp .and. m(3) == 0.0_dp, "fins with their trailing edge at the edge: no fin force")
+  end block
+  rk = rocket_aero()
+
+  call section("rocket: the exposed fins' centre of pressure, in closed form")
+  ! The paper's fins (root chord 2, tip chord 1, sweep 1: the trailing edge
+  ! square to the axis at 2 m aft of the root's leading edge) with the edge
+  ! s aft of that leading edge.  Strip theory, each strip's force at its
+  ! quarter chord, worked by hand: for s >= 1 the exposed part is the
+  ! rectangle [s, 2] over the whole span, centre s + (2 - s)/4; for s < 1 the
+  ! strips e < s (span fraction) run from s to 2 and the strips e > s from e
+  ! to 2, so with c = 2 - s
+  !   A = s c + int_s^1 (2 - e) de,   M = s c (s + c/4) + int_s^1 (2 - e)(e + (2 - e)/4) de,
+  ! the integrals by their primitives (prim_area, prim_mom), centre M/A.  All out, the centre is Barrowman's
+  ! (17.3333 m from the nose, the configuration's formula).  The centre is
+  ! where the fin force acts: its moment over its force.  1e-12 allowed
+  ! (round-off of the two sums).
+  block
+    real(dp) :: s_e, share, x_cp, area, mom, worst, x_shield, expected_cp
+    integer :: i
+    rk = rocket_aero()
+    rk%cn_alpha_fin = 6.4734_dp; rk%cn_fin_90 = 3.6193_dp
+    rk%fin_root_le_from_nose = 16.5_dp; rk%fin_root_chord = 2.0_dp; rk%fin_tip_chord = 1.0_dp; rk%fin_sweep = 1.0_dp
+    ! Barrowman's centre of pressure of the whole fin (airlaunch_scenario_config's formula)
+    rk%x_fin_from_nose = 16.5_dp + 1.0_dp*(2.0_dp + 2*1.0_dp)/(3*3.0_dp) + (3.0_dp - 2.0_dp/3.0_dp)/6
+    worst = 0.0_dp
+    do i = 1, 199
+      s_e = 2.0_dp*i/200.0_dp
+      x_shield = rk%cg_from_nose - rk%fin_root_le_from_nose - s_e
+      call fin_exposure(rk, x_shield, share, x_cp)
+      if (s_e >= 1.0_dp) then
+        expected_cp = s_e + (2.0_dp - s_e)/4
+        area = 2.0_dp - s_e
+      else
+        ! strips e in [0, s]: chord 2 - s from s; e in [s, 1]: chord 2 - e from e,
+        ! their moment (2 - e)(e + (2 - e)/4) = (2 - e)(3e + 2)/4 = (4 + 4e - 3e^2)/4
+        area = s_e*(2.0_dp - s_e) + (prim_area(1.0_dp) - prim_area(s_e))
+        mom = s_e*(2.0_dp - s_e)*(s_e + (2.0_dp - s_e)/4) + (prim_mom(1.0_dp) - prim_mom(s_e))
+        expected_cp = mom/area
+      end if
+      worst = max(worst, abs(share - area/1.5_dp))
+      worst = max(worst, abs((rk%cg_from_nose - x_cp) - (16.5_dp + expected_cp)))
+    end do
+    call check(worst <= 1.0e-12_dp, "exposed share and centre of the paper's fins against the closed form: worst " // &
+      str(worst))
+    call fin_exposure(rk, 0.0_dp, share, x_cp)   ! the edge at the CG: all out
+    call check_close(rk%cg_from_nose - x_cp, rk%x_fin_from_nose, "all out: Barrowman's centre of pressure", &
+      rel=1e-14_dp)
+    ! the force acts there: moment over force, a quarter of the root chord out
+    x_shield = rk%cg_from_nose - rk%fin_root_le_from_nose - 1.5_dp
+    call fin_exposure(rk, x_shield, share, x_cp)
+    rk%c_dn = 0.0_dp
+    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
+    call check_close(m(3)/f(2), x_cp, "the fin force acts at the exposed part's centre", rel=1e-12_dp)
+    call check_close(rk%cg_from_nose - x_cp, 16.5_dp + 1.5_dp + 0.5_dp/4, &
+      "a quarter of the root chord out: its centre at the strip's quarter chord", rel=1e-14_dp)
   end block
   rk = rocket_aero()
 
@@ -328,6 +394,18 @@ program test_aero
   end block
   call finish()
 contains
+
+  !> int (2 - e) de: the exposed chord of the paper's fins aft of their leading edge.
+  pure real(dp) function prim_area(e)
+    real(dp), intent(in) :: e
+    prim_area = 2*e - e**2/2
+  end function prim_area
+
+  !> int (4 + 4 e - 3 e^2)/4 de: those strips' chord times their quarter-chord point.
+  pure real(dp) function prim_mom(e)
+    real(dp), intent(in) :: e
+    prim_mom = e + e**2/2 - e**3/4
+  end function prim_mom
   !> The share of a trapezoidal fin (root chord, tip chord, sweep; semi-span b)
   !> aft of s_e (measured aft from the root's leading edge): the planform
   !> clipped by the half-plane s >= s_e (Sutherland-Hodgman), areas by the
