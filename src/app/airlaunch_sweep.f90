@@ -37,7 +37,8 @@ program airlaunch_sweep
   interface
     integer(c_int) function c_usleep(usec) bind(C, name="usleep")
       import :: c_int
-      integer(c_int), value :: usec
+      implicit none
+      integer(c_int), value, intent(in) :: usec
     end function c_usleep
   end interface
 

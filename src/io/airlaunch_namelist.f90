@@ -185,7 +185,8 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set if the copy is short
     integer :: unit, lines, ios
     character(len=:), allocatable :: line
-    call self%open_text(unit)
+    call self%open_text(unit, error)
+    if (allocated(error)) return
     lines = 0
     do
       call read_line(unit, line, ios)
@@ -675,36 +676,57 @@ contains
   end function nml_is_set
 
   !> Open the file on a new unit for `read(unit, nml=...)` of `group`;
-  !> `present` is false (and the unit closed) if the file lacks the group.
-  subroutine nml_position(self, group, unit, present)
+  !> `present` is false (and the unit closed) if the file lacks the group, or
+  !> if it cannot be opened again (`error` set).
+  subroutine nml_position(self, group, unit, present, error)
     class(nml_file), intent(in) :: self
     character(len=*), intent(in) :: group   !< group name
     integer, intent(out) :: unit            !< unit to read from (closed by the caller)
     logical, intent(out) :: present         !< the group is in the file
+    type(error_type), allocatable, intent(inout) :: error  !< set if the file cannot be opened
     present = self%has_group(group)
     unit = -1
-    if (present) call self%open_text(unit)
+    if (.not. present) return
+    call self%open_text(unit, error)
+    present = .not. allocated(error)
   end subroutine nml_position
 
   !> Open the file at its start on a new unit for `read(unit, nml=...)` of its
   !> groups in turn (closed by the caller): the file itself, or, if its last
   !> line has no newline, the same lines each terminated in a scratch file.
-  subroutine nml_open_text(self, unit)
+  !> If that fails (the file removed since it was loaded, no temporary
+  !> directory to write in) `error` says so and no unit is left open.
+  subroutine nml_open_text(self, unit, error)
     class(nml_file), intent(in) :: self
     integer, intent(out) :: unit            !< unit to read from
-    integer :: src, ios
+    type(error_type), allocatable, intent(inout) :: error  !< set on failure
+    integer :: src, ios, ios_close
     character(len=:), allocatable :: line
-    open(newunit=unit, file=self%path, status="old", action="read")
+    character(len=256) :: msg
+    msg = "a read failed"
+    open(newunit=unit, file=self%path, status="old", action="read", iostat=ios, iomsg=msg)
+    if (ios /= 0) then
+      call fatal_error(error, self%path // ": could not be opened again to read its groups (" // trim(msg) // ")")
+      return
+    end if
     if (.not. self%unterminated) return
     src = unit
-    open(newunit=unit, status="scratch", action="readwrite", form="formatted")
-    do
-      call read_line(src, line, ios)
-      if (ios /= 0) exit
-      write(unit, '(a)') line
-    end do
-    close(src)
-    rewind(unit)
+    open(newunit=unit, status="scratch", action="readwrite", form="formatted", iostat=ios, iomsg=msg)
+    if (ios == 0) then
+      do
+        call read_line(src, line, ios)
+        if (ios /= 0) exit
+        write(unit, '(a)', iostat=ios, iomsg=msg) line
+        if (ios /= 0) exit
+      end do
+      ! the end of the file: every line copied; otherwise a read or a write failed
+      if (is_iostat_end(ios)) rewind(unit, iostat=ios, iomsg=msg)
+      if (ios /= 0) close(unit, iostat=ios_close)
+    end if
+    close(src, iostat=ios_close)
+    if (ios /= 0) call fatal_error(error, self%path // ": its last line has no newline, and its copy with one " // &
+      "could not be written in the temporary directory ($TMPDIR, else /tmp: " // trim(msg) // &
+      "; or end the file with a newline)")
   end subroutine nml_open_text
 
   !> After a failed namelist read of `group`: find the value that does not

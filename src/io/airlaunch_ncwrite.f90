@@ -25,6 +25,7 @@ module airlaunch_ncwrite
   interface
     integer(c_int) function c_rename(old, new) bind(C, name="rename")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: old(*), new(*)
     end function c_rename
   end interface

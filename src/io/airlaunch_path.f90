@@ -30,33 +30,41 @@ module airlaunch_path
   interface
     integer(c_int) function c_path_kind(path) bind(c, name="airlaunch_path_kind")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
     end function c_path_kind
     integer(c_int) function c_same_file(a, b) bind(c, name="airlaunch_same_file")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: a(*), b(*)
     end function c_same_file
     integer(c_int) function c_getpid() bind(c, name="getpid")   ! pid_t is an int on Linux
       import :: c_int
+      implicit none
     end function c_getpid
     real(c_double) function c_free_bytes(path) bind(c, name="airlaunch_free_bytes")
       import :: c_double, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
     end function c_free_bytes
     integer(c_int) function c_lock_file(path) bind(c, name="airlaunch_lock_output")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
     end function c_lock_file
     !> Past the file size limit a write fails (EFBIG) instead of killing the process (SIGXFSZ).
     real(c_double) function c_file_size_limit() bind(c, name="airlaunch_file_size_limit")
       import :: c_double
+      implicit none
     end function c_file_size_limit
     subroutine ignore_file_size_signal() bind(c, name="airlaunch_ignore_file_size_signal")
+      implicit none
     end subroutine ignore_file_size_signal
     subroutine c_release_lock(path, fd) bind(c, name="airlaunch_release_output_lock")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
-      integer(c_int), value :: fd
+      integer(c_int), value, intent(in) :: fd
     end subroutine c_release_lock
   end interface
 

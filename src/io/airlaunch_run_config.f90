@@ -1,7 +1,7 @@
 !> The &run group, common to every scene: which scene, how long, how often to
 !> write, where, and the integrator's tolerances.
 module airlaunch_run_config
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_namelist
   use airlaunch_path, only: path_kind, same_file, process_id, kind_directory, kind_other
@@ -19,6 +19,7 @@ module airlaunch_run_config
   abstract interface
     !> Writes one namelist group: write(lines, nml=group, iostat=ios).
     subroutine namelist_writer(lines, ios)
+      implicit none
       character(len=*), intent(inout) :: lines(:)   !< internal file, blank
       integer, intent(out) :: ios                   !< nonzero: too few records
     end subroutine namelist_writer
@@ -84,7 +85,8 @@ contains
     stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps; max_wall_time = cfg%max_wall_time
     call f%check_group("run", vars, error)
     if (allocated(error)) return
-    call f%position("run", unit, present)
+    call f%position("run", unit, present, error)
+    if (allocated(error)) return
     if (present) then
       read(unit, nml=run, iostat=ios, iomsg=msg)
       close(unit)
@@ -155,7 +157,7 @@ contains
     character(len=64) :: a, b, c
     write(a, '(es10.3)') output_dt
     write(b, '(i0)') records
-    write(c, '(i0)') nint(min(bytes/1.0e6_dp, 1.0e15_dp), kind=8)
+    write(c, '(i0)') nint(min(bytes/1.0e6_dp, 1.0e15_dp), kind=i8)
     call fatal_error(error, "&run: output_dt = " // trim(adjustl(a)) // " is not allowed here: the trajectory's " // &
       trim(b) // " records need " // trim(c) // " MB, more than can be allocated (raise output_dt, or set " // &
       "trajectory = .false.)", input=.true.)

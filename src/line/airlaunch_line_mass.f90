@@ -40,12 +40,14 @@ module airlaunch_line_mass
   interface
     subroutine dpttrf(n, d, e, info)
       import :: dp
+      implicit none
       integer, intent(in) :: n
       real(dp), intent(inout) :: d(*), e(*)
       integer, intent(out) :: info
     end subroutine dpttrf
     subroutine dpttrs(n, nrhs, d, e, b, ldb, info)
       import :: dp
+      implicit none
       integer, intent(in) :: n, nrhs, ldb
       real(dp), intent(in) :: d(*), e(*)
       real(dp), intent(inout) :: b(ldb, *)

@@ -92,6 +92,7 @@ module airlaunch_line_scheme
     !> Integrate to t_out (>= t); on failure `error` names the time and the quantity.
     subroutine advance_interface(self, t_out, error)
       import :: line_scheme, dp, error_type
+      implicit none
       class(line_scheme), intent(inout) :: self
       real(dp), intent(in) :: t_out
       type(error_type), allocatable, intent(inout) :: error
@@ -100,12 +101,14 @@ module airlaunch_line_scheme
     !> kinematic ends included.
     subroutine state_interface(self, x, v)
       import :: line_scheme, dp
+      implicit none
       class(line_scheme), intent(inout) :: self
       real(dp), intent(out) :: x(:, 0:), v(:, 0:)
     end subroutine state_interface
     !> Work counters so far.
     function stats_interface(self) result(s)
       import :: line_scheme, line_scheme_stats
+      implicit none
       class(line_scheme), intent(in) :: self
       type(line_scheme_stats) :: s
     end function stats_interface
@@ -113,6 +116,7 @@ module airlaunch_line_scheme
     !> two samples (the owner's outer step); the integrator restarts there.
     subroutine body_interface(self, which, t1, x1, v1, t2, x2, v2, error)
       import :: line_scheme, dp, error_type
+      implicit none
       class(line_scheme), intent(inout) :: self
       integer, intent(in) :: which
       real(dp), intent(in) :: t1, t2, x1(3), v1(3), x2(3), v2(3)
@@ -121,6 +125,7 @@ module airlaunch_line_scheme
     !> Do not step past t_stop (> t): a change of the system known in advance.
     subroutine stop_interface(self, t_stop, error)
       import :: line_scheme, dp, error_type
+      implicit none
       class(line_scheme), intent(inout) :: self
       real(dp), intent(in) :: t_stop
       type(error_type), allocatable, intent(inout) :: error
@@ -129,6 +134,7 @@ module airlaunch_line_scheme
     !> time and fills in `fill_time` [s]; the integrator restarts there.
     subroutine fill_interface(self, which, fill_time, error)
       import :: line_scheme, dp, error_type
+      implicit none
       class(line_scheme), intent(inout) :: self
       integer, intent(in) :: which
       real(dp), intent(in) :: fill_time
@@ -137,6 +143,7 @@ module airlaunch_line_scheme
     !> Release resources (safe to call twice).
     subroutine free_interface(self)
       import :: line_scheme
+      implicit none
       class(line_scheme), intent(inout) :: self
     end subroutine free_interface
   end interface

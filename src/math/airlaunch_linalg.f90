@@ -18,18 +18,21 @@ module airlaunch_linalg
   interface
     subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
       import :: dp
+      implicit none
       integer, intent(in) :: n, nrhs, lda, ldb
       real(dp), intent(inout) :: a(lda, *), b(ldb, *)
       integer, intent(out) :: ipiv(*), info
     end subroutine dgesv
     subroutine dgetrf(m, n, a, lda, ipiv, info)
       import :: dp
+      implicit none
       integer, intent(in) :: m, n, lda
       real(dp), intent(inout) :: a(lda, *)
       integer, intent(out) :: ipiv(*), info
     end subroutine dgetrf
     subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
       import :: dp
+      implicit none
       character, intent(in) :: trans
       integer, intent(in) :: n, nrhs, lda, ldb, ipiv(*)
       real(dp), intent(in) :: a(lda, *)
@@ -38,6 +41,7 @@ module airlaunch_linalg
     end subroutine dgetrs
     subroutine dgecon(norm, n, a, lda, anorm, rcond, work, iwork, info)
       import :: dp
+      implicit none
       character, intent(in) :: norm
       integer, intent(in) :: n, lda
       real(dp), intent(in) :: a(lda, *), anorm
@@ -46,12 +50,14 @@ module airlaunch_linalg
     end subroutine dgecon
     subroutine dgbsv(n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
       import :: dp
+      implicit none
       integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb
       real(dp), intent(inout) :: ab(ldab, *), b(ldb, *)
       integer, intent(out) :: ipiv(*), info
     end subroutine dgbsv
     subroutine dpotrf(uplo, n, a, lda, info)
       import :: dp
+      implicit none
       character, intent(in) :: uplo
       integer, intent(in) :: n, lda
       real(dp), intent(inout) :: a(lda, *)
@@ -59,6 +65,7 @@ module airlaunch_linalg
     end subroutine dpotrf
     subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
       import :: dp
+      implicit none
       character, intent(in) :: uplo
       integer, intent(in) :: n, nrhs, lda, ldb
       real(dp), intent(in) :: a(lda, *)
@@ -67,6 +74,7 @@ module airlaunch_linalg
     end subroutine dpotrs
     subroutine dpocon(uplo, n, a, lda, anorm, rcond, work, iwork, info)
       import :: dp
+      implicit none
       character, intent(in) :: uplo
       integer, intent(in) :: n, lda
       real(dp), intent(in) :: a(lda, *), anorm

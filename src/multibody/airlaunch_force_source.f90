@@ -34,6 +34,7 @@ module airlaunch_force_source
     !> Add this source's loads on the bodies (see the module header for frames).
     subroutine add_loads_interface(self, t, bodies, force, moment, error)
       import :: force_source, rigid_body, dp, error_type
+      implicit none
       class(force_source), intent(inout) :: self            !< the source
       real(dp), intent(in) :: t                             !< time [s]
       type(rigid_body), intent(in) :: bodies(0:)            !< all bodies of the scene, paper numbering

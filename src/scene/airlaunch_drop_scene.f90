@@ -70,7 +70,8 @@ contains
     mach = cfg%mach; fall_height = cfg%fall_height
     call f%check_group("store", vars, error)
     if (allocated(error)) return
-    call f%position("store", unit, present)
+    call f%position("store", unit, present, error)
+    if (allocated(error)) return
     if (.not. present) then
       call fatal_error(error, f%path // ": group &store is missing (the drop scene needs at least &store mass)")
       return
@@ -177,6 +178,7 @@ contains
     nmax = ceiling(run%t_end/run%output_dt) + 2
     allocate(time(nmax), pos(3, nmax), vel(3, nmax), mach(nmax), stat=st)
     if (st /= 0) then
+      call solver%free()   ! CVODE's C objects have no finaliser
       call refuse_records(error, run%output_dt, nmax, 64.0_dp*nmax)
       return
     end if

@@ -37,6 +37,7 @@ module airlaunch_launch_scene
     !> The scene with the line coupled as `plan` says: direct (b), rigidized
     !> (a), per phase or automatically (submodule airlaunch_launch_coupled).
     module subroutine run_coupled(run, cfg, plan, echo, res, error)
+      implicit none
       type(run_config), intent(in) :: run
       type(scenario_config), intent(in) :: cfg
       type(coupling_plan), intent(in) :: plan

@@ -737,7 +737,8 @@ contains
     if (allocated(error)) return
     call f%check_group("line_scene", scene_vars, error)
     if (allocated(error)) return
-    call f%position("line", unit, present)
+    call f%position("line", unit, present, error)
+    if (allocated(error)) return
     if (present) then
       read(unit, nml=line, iostat=ios, iomsg=msg)
       close(unit)
@@ -747,7 +748,8 @@ contains
       end if
     end if
     if (.not. f%is_set("line_scene", "b_position")) b_position = [length, 0.0_dp, 0.0_dp]
-    call f%position("line_scene", unit, present)
+    call f%position("line_scene", unit, present, error)
+    if (allocated(error)) return
     if (present) then
       read(unit, nml=line_scene, iostat=ios, iomsg=msg)
       close(unit)
@@ -992,7 +994,10 @@ contains
     character(len=1), parameter :: nl = new_line("a")
 
     call scene%init(cfg, error)
-    if (allocated(error)) return
+    if (allocated(error)) then
+      call scene%free()   ! the integrator may be built (CVODE's C objects have no finaliser)
+      return
+    end if
     call scene%run(run_error)
     m = scene%n_out
     if (present(result)) result = result_of(scene)

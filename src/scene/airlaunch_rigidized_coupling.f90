@@ -635,7 +635,7 @@ contains
     end if
     if (allocated(error)) return
     copt = cvode_options(method="bdf", linear_solver="dense", rtol=opts%chain_rtol, &
-      atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000, \
+      atol_vector=chain_atol(opts%chain_atol), max_order=opts%chain_max_order, max_num_steps=1000000, &
       max_total_steps=opts%max_steps, max_wall_time=opts%max_wall_time, wall_deadline=opts%wall_deadline, &
       t_final=opts%t_end, max_step=opts%max_step)
     call self%chain_solver%init(self%chain, t0, y, copt, error)

@@ -215,7 +215,8 @@ contains
     present = .false.
     unit = -1
     if (allocated(error)) return
-    call f%position(group, unit, present)
+    call f%position(group, unit, present, error)
+    if (allocated(error)) return
   end subroutine open_group
 
   subroutine read_flight(f, c, echo, error)

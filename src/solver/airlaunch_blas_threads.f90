@@ -10,6 +10,7 @@ module airlaunch_blas_threads
     !> Stop OpenBLAS's worker threads unless OPENBLAS_NUM_THREADS is set; no-op
     !> with another BLAS.
     subroutine use_one_blas_thread() bind(C, name="airlaunch_one_blas_thread")
+      implicit none
     end subroutine use_one_blas_thread
   end interface
 end module airlaunch_blas_threads

@@ -104,6 +104,7 @@ module airlaunch_cvode
     !> the end of the run (cvode_options%t_final; the stretch is cut there).
     subroutine observe_interface(self, poly, t_start, t_end, restart, last)
       import :: step_observer, step_polynomial, dp
+      implicit none
       class(step_observer), intent(inout) :: self
       type(step_polynomial), intent(in) :: poly
       real(dp), intent(in) :: t_start, t_end
@@ -946,9 +947,9 @@ contains
 
   !> CVODE right-hand side callback.
   integer(c_int) function rhs_callback(t, nv_y, nv_ydot, user_data) result(ierr) bind(C)
-    real(c_double), value :: t
-    type(N_Vector) :: nv_y, nv_ydot
-    type(c_ptr), value :: user_data
+    real(c_double), value, intent(in) :: t
+    type(N_Vector), intent(inout) :: nv_y, nv_ydot
+    type(c_ptr), value, intent(in) :: user_data
     type(callback_data), pointer :: cb
     real(c_double), pointer :: y(:), ydot(:)
     integer :: status
@@ -962,10 +963,10 @@ contains
   !> CVODE Jacobian callback (band matrices): the system's analytic df/dy into
   !> the band matrix, which CVODE has zeroed.
   integer(c_int) function jac_callback(t, nv_y, nv_fy, mat, user_data, tmp1, tmp2, tmp3) result(ierr) bind(C)
-    real(c_double), value :: t
-    type(N_Vector) :: nv_y, nv_fy, tmp1, tmp2, tmp3
-    type(SUNMatrix) :: mat
-    type(c_ptr), value :: user_data
+    real(c_double), value, intent(in) :: t
+    type(N_Vector), intent(inout) :: nv_y, nv_fy, tmp1, tmp2, tmp3
+    type(SUNMatrix), intent(inout) :: mat
+    type(c_ptr), value, intent(in) :: user_data
     type(callback_data), pointer :: cb
     real(c_double), pointer :: y(:)
     type(band_view) :: jac
@@ -989,13 +990,13 @@ contains
   !> which follows; CVODE's band matrix `mat` is not used.
   integer(c_int) function linsys_callback(t, nv_y, nv_fy, mat, jok, jcur, gamma, user_data, tmp1, tmp2, tmp3) &
       result(ierr) bind(C)
-    real(c_double), value :: t
-    type(N_Vector) :: nv_y, nv_fy, tmp1, tmp2, tmp3
-    type(SUNMatrix) :: mat
-    integer(c_int), value :: jok
-    integer(c_int) :: jcur
-    real(c_double), value :: gamma
-    type(c_ptr), value :: user_data
+    real(c_double), value, intent(in) :: t
+    type(N_Vector), intent(inout) :: nv_y, nv_fy, tmp1, tmp2, tmp3
+    type(SUNMatrix), intent(inout) :: mat
+    integer(c_int), value, intent(in) :: jok
+    integer(c_int), intent(inout) :: jcur
+    real(c_double), value, intent(in) :: gamma
+    type(c_ptr), value, intent(in) :: user_data
     type(callback_data), pointer :: cb
     real(c_double), pointer :: y(:)
     logical :: fresh
@@ -1012,9 +1013,9 @@ contains
 
   !> CVODE projection callback: corr = P(y) - y.
   integer(c_int) function proj_callback(t, nv_y, nv_corr, eps, err, user_data) result(ierr) bind(C)
-    real(c_double), value :: t, eps
-    type(N_Vector) :: nv_y, nv_corr
-    type(c_ptr), value :: err, user_data
+    real(c_double), value, intent(in) :: t, eps
+    type(N_Vector), intent(inout) :: nv_y, nv_corr
+    type(c_ptr), value, intent(in) :: err, user_data
     type(callback_data), pointer :: cb
     real(c_double), pointer :: y(:), corr(:)
     integer :: status
@@ -1033,10 +1034,10 @@ contains
 
   !> CVODE event-function callback.
   integer(c_int) function root_callback(t, nv_y, gout, user_data) result(ierr) bind(C)
-    real(c_double), value :: t
-    type(N_Vector) :: nv_y
-    real(c_double) :: gout(*)
-    type(c_ptr), value :: user_data
+    real(c_double), value, intent(in) :: t
+    type(N_Vector), intent(inout) :: nv_y
+    real(c_double), intent(inout) :: gout(*)
+    type(c_ptr), value, intent(in) :: user_data
     type(callback_data), pointer :: cb
     real(c_double), pointer :: y(:)
     integer :: status
@@ -1050,8 +1051,8 @@ contains
 
   !> CVODE error handler: keep the message, print nothing.
   subroutine error_handler(code, module, function, msg, user_data) bind(C)
-    integer(c_int), value :: code
-    type(c_ptr), value :: module, function, msg, user_data
+    integer(c_int), value, intent(in) :: code
+    type(c_ptr), value, intent(in) :: module, function, msg, user_data
     type(callback_data), pointer :: cb
     character(kind=c_char), pointer :: chars(:)
     integer :: n

@@ -23,16 +23,20 @@ module airlaunch_interrupt
   interface
     !> Catch SIGINT and SIGTERM from now on (once each: a second one ends the process).
     subroutine catch_interrupts() bind(c, name="airlaunch_catch_interrupts")
+      implicit none
     end subroutine catch_interrupts
     !> The signal caught so far (0: none).
     integer(c_int) function c_interrupt_signal() bind(c, name="airlaunch_interrupt_signal")
       import :: c_int
+      implicit none
     end function c_interrupt_signal
     integer(c_int) function c_sigint() bind(c, name="airlaunch_sigint")
       import :: c_int
+      implicit none
     end function c_sigint
     integer(c_int) function c_sigterm() bind(c, name="airlaunch_sigterm")
       import :: c_int
+      implicit none
     end function c_sigterm
   end interface
 

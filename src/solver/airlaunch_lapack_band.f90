@@ -97,12 +97,14 @@ module airlaunch_lapack_band
   interface
     subroutine dgbtrf(m, n, kl, ku, ab, ldab, ipiv, info)
       import :: c_double
+      implicit none
       integer, intent(in) :: m, n, kl, ku, ldab
       real(c_double), intent(inout) :: ab(ldab, *)
       integer, intent(out) :: ipiv(*), info
     end subroutine dgbtrf
     subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
       import :: c_double
+      implicit none
       character, intent(in) :: trans
       integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb, ipiv(*)
       real(c_double), intent(in) :: ab(ldab, *)
@@ -111,12 +113,14 @@ module airlaunch_lapack_band
     end subroutine dgbtrs
     subroutine dgetrf(m, n, a, lda, ipiv, info)
       import :: c_double
+      implicit none
       integer, intent(in) :: m, n, lda
       real(c_double), intent(inout) :: a(lda, *)
       integer, intent(out) :: ipiv(*), info
     end subroutine dgetrf
     subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
       import :: c_double
+      implicit none
       character, intent(in) :: trans
       integer, intent(in) :: n, nrhs, lda, ldb, ipiv(*)
       real(c_double), intent(in) :: a(lda, *)
@@ -125,6 +129,7 @@ module airlaunch_lapack_band
     end subroutine dgetrs
     subroutine dgbequ(m, n, kl, ku, ab, ldab, r, c, rowcnd, colcnd, amax, info)
       import :: c_double
+      implicit none
       integer, intent(in) :: m, n, kl, ku, ldab
       real(c_double), intent(in) :: ab(ldab, *)
       real(c_double), intent(out) :: r(*), c(*), rowcnd, colcnd, amax
@@ -132,6 +137,7 @@ module airlaunch_lapack_band
     end subroutine dgbequ
     subroutine dtbsv(uplo, trans, diag, n, k, a, lda, x, incx)
       import :: c_double
+      implicit none
       character, intent(in) :: uplo, trans, diag
       integer, intent(in) :: n, k, lda, incx
       real(c_double), intent(in) :: a(lda, *)
@@ -156,7 +162,7 @@ contains
   end function new_lapack_band_solver
 
   integer(c_int) function band_gettype(s) result(t) bind(C)
-    type(SUNLinearSolver) :: s
+    type(SUNLinearSolver), intent(inout) :: s
     t = SUNLINEARSOLVER_DIRECT
     if (.false.) t = int(merge(1, 0, c_associated(s%content)), c_int)
   end function band_gettype
@@ -164,8 +170,8 @@ contains
   !> LU factorisation in place (dgbtrf, or dgetrf for a dense matrix); a zero
   !> pivot is a recoverable failure (CVODE retries with a smaller step).
   integer(c_int) function band_setup(s, a) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
+    type(SUNLinearSolver), intent(inout) :: s
+    type(SUNMatrix), intent(inout) :: a
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:)
     integer :: info
@@ -182,10 +188,10 @@ contains
 
   !> x = A^-1 b from the factors (band: band_lu_solve; dense: dgetrs).
   integer(c_int) function band_solve(s, a, x, b, tol) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
-    type(N_Vector) :: x, b
-    real(c_double), value :: tol
+    type(SUNLinearSolver), intent(inout) :: s
+    type(SUNMatrix), intent(inout) :: a
+    type(N_Vector), intent(inout) :: x, b
+    real(c_double), value, intent(in) :: tol
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:), xd(:)
     integer :: info
@@ -343,8 +349,8 @@ contains
   !> Build the reduced velocity matrix from M and factor it (dgbtrf); a zero
   !> pivot is a recoverable failure (CVODE retries with a smaller step).
   integer(c_int) function reduced_setup(s, a) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
+    type(SUNLinearSolver), intent(inout) :: s
+    type(SUNMatrix), intent(inout) :: a
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:)
     integer :: ldim, smu, j, k, p, q, row, col, n3
@@ -420,10 +426,10 @@ contains
 
   !> x = M^-1 b through the velocity system.
   integer(c_int) function reduced_solve(s, a, x, b, tol) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
-    type(N_Vector) :: x, b
-    real(c_double), value :: tol
+    type(SUNLinearSolver), intent(inout) :: s
+    type(SUNMatrix), intent(inout) :: a
+    type(N_Vector), intent(inout) :: x, b
+    real(c_double), value, intent(in) :: tol
     type(band_content), pointer :: c
     real(c_double), pointer :: xd(:), bd(:)
     integer :: j, k, p, q, i0, info
@@ -559,8 +565,8 @@ contains
   !> is not exactly dx - g dv is an unrecoverable failure (the system declared
   !> a position that is not one; last flag -1).
   integer(c_int) function position_setup(s, a) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
+    type(SUNLinearSolver), intent(inout) :: s
+    type(SUNMatrix), intent(inout) :: a
     type(band_content), pointer :: c
     real(c_double), pointer :: ab(:)
     real(c_double) :: m
@@ -625,10 +631,10 @@ contains
   !> x = M^-1 b through the kept states: r = b_kept - M(kept, x) b_x, R d = r,
   !> then every position from its velocity.
   integer(c_int) function position_solve(s, a, x, b, tol) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
-    type(SUNMatrix) :: a
-    type(N_Vector) :: x, b
-    real(c_double), value :: tol
+    type(SUNLinearSolver), intent(inout) :: s
+    type(SUNMatrix), intent(inout) :: a
+    type(N_Vector), intent(inout) :: x, b
+    real(c_double), value, intent(in) :: tol
     type(band_content), pointer :: c
     real(c_double), pointer :: xd(:), bd(:)
     real(c_double) :: r
@@ -678,14 +684,14 @@ contains
   end function solve_flag
 
   integer(c_long) function band_lastflag(s) result(f) bind(C)
-    type(SUNLinearSolver) :: s
+    type(SUNLinearSolver), intent(inout) :: s
     type(band_content), pointer :: c
     call c_f_pointer(s%content, c)
     f = c%last_flag
   end function band_lastflag
 
   integer(c_int) function band_free(s) result(ierr) bind(C)
-    type(SUNLinearSolver) :: s
+    type(SUNLinearSolver), intent(inout) :: s
     type(band_content), pointer :: c
     if (c_associated(s%content)) then
       call c_f_pointer(s%content, c)

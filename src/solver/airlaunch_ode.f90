@@ -67,6 +67,7 @@ module airlaunch_ode
     !> Derivative ydot = f(t, y); status one of rhs_ok, rhs_recoverable, rhs_fatal.
     subroutine rhs_interface(self, t, y, ydot, status)
       import :: ode_system, dp
+      implicit none
       class(ode_system), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), intent(in) :: y(:)

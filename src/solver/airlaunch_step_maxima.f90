@@ -52,6 +52,7 @@ module airlaunch_step_maxima
     !> may be estimated).  ok = .false. if the state cannot be evaluated.
     subroutine values_interface(self, t, q, ok)
       import :: maxima_observer, dp
+      implicit none
       class(maxima_observer), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: q(:)

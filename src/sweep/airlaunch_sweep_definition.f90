@@ -177,7 +177,8 @@ contains
     call f%check_group("fixed", vars, error)
     if (allocated(error)) return
     lines = pack(f%group_lines, f%groups == "fixed")
-    call f%open_text(u)
+    call f%open_text(u, error)
+    if (allocated(error)) return
     do k = 1, n_fixed
       name = ""
       value = ""
@@ -255,7 +256,8 @@ contains
     t_end = 0.0_dp; progress_interval = 5.0_dp; keep_failed = .false.
     call f%check_group("sweep", vars, error)
     if (allocated(error)) return
-    call f%position("sweep", u, present)
+    call f%position("sweep", u, present, error)
+    if (allocated(error)) return
     read(u, nml=sweep, iostat=ios, iomsg=msg)
     close(u)
     if (ios /= 0) then
@@ -439,7 +441,8 @@ contains
     if (allocated(error)) return
     lines = pack(f%group_lines, f%groups == "input")
     allocate(def%inputs(n_input))
-    call f%open_text(u)
+    call f%open_text(u, error)
+    if (allocated(error)) return
     do k = 1, n_input
       name = ""; distribution = ""; units = ""; description = ""
       lower = unset_real; upper = unset_real; mean = unset_real; std = unset_real

@@ -19,45 +19,53 @@ module airlaunch_sweep_files
   interface
     integer(c_int) function c_mkdir(path, mode) bind(C, name="mkdir")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
-      integer(c_int), value :: mode
+      integer(c_int), value, intent(in) :: mode
     end function c_mkdir
     integer(c_int) function c_rename(old, new) bind(C, name="rename")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: old(*), new(*)
     end function c_rename
     integer(c_int) function c_file_open(path, append, msg, msglen) bind(C, name="airlaunch_file_open")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
-      integer(c_int), value :: append, msglen
+      integer(c_int), value, intent(in) :: append, msglen
       character(kind=c_char), intent(inout) :: msg(*)
     end function c_file_open
     integer(c_int) function c_file_write(fd, data, n, msg, msglen) bind(C, name="airlaunch_file_write")
       import :: c_int, c_long, c_char
-      integer(c_int), value :: fd, msglen
+      implicit none
+      integer(c_int), value, intent(in) :: fd, msglen
       character(kind=c_char), intent(in) :: data(*)
-      integer(c_long), value :: n
+      integer(c_long), value, intent(in) :: n
       character(kind=c_char), intent(inout) :: msg(*)
     end function c_file_write
     integer(c_int) function c_remove_case_files(dir) bind(C, name="airlaunch_remove_case_files")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: dir(*)
     end function c_remove_case_files
     integer(c_int) function c_lock_file(path, msg, msglen) bind(C, name="airlaunch_lock_file")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(in) :: path(*)
       character(kind=c_char), intent(inout) :: msg(*)
-      integer(c_int), value :: msglen
+      integer(c_int), value, intent(in) :: msglen
     end function c_lock_file
     integer(c_int) function c_temp_file(templ, suffix_len, msg, msglen) bind(C, name="airlaunch_temp_file")
       import :: c_int, c_char
+      implicit none
       character(kind=c_char), intent(inout) :: templ(*)
-      integer(c_int), value :: suffix_len, msglen
+      integer(c_int), value, intent(in) :: suffix_len, msglen
       character(kind=c_char), intent(out) :: msg(*)
     end function c_temp_file
     integer(c_int) function c_file_close(fd, msg, msglen) bind(C, name="airlaunch_file_close")
       import :: c_int, c_char
-      integer(c_int), value :: fd, msglen
+      implicit none
+      integer(c_int), value, intent(in) :: fd, msglen
       character(kind=c_char), intent(inout) :: msg(*)
     end function c_file_close
   end interface

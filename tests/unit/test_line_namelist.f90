@@ -51,6 +51,29 @@ program test_line_namelist
   call expect("test_line_bad7.nml", [character(len=200) :: run_group, line_group, &
     "&line_scene scheme = 'marching', dt = 0.01 /"], &
     [character(len=19) :: "test_line_bad7.nml", "&line_scene        ", "dt = 0.01 s        ", "stability limit    "])
+
+  call section("a file removed after it was loaded: an error, not the runtime's stop")
+  ! nml_position reopens the file for each group; gfortran's OPEN without
+  ! iostat ended the program with its own message (found by an audit,
+  ! thirty-first session).  Reference: the file does not exist any more.
+  block
+    type(nml_file) :: f
+    type(run_config) :: run
+    integer :: unit, u
+    logical :: present
+    call write_file("test_line_gone.nml", [character(len=200) :: run_group, line_group, scene_group])
+    call f%load("test_line_gone.nml", error)
+    call check(.not. allocated(error), "the file loads")
+    open(newunit=u, file="test_line_gone.nml", status="old")
+    close(u, status="delete")
+    call f%position("line", unit, present, error)
+    call check(allocated(error) .and. .not. present, "reopening a removed file is an error")
+    if (allocated(error)) call check(index(error%message, "test_line_gone.nml: could not be opened again") == 1, &
+      "the error names the file: " // error%message)
+    if (allocated(error)) deallocate(error)
+    call read_run_config(f, run, echo, error)
+    call check(allocated(error), "reading &run from the removed file is an error")
+  end block
   call finish()
 
 contains
