@@ -49,8 +49,10 @@ def clear_boundary(prob, contrast=0.15):
 def passfail_map(env, path, criterion="all"):
     """Pass/fail map with the boundary of the safe region for every pair of inputs."""
     fig = passfail_figure(env, criterion)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    try:
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)
 
 
 def passfail_figure(env, criterion="all"):
@@ -64,6 +66,16 @@ def passfail_figure(env, criterion="all"):
     ncol = min(3, len(pairs))
     nrow = int(np.ceil(len(pairs) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
+    try:
+        _draw_passfail(fig, axes, env, pairs, criterion, ok, passed)
+    except BaseException:
+        plt.close(fig)   # a figure that could not be drawn is not left open
+        raise
+    return fig
+
+
+def _draw_passfail(fig, axes, env, pairs, criterion, ok, passed):
+    """The panels of passfail_figure."""
     for ax, (a, b) in zip(axes.ravel(), pairs):
         x = env[a].values
         if b is None:   # one varied input: the cases along its axis
@@ -103,7 +115,6 @@ def passfail_figure(env, criterion="all"):
     name = envelope_name(str(env.attrs.get("scene", "airlaunch")))
     fig.suptitle(f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
     fig.tight_layout()
-    return fig
 
 
 def margins(env, path):
@@ -113,24 +124,27 @@ def margins(env, path):
     units = dict(zip(env["criterion"].values, env["criterion_units"].values))
     fig, axes = plt.subplots(len(crit), len(inputs), figsize=(3.6 * len(inputs), 2.6 * len(crit)),
                              squeeze=False, sharex="col")
-    for i, c in enumerate(crit):
-        m = env["margin"].sel(criterion=c).values
-        p = env["passed"].sel(criterion=c).values.astype(bool)
-        for j, name in enumerate(inputs):
-            ax = axes[i, j]
-            x = env[name].values
-            ax.scatter(x[p], m[p], s=6, c=PASS_COLOUR, edgecolors="none")
-            ax.scatter(x[~p], m[~p], s=6, c=FAIL_COLOUR, edgecolors="none")
-            ax.axhline(0.0, color="k", lw=0.8)
-            if j == 0:
-                ax.set_ylabel(f"{c}\nmargin [{units[c]}]", fontsize=8)
-            if i == len(crit) - 1:
-                ax.set_xlabel(_label(env, name), fontsize=8)
-            ax.tick_params(labelsize=7)
-    fig.suptitle("margins against each input (>= 0 passes; failed cases are not drawn)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    try:
+        for i, c in enumerate(crit):
+            m = env["margin"].sel(criterion=c).values
+            p = env["passed"].sel(criterion=c).values.astype(bool)
+            for j, name in enumerate(inputs):
+                ax = axes[i, j]
+                x = env[name].values
+                ax.scatter(x[p], m[p], s=6, c=PASS_COLOUR, edgecolors="none")
+                ax.scatter(x[~p], m[~p], s=6, c=FAIL_COLOUR, edgecolors="none")
+                ax.axhline(0.0, color="k", lw=0.8)
+                if j == 0:
+                    ax.set_ylabel(f"{c}\nmargin [{units[c]}]", fontsize=8)
+                if i == len(crit) - 1:
+                    ax.set_xlabel(_label(env, name), fontsize=8)
+                ax.tick_params(labelsize=7)
+        fig.suptitle("margins against each input (>= 0 passes; cases not computed, or whose metric is NaN, "
+                     "have no margin and are not drawn)")
+        fig.tight_layout()
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)   # also when drawing or writing fails
 
 
 def probability(env, path):
@@ -140,18 +154,20 @@ def probability(env, path):
     lo = env["wilson_low"].values
     hi = env["wilson_high"].values
     fig, ax = plt.subplots(figsize=(7, 0.5 * len(names) + 1.5))
-    yy = np.arange(len(names))[::-1]
-    ax.barh(yy, p, color=[PASS_COLOUR if n != "all" else "#1f77b4" for n in names], alpha=0.6)
-    ax.errorbar(p, yy, xerr=[p - lo, hi - p], fmt="none", ecolor="k", capsize=4)
-    for y_, p_, l_, h_ in zip(yy, p, lo, hi):
-        ax.text(1.01, y_, f"{p_:.3f} [{l_:.3f}, {h_:.3f}]", va="center", fontsize=8)
-    ax.set_yticks(yy)
-    ax.set_yticklabels(names)
-    ax.set_xlim(0, 1.35)
-    ax.set_xlabel(f"probability of success (95% Wilson interval), n = {env.sizes['case']} cases")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    try:
+        yy = np.arange(len(names))[::-1]
+        ax.barh(yy, p, color=[PASS_COLOUR if n != "all" else "#1f77b4" for n in names], alpha=0.6)
+        ax.errorbar(p, yy, xerr=[p - lo, hi - p], fmt="none", ecolor="k", capsize=4)
+        for y_, p_, l_, h_ in zip(yy, p, lo, hi):
+            ax.text(1.01, y_, f"{p_:.3f} [{l_:.3f}, {h_:.3f}]", va="center", fontsize=8)
+        ax.set_yticks(yy)
+        ax.set_yticklabels(names)
+        ax.set_xlim(0, 1.35)
+        ax.set_xlabel(f"probability of success (95% Wilson interval), n = {env.sizes['case']} cases")
+        fig.tight_layout()
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)   # also when drawing or writing fails
 
 
 def sensitivity(env, path):
@@ -164,33 +180,35 @@ def sensitivity(env, path):
     ncol = min(3, len(crit))
     nrow = int(np.ceil(len(crit) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.8 * ncol, (0.45 * len(inputs) + 1.6) * nrow), squeeze=False)
-    for ax, c in zip(axes.ravel(), crit):
-        srrc = env["srrc"].sel(criterion=c).values
-        sig = significant(env, c)
-        order = by_importance(env, c)[::-1]   # the largest drawn on top
-        yy = np.arange(len(order))
-        for y_, j in zip(yy, order):
-            if np.isnan(srrc[j]):
-                ax.text(0.0, y_, "n/a", ha="center", va="center", fontsize=7)
-                continue
-            ax.barh(y_, srrc[j], color=PASS_COLOUR if srrc[j] > 0 else FAIL_COLOUR, alpha=0.8 if sig[j] else 0.25)
-            ax.text(srrc[j], y_, f" {srrc[j]:+.2f} ", ha="left" if srrc[j] >= 0 else "right", va="center",
-                    fontsize=7)
-        ax.axvline(0.0, color="k", lw=0.8)
-        ax.set_yticks(yy)
-        ax.set_yticklabels([inputs[j] for j in order], fontsize=7)
-        ax.set_xlim(-1.3, 1.3)
-        ax.set_title(f"{c} (rank R$^2$ = {float(env['rank_r2'].sel(criterion=c)):.2f})", fontsize=9)
-        ax.tick_params(axis="x", labelsize=7)
-    for ax in axes.ravel()[len(crit):]:
-        ax.axis("off")
-    n = int(env["sensitivity_cases"].values[0])
-    fig.suptitle("drivers: standardised rank regression coefficient of each margin on each input "
-                 f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
-                 "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    try:
+        for ax, c in zip(axes.ravel(), crit):
+            srrc = env["srrc"].sel(criterion=c).values
+            sig = significant(env, c)
+            order = by_importance(env, c)[::-1]   # the largest drawn on top
+            yy = np.arange(len(order))
+            for y_, j in zip(yy, order):
+                if np.isnan(srrc[j]):
+                    ax.text(0.0, y_, "n/a", ha="center", va="center", fontsize=7)
+                    continue
+                ax.barh(y_, srrc[j], color=PASS_COLOUR if srrc[j] > 0 else FAIL_COLOUR, alpha=0.8 if sig[j] else 0.25)
+                ax.text(srrc[j], y_, f" {srrc[j]:+.2f} ", ha="left" if srrc[j] >= 0 else "right", va="center",
+                        fontsize=7)
+            ax.axvline(0.0, color="k", lw=0.8)
+            ax.set_yticks(yy)
+            ax.set_yticklabels([inputs[j] for j in order], fontsize=7)
+            ax.set_xlim(-1.3, 1.3)
+            ax.set_title(f"{c} (rank R$^2$ = {float(env['rank_r2'].sel(criterion=c)):.2f})", fontsize=9)
+            ax.tick_params(axis="x", labelsize=7)
+        for ax in axes.ravel()[len(crit):]:
+            ax.axis("off")
+        n = int(env["sensitivity_cases"].values[0])
+        fig.suptitle("drivers: standardised rank regression coefficient of each margin on each input "
+                     f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
+                     "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)   # also when drawing or writing fails
 
 
 def worst_table(env, path_png, path_md, k=10, text=None):
@@ -203,16 +221,18 @@ def worst_table(env, path_png, path_md, k=10, text=None):
     rows = [line.strip("|").split("|") for line in text.strip().splitlines()]
     head, body = [c.strip() for c in rows[0]], [[c.strip() for c in r] for r in rows[2:]]
     fig, ax = plt.subplots(figsize=(min(2 + 1.3 * len(head), 24), 0.4 * len(body) + 1.2))
-    ax.axis("off")
-    if body:
-        table = ax.table(cellText=body, colLabels=head, loc="center", cellLoc="center")
-        table.auto_set_font_size(False)
-        table.set_fontsize(7)
-        table.scale(1, 1.3)
-    ax.set_title(f"the {len(body)} worst cases (smallest relative margin first)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path_png, dpi=110, format="png")
-    plt.close(fig)
+    try:
+        ax.axis("off")
+        if body:
+            table = ax.table(cellText=body, colLabels=head, loc="center", cellLoc="center")
+            table.auto_set_font_size(False)
+            table.set_fontsize(7)
+            table.scale(1, 1.3)
+        ax.set_title(f"the {len(body)} worst cases (smallest relative margin first)", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(path_png, dpi=110, format="png")
+    finally:
+        plt.close(fig)   # also when drawing or writing fails
     return text
 
 
