@@ -272,7 +272,7 @@ def warn_stale_figures(defn) -> None:
 
 def cmd_envelope(args) -> int:
     """Evaluate the criteria on the summary; write the envelope and the figures."""
-    from .envelope import evaluate, worst_case_table
+    from .envelope import evaluate, undefined_metric_lines, worst_case_table
     from .stamp import STAMP, remove_figures, stale_figures, write_stamp
     from .table import output_dir_error, write_atomic
 
@@ -300,6 +300,17 @@ def cmd_envelope(args) -> int:
         row = env.sel(criterion=c)
         print(f"  {c:16s} {float(row['probability']):.4f} "
               f"[{float(row['wilson_low']):.4f}, {float(row['wilson_high']):.4f}]")
+    # why criteria fail that no case could evaluate, beside their probabilities (before: P = 0 without a word)
+    n_not_ok = int((env["status"].values != 0).sum())
+    if n_not_ok == env.sizes["case"]:
+        print(f"  warning: no case was computed ({n_not_ok} failed or had invalid input: the summary's 'failure' "
+              "says why): every criterion fails")
+    else:
+        if n_not_ok:
+            print(f"  note: {n_not_ok} of {env.sizes['case']} cases were not computed (failed or invalid input): "
+                  "they pass no criterion")
+        for line in undefined_metric_lines(env, criteria):
+            print(line)
     from .sensitivity import DRIVERS_HEADING, drivers_table
 
     print(f"{DRIVERS_HEADING}, over {int(env['sensitivity_cases'].values[0])} computed cases:")

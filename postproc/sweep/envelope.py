@@ -99,6 +99,48 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
     return ds
 
 
+#: Why a summary variable is NaN in a computed case (docs/sweep.md, "The summary").
+UNDEFINED_WHY = {
+    "ground_speed_m_s": "no run reached the ground, &flight ground_altitude or &line_scene ground, by its t_end",
+    "pitch_max_deg": "no first pitch maximum after a separation by t_end",
+    "pitch_max_time_s": "no first pitch maximum after a separation by t_end",
+    "min_clearance_m": "no separation by t_end",
+    "min_line_clearance_m": "no line",
+    "peak_line_tension_N": "no line, or its peak tension not tracked",
+}
+
+
+def undefined_metrics(env: xr.Dataset, criteria: list) -> list:
+    """The criteria whose metric is NaN in computed cases (they fail it, by
+    rule): (criterion, its metrics, cases with a NaN metric, computed cases),
+    one per such criterion, in the criteria's order."""
+    ok = env["status"].values == 0
+    out = []
+    for c in criteria:
+        margin = env["margin"].sel(criterion=c.name).values
+        k = int(np.sum(ok & np.isnan(margin)))
+        if k:
+            out.append((c.name, c.metrics, k, int(ok.sum())))
+    return out
+
+
+def undefined_metric_lines(env: xr.Dataset, criteria: list) -> list:
+    """Lines (for stdout, under the probabilities) on the criteria whose metric
+    is NaN in computed cases: a warning when every computed case lacks it, so
+    that a criterion no case can evaluate (the touchdown speed of a sweep that
+    never lands) does not fail them all without a word; a note otherwise."""
+    lines = []
+    for name, metrics, k, n_ok in undefined_metrics(env, criteria):
+        metric = ", ".join(metrics)
+        why = UNDEFINED_WHY.get(metrics[0], "the event never came by t_end")
+        if k == n_ok:
+            lines.append(f"  warning: {name}: {metric} is NaN in every computed case ({k} of {k}): no case can pass "
+                         f"this criterion ({why}); leave it out, or change the sweep so that the event happens")
+        else:
+            lines.append(f"  note: {name}: {metric} is NaN in {k} of {n_ok} computed cases ({why}): they fail it")
+    return lines
+
+
 def wilson_interval(k, n, z=Z95):
     """Wilson score interval for k successes in n trials (arrays allowed)."""
     k = np.asarray(k, dtype=float)
