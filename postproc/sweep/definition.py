@@ -646,6 +646,19 @@ def _read_input(path, index, group_vars, design):
     return InputSpec(**spec)
 
 
+def _utf8_path(where, key, value, encoding):
+    """Refuse a path of a file that is not UTF-8 (read as Latin-1) with bytes
+    beyond ASCII: airlaunch-sweep takes its bytes as they are, the Python
+    steps would name another file (their UTF-8 encoding of the Latin-1 text),
+    and netCDF takes UTF-8 paths only (found by an audit: the table went to
+    'lat\xc3\xbfdir', the cases looked for it in 'lat\xffdir')."""
+    if encoding != "utf-8" and not value.isascii():
+        shown = value.encode(encoding, "replace").decode("ascii", "backslashreplace")
+        raise DefinitionError(f"{where}{key} = '{shown}' is not allowed: the file is not UTF-8 and this path holds "
+                              "other bytes, which airlaunch-sweep and the Python steps would take for different "
+                              "files (write the file in UTF-8, or keep its paths ASCII)")
+
+
 def parse_definition(text, path="<sweep>"):
     """Validate the text of a sweep definition; return a SweepDefinition."""
     check_namelist_text(text, path, DEFINITION_FORMS)
@@ -670,6 +683,9 @@ def parse_definition(text, path="<sweep>"):
     output_dir = _str(where, sweep, "output_dir", f"output/sweep_{name}")
     if not output_dir:
         raise DefinitionError(f"{where}output_dir = '' is not allowed (a directory, e.g. 'output/sweep_{name}')")
+    encoding = getattr(text, "encoding", "utf-8")
+    for key, value in (("base", base), ("output_dir", output_dir), ("criteria", _str(where, sweep, "criteria", ""))):
+        _utf8_path(where, key, value, encoding)
     groups = _groups(nml, "input")
     if not groups:
         raise DefinitionError(f"{path}: no &input group (at least one varied input is needed)")

@@ -140,10 +140,25 @@ def encoding(ds: xr.Dataset) -> dict:
     return {name: {"_FillValue": None} for name in list(ds.data_vars) + list(ds.coords)}
 
 
+def require_utf8_path(path, what) -> None:
+    """A DefinitionError (one line) for a path that netCDF cannot take: its
+    absolute form (as xarray passes it) is not UTF-8 text, e.g. a directory
+    named in Latin-1 (netCDF4 encodes paths as strict UTF-8: a traceback,
+    before; found by an audit)."""
+    full = os.path.abspath(path)
+    try:
+        full.encode("utf-8")
+    except UnicodeEncodeError:
+        shown = os.fsencode(full).decode("utf-8", "backslashreplace")
+        raise DefinitionError(f"{shown}: cannot {what}: its path is not UTF-8 text, which netCDF requires (run "
+                              "from, and write to, directories whose names are UTF-8)") from None
+
+
 def write_atomic(ds: xr.Dataset, path) -> pathlib.Path:
     """Write a netCDF-4 file under a temporary name and rename it; on any
     failure the temporary file is removed and the exception goes on."""
     path = pathlib.Path(path)
+    require_utf8_path(path, "write the netCDF file")
     path.parent.mkdir(parents=True, exist_ok=True)
     return files.write_atomic(path, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds)))
 
@@ -200,6 +215,7 @@ def output_dir_error(defn: SweepDefinition, target, exc) -> DefinitionError:
 def open_netcdf(path, what, hint):
     """Open a netCDF file and load it; a file that is not one (empty, text,
     truncated, damaged) is a one-line DefinitionError."""
+    require_utf8_path(path, f"read the {what}")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             return ds.load()
