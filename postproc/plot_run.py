@@ -154,6 +154,13 @@ def main(argv):
     if not out_dir.is_dir():
         return fail(f"{out}: its directory {out_dir} does not exist")
     try:
+        os.path.abspath(path).encode("utf-8")
+    except UnicodeEncodeError:
+        # netCDF takes UTF-8 paths only (its error named a 'utf-8' codec and called the file unreadable)
+        shown = os.fsencode(os.path.abspath(path)).decode("utf-8", "backslashreplace")
+        return fail(f"{shown}: cannot read it: its path is not UTF-8 text, which netCDF requires (copy or link it "
+                    "to a path whose directory names are UTF-8)")
+    try:
         ds = xr.open_dataset(path, engine="netcdf4")
     except Exception as exc:   # noqa: BLE001 - any unreadable file is the user's to hear about in one line
         text = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
