@@ -369,9 +369,12 @@ def cmd_verify(args) -> int:
         return 0
     sweep_exe, exe = require_programs(args.exe_dir, ["airlaunch-sweep", "airlaunch"], "to rerun the cases with")
     out_dir = pathlib.Path(defn.output_dir)
-    # an earlier verification's reruns (other cases, other settings) go: verify/ holds this one's only
+    # an earlier verification's reruns (other cases, other settings) go: verify/ holds this one's only; and
+    # so does its verify.nc, which named them (an interrupted or failed verification left it, stale, beside
+    # the new runs: found by an audit)
     for old in (out_dir / "verify").glob("case_*"):
         old.unlink()
+    (out_dir / "verify.nc").unlink(missing_ok=True)
     ds = verify(env, criteria, base_scene(defn.base) or "airlaunch", ids, defn.path, sweep_exe,
                 exe, out_dir / "verify", segments=args.segments, tolerance=args.tolerance,
                 jobs=args.jobs)
