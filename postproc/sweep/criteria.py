@@ -186,7 +186,7 @@ def parse_criteria(text, path="<criteria>"):
         if v["min_line_clearance_m"] < 0:
             raise DefinitionError(f"{where}min_line_clearance_m = {v['min_line_clearance_m']:g} is not allowed "
                                   "(must be >= 0 m)")
-        out.append(Criterion("line_clearance", "minimum line-empennage clearance >= limit (direct coupling)",
+        out.append(Criterion("line_clearance", "minimum line-empennage clearance >= limit",
                              "m", max(v["min_line_clearance_m"], 1.0), ("min_line_clearance_m",),
                              {"min_line_clearance_m": v["min_line_clearance_m"]}))
     if "line_strength_n" in v or "line_safety_factor" in v:

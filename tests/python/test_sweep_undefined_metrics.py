@@ -86,3 +86,11 @@ def test_undefined_metrics_counts_computed_cases_only():
     criteria = parse_criteria("&criteria min_clearance_m = 1, max_ground_speed_m_s = 5 /")
     env = evaluate(ds, criteria)
     assert undefined_metrics(env, criteria) == [("touchdown", ("ground_speed_m_s",), 2, 3)]
+
+
+def test_line_clearance_description_names_no_coupling():
+    """Every coupling tracks the line's clearance since the twenty-eighth
+    session (docs/sweep.md); the criterion's description in envelope.nc still
+    said '(direct coupling)' (an audit)."""
+    (c,) = parse_criteria("&criteria min_line_clearance_m = 3.0 /")
+    assert "coupling" not in c.description
