@@ -163,6 +163,29 @@ def check_summary_settings(defn, summary, where) -> None:
     if defn.t_end > 0 and t_end is not None and float(t_end) != defn.t_end:
         raise DefinitionError(f"{where} (&sweep t_end = {defn.t_end:g} s, the sweep ran {float(t_end):g} s): "
                               f"{rerun}")
+    # t_end = 0 is the base's &run t_end (unless &fixed or &input sets run%t_end): a sweep run at
+    # &sweep t_end = 4 and then set to 0 was evaluated as the new definition's (found by an audit)
+    sets_it = any(name == "run%t_end" for name, _ in defn.fixed) or any(s.name == "run%t_end" for s in defn.inputs)
+    base_t_end = _base_t_end(summary.attrs.get("base_namelist"))
+    if defn.t_end == 0 and not sets_it and t_end is not None and base_t_end is not None \
+            and float(t_end) != base_t_end:
+        raise DefinitionError(f"{where} (&sweep t_end = 0, the base's {base_t_end:g} s, the sweep ran "
+                              f"{float(t_end):g} s): {rerun}")
+
+
+def _base_t_end(base_namelist):
+    """&run t_end of the base's resolved input as the summary records it
+    (None if it cannot be read there)."""
+    import re
+
+    if not isinstance(base_namelist, str):
+        return None
+    group = re.search(r"^\s*&run\b(.*?)^\s*/", base_namelist, flags=re.I | re.M | re.S)
+    value = re.search(r"\bt_end\s*=\s*([-+0-9.eEdD]+)", group.group(1), flags=re.I) if group else None
+    try:
+        return float(value.group(1).replace("d", "e").replace("D", "E")) if value else None
+    except ValueError:
+        return None
 
 
 def check_summary_belongs(defn, summary, summary_path) -> None:
