@@ -265,19 +265,23 @@ def verify(env, criteria, scene, ids, definition, sweep_exe, exe, work, segments
     for name in env.attrs["inputs"].split():
         ds[name] = sel[name]
     ds["margin_sweep"] = (("criterion", "case"), margin_sweep,
-                          {"long_name": "margin at the sweep's settings (the summary's)"})
+                          {"long_name": "margin at the sweep's settings (the summary's)", "units": "criterion units (see criterion_units)"})
     ds["margin_refined"] = (("criterion", "case"), margin_refined,
-                            {"long_name": "margin at the refined settings (NaN: not computed or event not reached)"})
+                            {"long_name": "margin at the refined settings (NaN: not computed or event not reached)",
+                             "units": "criterion units (see criterion_units)"})
     ds["difference"] = (("criterion", "case"), margin_sweep - margin_refined,
                         {"long_name": "margin at the sweep's settings less the refined one (the sweep's numerical "
-                                      "error, in the criterion's units)"})
+                                      "error, in the criterion's units)", "units": "criterion units (see criterion_units)"})
     ds["relative_difference"] = (("criterion", "case"), (margin_sweep - margin_refined) / scale,
                                  {"long_name": "difference / the criterion's scale", "units": "1"})
     ds["flipped"] = (("criterion", "case"), (passed_sweep != passed_refined).astype(np.int8),
                      {"long_name": "1 where the case passes at one setting and fails at the other", "units": "1"})
-    ds["refined_status"] = (("case",), np.array([r[0] for r in runs]))
-    ds["refined_message"] = (("case",), np.array([r[1] for r in runs]))
-    ds["criterion_units"] = (("criterion",), np.array([c.units for c in criteria]))
+    ds["refined_status"] = (("case",), np.array([r[0] for r in runs]),
+                            {"long_name": "status of the refined rerun (ok; failed: a numerical failure; invalid_input; error)"})
+    ds["refined_message"] = (("case",), np.array([r[1] for r in runs]),
+                             {"long_name": "the refined rerun's failure, if any (empty: none)"})
+    ds["criterion_units"] = (("criterion",), np.array([c.units for c in criteria]),
+                             {"long_name": "units of each criterion's margins"})
     ds["segments_factor"] = (("case",), np.array([r[4] for r in runs], dtype=np.int32),
                              {"long_name": "the factor n_seg was multiplied by (--segments, capped at "
                                            f"{MAX_SEGMENTS} segments; 1: no line)", "units": "1"})
