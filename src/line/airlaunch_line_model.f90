@@ -38,7 +38,8 @@
 !>    model choice, docs/line.md section 1).  rho_air is the ISA density
 !>    at the segment midpoint altitude y (see `air_density_fit`), or a fixed value.
 !>  - optionally a settling aid: a linear damper to the earth frame,
-!>    -alpha m_k v_k (mass-proportional "Rayleigh" damping, alpha [1/s]), used
+!>    -alpha m_k v_k (mass-proportional "Rayleigh" damping, alpha [1/s]; m_k the
+!>    line's own node mass, not a point-mass or canopy end's), used
 !>    only to let static problems (catenary) settle; zero by default.
 !> A parted segment (`parted`, set by the air-launch scene where the line breaks:
 !> &line breaking_strength or break_time) carries no tension and no drag from
@@ -517,8 +518,9 @@ contains
   end function length3
 
   !> Air density along the line: the ISA density at the lowest and the highest
-  !> node, interpolated log-linearly in altitude (exact in the isothermal layer,
-  !> relative error below 1e-7 over 100 m of height in the troposphere), so the
+  !> node, interpolated log-linearly in altitude (exact in an isothermal layer;
+  !> in the troposphere the relative error grows as the square of the line's
+  !> height span: ~1e-7 at 20 m, 2.7e-6 to 4.5e-6 at 100 m), so the
   !> standard is evaluated twice per call instead of once per segment.  A fixed
   !> `air_density` > 0 replaces the ISA.
   subroutine air_density_fit(self, x, y_lo, rho_lo, log_slope)
