@@ -627,8 +627,14 @@ contains
       call self%scheme%free()
       deallocate(self%scheme)
     end if
-    if (allocated(self%time)) deallocate(self%time, self%tip, self%tip_velocity, self%end_tension, &
-      self%end_force, self%energy, self%rigid)
+    ! each on its own: an ALLOCATE of several that failed (stat) may have made some of them
+    if (allocated(self%time)) deallocate(self%time)
+    if (allocated(self%tip)) deallocate(self%tip)
+    if (allocated(self%tip_velocity)) deallocate(self%tip_velocity)
+    if (allocated(self%end_tension)) deallocate(self%end_tension)
+    if (allocated(self%end_force)) deallocate(self%end_force)
+    if (allocated(self%energy)) deallocate(self%energy)
+    if (allocated(self%rigid)) deallocate(self%rigid)
     if (allocated(self%nodes)) deallocate(self%nodes)
     if (allocated(self%tensions)) deallocate(self%tensions)
     if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension)
