@@ -317,7 +317,11 @@ contains
   subroutine rigid_only_options(run, opts)
     type(run_config), intent(in) :: run
     type(cvode_options), intent(inout) :: opts
-    opts%linear_solver = "dense"
+    ! a full band: the scene's own difference quotients (launch_jacobian), whose
+    ! increments stay above the rounding of V0 + v (CVODE's dense ones did not)
+    opts%linear_solver = "band"
+    opts%upper_bandwidth = rigid_size - 1
+    opts%lower_bandwidth = rigid_size - 1
     if (run%max_order == 0 .and. opts%method == "bdf") opts%max_order = 5
   end subroutine rigid_only_options
 

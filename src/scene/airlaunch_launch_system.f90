@@ -389,11 +389,16 @@ contains
     end do
   end subroutine launch_velocity_partners
 
-  !> With the line, the band Jacobian is the system's own difference quotients
-  !> (launch_jacobian); without it CVODE's dense ones.
+  !> The Newton matrix is the system's own difference quotients (launch_jacobian),
+  !> with the line (its band) and without it (26 rigid states, a full band:
+  !> rigid_only_options).  CVODE's own dense quotients perturb a state near 0 by
+  !> 1000 h u N |f| / ewt_j, which at a tight atol falls below the rounding of
+  !> V0 + v: a rocket stuck on the rail (Karnopp, s'' + stick_rate s' = 0) lost
+  !> its stick row from the Newton matrix and the run crawled at h ~ 1/stick_rate
+  !> (3 s stuck at atol 1e-12: 2 849 steps, 2 064 convergence failures).
   logical function launch_has_jacobian(self)
     class(launch_system), intent(in) :: self
-    launch_has_jacobian = self%has_line
+    launch_has_jacobian = allocated(self%jac_y)
   end function launch_has_jacobian
 
   !> Band Jacobian by difference quotients, columns perturbed together when no

@@ -121,3 +121,26 @@ def test_rail_and_edge_against_planar_reference(airlaunch_exe, tmp_path, name):
             assert pitch == pytest.approx(math.degrees(deck + y[2]), abs=2e-5)
             assert rate == pytest.approx(math.degrees(y[3]), abs=2e-5)
             assert n_edge == pytest.approx(case2(y)[2], abs=1e-6 * weight)
+
+
+def test_rocket_stuck_on_the_rail_at_a_tight_atol_does_not_crawl(airlaunch_exe, tmp_path):
+    """A rocket that friction holds on the rail (mu = 0.3 > tan 7 deg) sticks
+    (Karnopp: s'' + stick_rate s' = 0, rate 1000/s).  Without a line the Newton
+    matrix came from CVODE's dense difference quotients, whose increment for a
+    state near 0 (the rocket's velocity relative to the frame moving at V0) fell
+    below the rounding of V0 + v at atol 1e-12: the stick row was lost and CVODE
+    crawled at h ~ 1 ms (3 s: 2 849 steps, 2 064 convergence failures).  With the
+    scene's own increments (launch_jacobian, as with a line): 8 steps.  And it
+    stays put (no creep)."""
+    c = dict(CASES["frictionless_one_sided"], mu=0.3)
+    nml = tmp_path / "stuck.nml"
+    nml.write_text(BASE.format(**c).replace("t_end = 12.0", "t_end = 3.0"))
+    out = tmp_path / "stuck.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    steps = int(next(l for l in res.stdout.splitlines() if l.startswith("integration:")).split()[1])
+    assert steps < 100, res.stdout
+    with xr.open_dataset(out) as ds:
+        rel = (ds.rocket_position - ds.aircraft_position).values[:, :2]
+        assert np.abs(rel - rel[0]).max() < 1e-8
+        assert (ds.phase.values[ds.time.values > 0.5] == 1).all()
