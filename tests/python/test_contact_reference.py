@@ -1,5 +1,5 @@
 """The rail and ramp-edge contact (Cases 1-3) against an independent planar
-reference (audit, helper session): a rocket on the deck of a prescribed (steady)
+reference (audit, thirty-first session): a rocket on the deck of a prescribed (steady)
 aircraft, no line, the rocket's aerodynamics off (c_axial = c_dn = 0, no fins;
 the slender-body term, which has no coefficient, made negligible by a high,
 slow flight and a tiny diameter or a heavy rocket).  The reference is Newton-
