@@ -246,7 +246,7 @@ def _png(draw, *args):
 
 def draw_all(env, figure_dir):
     """Every figure of the envelope into figure_dir; returns the paths.  Each
-    is written under its name with .part and renamed once whole."""
+    is written under a temporary name ending in .part and renamed once whole."""
     d = pathlib.Path(figure_dir)
     d.mkdir(parents=True, exist_ok=True)
     paths = {key: d / name for key, name in FIGURE_FILES.items()}

@@ -117,7 +117,7 @@ def test_table_nc_is_a_directory(tmp_path):
     d = definition(tmp_path)
     res = table(tmp_path, d)
     assert_error(res, "&sweep", "output_dir = 'out'", "table.nc is a directory")
-    assert not (tmp_path / "out" / "table.nc.part").exists()
+    assert not list((tmp_path / "out").glob("table.nc*.part"))
 
 
 # 4. files that are not the netCDF file asked for ------------------------------

@@ -71,7 +71,7 @@ def test_interrupted_table_step_is_one_line_and_leaves_no_table(tmp_path):
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, out + err
     assert err == "sweep: interrupted\n", err
-    assert not (tmp_path / "out" / "table.nc").exists() and not (tmp_path / "out" / "table.nc.part").exists()
+    assert not (tmp_path / "out" / "table.nc").exists() and not list((tmp_path / "out").glob("table.nc*.part"))
     _wait_for(lambda: not any(_alive(p) for p in _pids(pid_dir)), 10, "the check's process to end")
 
 
@@ -195,3 +195,51 @@ def test_the_batch_script_names_what_it_misses_in_one_line(tmp_path):
     assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
     assert "srun is not on PATH" in res.stderr and "scripts/sweep" in res.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_two_writers_of_one_file_each_rename_a_whole_file(tmp_path):
+    """Two steps writing the same file at once (two envelope runs on one
+    sweep): with a shared PATH.part the second writer truncated the first
+    one's temporary file, and the first one's rename put the second one's
+    half-written bytes under the final name, then its own rename failed.
+    Now each call writes under a name of its own.  Reference: whatever the
+    interleaving, the final file is one writer's whole content and both
+    calls succeed.  Threads force the interleaving (the first writer pauses
+    after half its bytes until the second has renamed)."""
+    import threading
+
+    from postproc.sweep.files import write_atomic
+
+    target = tmp_path / "envelope.nc"
+    half_written, second_done = threading.Event(), threading.Event()
+    errors = []
+
+    def first(tmp):
+        with open(tmp, "w") as f:
+            f.write("A" * 1000)
+            f.flush()
+            half_written.set()
+            assert second_done.wait(10)
+            f.write("A" * 1000)
+
+    def second(tmp):
+        assert half_written.wait(10)
+        pathlib.Path(tmp).write_text("B" * 2000)
+
+    def run(writer, done=None):
+        try:
+            write_atomic(target, writer)
+        except BaseException as exc:   # reported below: a thread's exception is lost otherwise
+            errors.append(exc)
+        finally:
+            if done is not None:
+                done.set()
+
+    threads = [threading.Thread(target=run, args=(first,)), threading.Thread(target=run, args=(second, second_done))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(20)
+    assert errors == []
+    assert target.read_text() in ("A" * 2000, "B" * 2000)
+    assert [p.name for p in tmp_path.iterdir()] == ["envelope.nc"]
