@@ -176,15 +176,11 @@ def check_summary_settings(defn, summary, where) -> None:
 def _base_t_end(base_namelist):
     """&run t_end of the base's resolved input as the summary records it
     (None if it cannot be read there)."""
-    import re
+    import f90nml
 
-    if not isinstance(base_namelist, str):
-        return None
-    group = re.search(r"^\s*&run\b(.*?)^\s*/", base_namelist, flags=re.I | re.M | re.S)
-    value = re.search(r"\bt_end\s*=\s*([-+0-9.eEdD]+)", group.group(1), flags=re.I) if group else None
     try:
-        return float(value.group(1).replace("d", "e").replace("D", "E")) if value else None
-    except ValueError:
+        return float(f90nml.reads(base_namelist)["run"]["t_end"])
+    except Exception:   # noqa: BLE001 - f90nml raises several types; an unreadable record is not checked
         return None
 
 

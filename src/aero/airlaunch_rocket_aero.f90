@@ -227,23 +227,27 @@ contains
       x_cp = x_cp - (moment/area - whole)
     end if
   contains
+    !> The front of the strip at span fraction e aft of the edge, from the
+    !> root's leading edge: the edge, or the fin's leading or trailing edge.
+    pure real(dp) function front_aft(e) result(a)
+      real(dp), intent(in) :: e
+      a = min(trailing(e), max(xr*e, s_e))
+    end function front_aft
+    !> The fin's trailing edge at span fraction e, from the root's leading edge.
+    pure real(dp) function trailing(e)
+      real(dp), intent(in) :: e
+      trailing = xr*e + cr + (ct - cr)*e
+    end function trailing
     !> The chord aft of the edge at span fraction e.
     pure real(dp) function chord_aft(e) result(c)
       real(dp), intent(in) :: e
-      real(dp) :: le, te
-      le = xr*e
-      te = le + cr + (ct - cr)*e
-      c = te - min(te, max(le, s_e))
+      c = trailing(e) - front_aft(e)
     end function chord_aft
     !> The exposed strip's chord times its quarter-chord point, aft of the
     !> root's leading edge, at span fraction e.
     pure real(dp) function strip_moment(e) result(g)
       real(dp), intent(in) :: e
-      real(dp) :: le, te, front
-      le = xr*e
-      te = le + cr + (ct - cr)*e
-      front = min(te, max(le, s_e))
-      g = (te - front)*(front + (te - front)/4)
+      g = chord_aft(e)*(front_aft(e) + chord_aft(e)/4)
     end function strip_moment
   end subroutine fin_exposure
 end module airlaunch_rocket_aero
