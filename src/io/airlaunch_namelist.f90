@@ -10,8 +10,7 @@
 !> f%position(group, unit, present)`; `read(unit, nml=...)`; on failure `call
 !> f%diagnose(...)`; then range checks with `require_*`.
 module airlaunch_namelist
-  use, intrinsic :: iso_fortran_env, only: int64
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
   use airlaunch_path, only: path_kind, kind_other
@@ -90,7 +89,7 @@ contains
     character(len=:), allocatable :: buf, text
     integer, allocatable :: line_of(:), col_of(:)
     logical :: exists, is_dir
-    integer(int64) :: nbytes
+    integer(i8) :: nbytes
     character(len=*), parameter :: no_group = ": no namelist group in the file (a group starts with &name " // &
       "and ends with /, e.g. &run ... /)"
 
@@ -220,7 +219,7 @@ contains
   logical function ends_with_newline(path) result(ok)
     character(len=*), intent(in) :: path  !< an existing, readable file
     integer :: unit, ios
-    integer(int64) :: nbytes
+    integer(i8) :: nbytes
     character(len=1) :: last
     ok = .true.
     open(newunit=unit, file=path, access="stream", form="unformatted", status="old", action="read", iostat=ios)

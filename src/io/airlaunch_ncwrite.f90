@@ -14,8 +14,7 @@ module airlaunch_ncwrite
   use hdf5
   use h5lt
   use h5ds
-  use, intrinsic :: iso_fortran_env, only: int64
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_path, only: free_bytes, file_size_limit, delete_file, parent_directory
   implicit none
@@ -240,7 +239,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     character(len=*), intent(in) :: what
     real(dp) :: free, limit
-    integer(int64) :: written
+    integer(i8) :: written
     character(len=24) :: kb
     character(len=:), allocatable :: note
     note = ""

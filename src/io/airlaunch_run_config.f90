@@ -8,7 +8,7 @@ module airlaunch_run_config
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: run_config, read_run_config, run_echo, echo_namelist, namelist_writer, echo_record, scene_names, &
+  public :: run_config, read_run_config, run_echo, echo_buffer, echo_record, scene_names, &
     require_output_directory, &
     refuse_records
 
@@ -16,14 +16,30 @@ module airlaunch_run_config
   !> namelist output well inside it: one value list per record or so).
   integer, parameter :: echo_record = 1024
 
-  abstract interface
-    !> Writes one namelist group: write(lines, nml=group, iostat=ios).
-    subroutine namelist_writer(lines, ios)
-      implicit none
-      character(len=*), intent(inout) :: lines(:)   !< internal file, blank
-      integer, intent(out) :: ios                   !< nonzero: too few records
-    end subroutine namelist_writer
-  end interface
+  !> A namelist group echoed into memory: the caller writes the group into
+  !> `lines` until `another_try` is false, then appends it to the resolved
+  !> input with `append_to`:
+  !>
+  !>     do while (buffer%another_try())
+  !>       write(buffer%lines, nml=group, iostat=buffer%ios)
+  !>     end do
+  !>     call buffer%append_to(echo)
+  !>
+  !> The group is written where its namelist lives, not through a procedure
+  !> argument: an internal procedure passed as an argument needs a trampoline
+  !> on the stack, and gfortran then marks the whole program's stack
+  !> executable.  (It was a scratch file before: gfortran puts those in
+  !> $TMPDIR and loses their lines without an error when it is full, which left
+  !> the resolved input empty.)
+  type :: echo_buffer
+    !> internal file of echo_record-character records, blank before each try
+    character(len=echo_record), allocatable :: lines(:)
+    !> the last write's iostat: nonzero, too few records
+    integer :: ios = 0
+  contains
+    procedure :: another_try
+    procedure :: append_to
+  end type echo_buffer
 
   !> Scenes the main program knows.
   character(len=16), parameter :: scene_names(3) = [character(len=16) :: "airlaunch", "line", "drop"]
@@ -132,19 +148,17 @@ contains
     character(len=256) :: output
     logical :: trajectory, stop_when_final
     integer :: max_order, max_steps
+    type(echo_buffer) :: buffer
     namelist /run/ scene, t_end, output_dt, output, rtol, atol, trajectory, max_order, stop_when_final, max_steps, &
       max_wall_time
     scene = cfg%scene; t_end = cfg%t_end; output_dt = cfg%output_dt; output = cfg%output
     rtol = cfg%rtol; atol = cfg%atol; trajectory = cfg%trajectory; max_order = cfg%max_order
     stop_when_final = cfg%stop_when_final; max_steps = cfg%max_steps; max_wall_time = cfg%max_wall_time
     text = ""
-    call echo_namelist(write_run, text)
-  contains
-    subroutine write_run(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=run, iostat=ios)
-    end subroutine write_run
+    do while (buffer%another_try())
+      write(buffer%lines, nml=run, iostat=buffer%ios)
+    end do
+    call buffer%append_to(text)
   end function run_echo
 
   !> The trajectory's records could not be allocated: an input error naming
@@ -238,32 +252,39 @@ contains
     close(u, status="delete")
   end subroutine require_output_directory
 
-  !> Append a namelist group, as `writer` writes it to an internal file
-  !> (write(lines, nml=group, iostat=ios)), to `echo`: in memory, records of
-  !> echo_record characters, as many as the group needs.  (It was a scratch
-  !> file: gfortran puts those in $TMPDIR and loses their lines without an
-  !> error when it is full, which left the resolved input empty.)
-  subroutine echo_namelist(writer, echo)
-    procedure(namelist_writer) :: writer                  !< writes the group: write(lines, nml=...)
+  !> Whether the group is to be written (again): first into 64 blank
+  !> records, then, while the write fails for want of records, into 8 times
+  !> more, up to 32 768 (a list of 4 096 values takes ~100).
+  logical function another_try(self)
+    class(echo_buffer), intent(inout) :: self   !< the group's buffer
+    integer :: n
+    if (allocated(self%lines)) then
+      another_try = self%ios /= 0 .and. size(self%lines) < 32768
+      if (.not. another_try) return
+      n = 8*size(self%lines)
+      deallocate(self%lines)
+    else
+      another_try = .true.
+      n = 64
+    end if
+    allocate(self%lines(n))
+    self%lines = ""
+  end function another_try
+
+  !> Append the written group to `echo`, its records up to the closing "/",
+  !> with the padding of its strings removed.
+  subroutine append_to(self, echo)
+    class(echo_buffer), intent(in) :: self                 !< the written group
     character(len=:), allocatable, intent(inout) :: echo  !< text so far
-    character(len=echo_record), allocatable :: lines(:)
-    integer :: ios, n, k
+    integer :: k
     if (.not. allocated(echo)) echo = ""
-    n = 64
-    do   ! records enough for the group (a list of 4 096 values takes ~100)
-      allocate(lines(n))
-      lines = ""
-      call writer(lines, ios)
-      if (ios == 0 .or. n >= 32768) exit
-      deallocate(lines)
-      n = 8*n
+    if (.not. allocated(self%lines)) return
+    do k = 1, size(self%lines)
+      if (len_trim(self%lines(k)) == 0) exit
+      echo = echo // squeeze_string_padding(trim(self%lines(k))) // new_line("a")
+      if (trim(self%lines(k)) == "/") exit
     end do
-    do k = 1, size(lines)
-      if (len_trim(lines(k)) == 0) exit
-      echo = echo // squeeze_string_padding(trim(lines(k))) // new_line("a")
-      if (trim(lines(k)) == "/") exit
-    end do
-  end subroutine echo_namelist
+  end subroutine append_to
 
   !> Remove the blank padding the runtime writes inside quoted strings
   !> ("drop      " -> "drop"): only the blanks just before a string's closing

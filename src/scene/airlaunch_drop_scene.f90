@@ -13,7 +13,7 @@ module airlaunch_drop_scene
   use airlaunch_ode, only: ode_system, rhs_ok, rhs_fatal
   use airlaunch_cvode, only: cvode_solver, cvode_options
   use airlaunch_namelist
-  use airlaunch_run_config, only: run_config, echo_namelist, refuse_records
+  use airlaunch_run_config, only: run_config, echo_buffer, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   implicit none
@@ -62,6 +62,7 @@ contains
     logical :: present
     integer :: unit, ios
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /store/ mass, drag_area, altitude, mach, fall_height
     type(nml_var), parameter :: vars(5) = [nml_var("mass", "real"), nml_var("drag_area", "real"), &
       nml_var("altitude", "real"), nml_var("mach", "real"), nml_var("fall_height", "real")]
@@ -96,13 +97,10 @@ contains
       return
     end if
     cfg = drop_config(mass, drag_area, altitude, mach, fall_height)
-    call echo_namelist(write_store, echo)
-  contains
-    subroutine write_store(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=store, iostat=ios)
-    end subroutine write_store
+    do while (buffer%another_try())
+      write(buffer%lines, nml=store, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_drop_config
 
   subroutine drop_rhs(self, t, y, ydot, status)

@@ -18,7 +18,7 @@ module airlaunch_line_scene
   use airlaunch_error, only: error_type, fatal_error, add_output_error, run_status
   use airlaunch_strings, only: str, fixed
   use airlaunch_namelist
-  use airlaunch_run_config, only: run_config, echo_namelist, refuse_records
+  use airlaunch_run_config, only: run_config, echo_buffer, refuse_records
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_output_meta, only: write_run_metadata
   use airlaunch_parachute, only: parachute
@@ -686,6 +686,7 @@ contains
     real(dp) :: b_t_start, b_mass, b_drag_area, initial_sag, dt, force_tol, ground_altitude
     integer :: max_iterations
     logical :: record_tensions, peak_tension, ground
+    type(echo_buffer) :: line_buffer, scene_buffer
     namelist /line/ length, n_seg, ea, mass_per_length, damping, settling_damping, diameter, cd_normal, &
       cd_tangential, gravity, air, wind, air_density, mass, breaking_strength, break_time, break_segment, &
       weak_link_strength, weak_link_segment
@@ -891,20 +892,15 @@ contains
       return
     end if
 
-    call echo_namelist(write_line, echo)
-    call echo_namelist(write_line_scene, echo)
+    do while (line_buffer%another_try())
+      write(line_buffer%lines, nml=line, iostat=line_buffer%ios)
+    end do
+    call line_buffer%append_to(echo)
+    do while (scene_buffer%another_try())
+      write(scene_buffer%lines, nml=line_scene, iostat=scene_buffer%ios)
+    end do
+    call scene_buffer%append_to(echo)
     if (allocated(chute_echo)) echo = echo // chute_echo
-  contains
-    subroutine write_line(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=line, iostat=ios)
-    end subroutine write_line
-    subroutine write_line_scene(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=line_scene, iostat=ios)
-    end subroutine write_line_scene
   end subroutine read_line_scene_config
 
   !> The canopy of a 'canopy' end: the group &parachute (the air-launch

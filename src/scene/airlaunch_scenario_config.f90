@@ -7,7 +7,7 @@ module airlaunch_scenario_config
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_namelist
-  use airlaunch_run_config, only: echo_namelist
+  use airlaunch_run_config, only: echo_buffer
   use airlaunch_atmosphere, only: isa_max_altitude, isa_min_altitude
   use airlaunch_aircraft_aero, only: aircraft_aero
   use airlaunch_rocket_aero, only: rocket_aero
@@ -229,6 +229,7 @@ contains
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /flight/ altitude, mach, trim_mode, trim_alpha_deg, ground_altitude
     type(nml_var), parameter :: vars(5) = [nml_var("altitude", "real"), nml_var("mach", "real"), &
       nml_var("trim_mode", "string", 16), nml_var("trim_alpha_deg", "real"), nml_var("ground_altitude", "real")]
@@ -256,14 +257,11 @@ contains
       isa_min_altitude + ground_margin_below, altitude, "m: at most &flight altitude", error)
     if (allocated(error)) return
     c = flight_config(altitude, mach, trim_mode, trim_alpha_deg*deg2rad, ground_altitude)
-    call echo_namelist(write_flight, echo)
+    do while (buffer%another_try())
+      write(buffer%lines, nml=flight, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
     if (.false.) altitude = isa_max_altitude
-  contains
-    subroutine write_flight(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=flight, iostat=ios)
-    end subroutine write_flight
   end subroutine read_flight
 
   subroutine read_aircraft(f, c, echo, error)
@@ -277,6 +275,7 @@ contains
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /aircraft/ mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, &
       k_induced, cm0, cm_alpha, cm_q, cm_de, dynamics, control, k_theta, k_q, delta_e_max_deg, &
       cl_alpha_tail, cy_beta_fin
@@ -336,13 +335,10 @@ contains
     c%aero%k_theta = k_theta; c%aero%k_q = k_q; c%aero%delta_e_max = delta_e_max_deg*deg2rad
     c%aero%cl_alpha_tail = cl_alpha_tail; c%aero%cy_beta_fin = cy_beta_fin
     c%aero%attitude_hold = control == "attitude_hold"
-    call echo_namelist(write_aircraft, echo)
-  contains
-    subroutine write_aircraft(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=aircraft, iostat=ios)
-    end subroutine write_aircraft
+    do while (buffer%another_try())
+      write(buffer%lines, nml=aircraft, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_aircraft
 
   subroutine read_bay(f, c, echo, error)
@@ -355,6 +351,7 @@ contains
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
       tail_x, tail_y
     type(nml_var), parameter :: vars(11) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
@@ -384,13 +381,10 @@ contains
     if (allocated(error)) return
     c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
       tail_x, tail_y)
-    call echo_namelist(write_bay, echo)
-  contains
-    subroutine write_bay(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=bay, iostat=ios)
-    end subroutine write_bay
+    do while (buffer%another_try())
+      write(buffer%lines, nml=bay, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_bay
 
   subroutine read_rocket(f, c, echo, error)
@@ -404,6 +398,7 @@ contains
     integer :: n_strips, fin_count, u, ios
     logical :: present
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /rocket/ mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose, &
       cp_pot_from_nose, c_axial, c_dn, eta, n_strips, fin_count, fin_semi_span, fin_root_chord, &
       fin_tip_chord, fin_sweep, fin_root_le_from_nose
@@ -467,13 +462,10 @@ contains
     c%aero = rocket_aero(length=length, diameter=diameter, cg_from_nose=cg_from_nose, &
       cp_pot_from_nose=cp_pot_from_nose, c_axial=c_axial, c_dn=c_dn, eta=eta, n_strips=n_strips)
     if (fin_count > 0) call barrowman_fins(c)
-    call echo_namelist(write_rocket, echo)
-  contains
-    subroutine write_rocket(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=rocket, iostat=ios)
-    end subroutine write_rocket
+    do while (buffer%another_try())
+      write(buffer%lines, nml=rocket, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_rocket
 
   !> Fin normal-force slope and centre of pressure by Barrowman's equations
@@ -520,6 +512,7 @@ contains
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /parachute/ mass, drag_area, cd0, deploy_time, fill_constant, inflation_exponent, &
       packed_drag_area, added_mass_factor
     type(nml_var), parameter :: vars(8) = [nml_var("mass", "real"), nml_var("drag_area", "real"), &
@@ -557,13 +550,10 @@ contains
     c%mass = mass; c%drag_area = drag_area; c%cd0 = cd0; c%deploy_time = deploy_time
     c%fill_constant = fill_constant; c%inflation_exponent = inflation_exponent
     c%packed_drag_area = packed_drag_area; c%added_mass_factor = added_mass_factor
-    call echo_namelist(write_parachute, echo)
-  contains
-    subroutine write_parachute(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=parachute, iostat=ios)
-    end subroutine write_parachute
+    do while (buffer%another_try())
+      write(buffer%lines, nml=parachute, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_parachute
 
   !> &gust: a discrete 1 - cosine gust (airlaunch_gust); no gust with both
@@ -579,6 +569,7 @@ contains
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
+    type(echo_buffer) :: buffer
     namelist /gust/ vertical, lateral, gradient_length, hit_time, penetration, kussner
     type(nml_var), parameter :: vars(6) = [nml_var("vertical", "real"), nml_var("lateral", "real"), &
       nml_var("gradient_length", "real"), nml_var("hit_time", "real"), nml_var("penetration", "logical"), &
@@ -603,13 +594,10 @@ contains
     call require_nonnegative(f, "gust", "hit_time", hit_time, "s", error)
     if (allocated(error)) return
     c = gust_config(vertical, lateral, gradient_length, hit_time, penetration, kussner)
-    call echo_namelist(write_gust, echo)
-  contains
-    subroutine write_gust(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=gust, iostat=ios)
-    end subroutine write_gust
+    do while (buffer%another_try())
+      write(buffer%lines, nml=gust, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_gust
 
   subroutine read_line(f, c, echo, error)
@@ -808,6 +796,7 @@ contains
     integer :: n_seg, break_segment, weak_link_segment
     character(len=16) :: coupling, far_end, coupling_by_phase(4), inner_scheme
     logical :: enabled
+    type(echo_buffer) :: buffer
     namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
       coupling, outer_dt, inner_rtol, far_end, inner_scheme, inner_dt, breaking_strength, break_time, &
       break_segment, weak_link_strength, weak_link_segment
@@ -822,35 +811,37 @@ contains
     inner_scheme = c%inner_scheme; inner_dt = c%inner_dt
     breaking_strength = c%breaking_strength; break_time = c%break_time; break_segment = c%break_segment
     weak_link_strength = c%weak_link_strength; weak_link_segment = c%weak_link_segment
+    ! each mode's group is its own namelist /line/, so each is written by an
+    ! internal procedure of its own (called, not passed: no trampoline)
     select case (coupling)
     case ("per_phase")
-      call echo_namelist(write_per_phase, echo)
+      call write_per_phase(buffer)
     case ("auto")
-      call echo_namelist(write_auto, echo)
+      call write_auto(buffer)
     case default
-      call echo_namelist(write_line, echo)
+      do while (buffer%another_try())
+        write(buffer%lines, nml=line, iostat=buffer%ios)
+      end do
     end select
+    call buffer%append_to(echo)
   contains
-    subroutine write_line(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=line, iostat=ios)
-    end subroutine write_line
-    subroutine write_per_phase(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
+    subroutine write_per_phase(b)
+      type(echo_buffer), intent(inout) :: b
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
         coupling, outer_dt, inner_rtol, far_end, coupling_by_phase, breaking_strength, break_time, break_segment, &
         weak_link_strength, weak_link_segment
-      write(lines, nml=line, iostat=ios)
+      do while (b%another_try())
+        write(b%lines, nml=line, iostat=b%ios)
+      end do
     end subroutine write_per_phase
-    subroutine write_auto(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
+    subroutine write_auto(b)
+      type(echo_buffer), intent(inout) :: b
       namelist /line/ enabled, length, n_seg, ea, mass_per_length, damping, diameter, cd_normal, cd_tangential, &
         coupling, outer_dt, inner_rtol, far_end, auto_min_strain, auto_max_strain_change, auto_dwell, &
         auto_min_steps, breaking_strength, break_time, break_segment, weak_link_strength, weak_link_segment
-      write(lines, nml=line, iostat=ios)
+      do while (b%another_try())
+        write(b%lines, nml=line, iostat=b%ios)
+      end do
     end subroutine write_auto
   end subroutine echo_line
 
@@ -1033,6 +1024,7 @@ contains
     logical :: enabled
     integer :: u, i
     logical :: present
+    type(echo_buffer) :: buffer
     namelist /line/ enabled
     call open_group(f, "line", line_vars, u, present, error)
     if (allocated(error)) return
@@ -1059,13 +1051,10 @@ contains
     end if
     c = line_config(enabled=.false.)
     enabled = .false.
-    call echo_namelist(write_line, echo)
-  contains
-    subroutine write_line(lines, ios)
-      character(len=*), intent(inout) :: lines(:)
-      integer, intent(out) :: ios
-      write(lines, nml=line, iostat=ios)
-    end subroutine write_line
+    do while (buffer%another_try())
+      write(buffer%lines, nml=line, iostat=buffer%ios)
+    end do
+    call buffer%append_to(echo)
   end subroutine read_no_line
 
   !> Geometry that cannot work: rocket not fitting the bay, line shorter than

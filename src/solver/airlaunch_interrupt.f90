@@ -12,8 +12,7 @@
 !> not catch interrupts always polls 0.
 module airlaunch_interrupt
   use, intrinsic :: iso_c_binding, only: c_int
-  use, intrinsic :: iso_fortran_env, only: int64
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   implicit none
@@ -50,7 +49,7 @@ contains
   !> A monotonic wall clock [s] (system_clock's 64-bit count: the
   !> integrators' wall-time budget, &run max_wall_time).
   real(dp) function wall_clock()
-    integer(int64) :: count, rate
+    integer(i8) :: count, rate
     call system_clock(count, rate)
     wall_clock = real(count, dp)/real(rate, dp)
   end function wall_clock

@@ -10,8 +10,7 @@
 !> readers reject a variable assigned twice.  Values are written with 17
 !> significant digits (integers as integers), so they read back bit for bit.
 module airlaunch_sweep_case
-  use, intrinsic :: iso_fortran_env, only: int64
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
   use airlaunch_namelist, only: nml_file, nml_assignment, edit_distance
@@ -339,7 +338,7 @@ contains
     type(line_result) :: line_res
     type(error_type), allocatable :: error
     character(len=:), allocatable :: summary
-    integer(int64) :: c0, c1, rate
+    integer(i8) :: c0, c1, rate
 
     call system_clock(c0, rate)
     call load_case(def, base, id, values, scratch, in, error, file_error)
@@ -599,7 +598,7 @@ contains
     character(len=:), allocatable :: s
     character(len=40) :: buf
     if (x == aint(x) .and. abs(x) < 1.0e15_dp) then
-      write(buf, '(i0)') int(x, int64)
+      write(buf, '(i0)') int(x, i8)
     else
       write(buf, '(es25.16e3)') x
     end if

@@ -6,8 +6,7 @@
 !> table; here they are applied again so that airlaunch-sweep never runs a
 !> table against a definition it does not satisfy.
 module airlaunch_sweep_definition
-  use, intrinsic :: iso_fortran_env, only: int64
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, lower
   use airlaunch_namelist, only: nml_file, nml_var, unset_real, unset_int, max_list_items
@@ -234,7 +233,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     character(len=256) :: name, base, output_dir, design, worst_by, criteria
     integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_ids
-    integer(int64) :: n_grid
+    integer(i8) :: n_grid
     real(dp) :: t_end, progress_interval
     logical :: keep_failed, present, exists, is_dir
     character(len=512) :: msg
@@ -316,7 +315,7 @@ contains
       do i = 1, size(def%inputs)
         associate(s => def%inputs(i))
           if (s%distribution == "list") then
-            n_grid = n_grid*size(s%values, kind=int64)
+            n_grid = n_grid*size(s%values, kind=i8)
           else if (s%levels < 1) then
             call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
               "': missing required value levels (design = 'grid' needs levels >= 1 or a list of values)")
@@ -324,7 +323,7 @@ contains
           else
             n_grid = n_grid*s%levels
           end if
-          n_grid = min(n_grid, int(max_cases, int64) + 1)   ! no overflow in the next product
+          n_grid = min(n_grid, int(max_cases, i8) + 1)   ! no overflow in the next product
         end associate
       end do
       if (n_grid > max_cases) then

@@ -10,8 +10,7 @@
 !> (code version, base scenario text, table values, t_end); a rerun with a
 !> different fingerprint refuses to mix its rows with the old ones.
 module airlaunch_sweep_journal
-  use, intrinsic :: iso_fortran_env, only: int64
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_sweep_files, only: file_exists, delete_file, read_text_file, replace_text_file, open_for_writing, &
@@ -216,12 +215,12 @@ contains
   function fnv1a(s) result(h)
     character(len=*), intent(in) :: s   !< bytes to hash
     character(len=16) :: h
-    integer(int64) :: x
-    integer(int64), parameter :: prime = 1099511628211_int64
+    integer(i8) :: x
+    integer(i8), parameter :: prime = 1099511628211_i8
     integer :: i
-    x = -3750763034362895579_int64   ! 14695981039346656037 as a signed 64-bit integer
+    x = -3750763034362895579_i8   ! 14695981039346656037 as a signed 64-bit integer
     do i = 1, len(s)
-      x = ieor(x, int(iachar(s(i:i)), int64))
+      x = ieor(x, int(iachar(s(i:i)), i8))
       x = x*prime                    ! wraps modulo 2^64 (two's complement)
     end do
     write(h, '(z16.16)') x

@@ -9,9 +9,8 @@
 !> with 17 significant digits so that they read back bit for bit.  A line cut
 !> short by a kill fails the checksum and is ignored (its case runs again).
 module airlaunch_sweep_row
-  use, intrinsic :: iso_fortran_env, only: int64
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, i8
   use airlaunch_launch_scene, only: launch_result
   use airlaunch_line_scene, only: line_result
   implicit none
@@ -274,7 +273,7 @@ contains
     type(sweep_row), intent(out) :: row     !< the row (if ok)
     logical, intent(out) :: ok              !< the line is a complete row
     integer :: p, q, i, ios, n
-    integer(int64) :: sum_want
+    integer(i8) :: sum_want
     character(len=:), allocatable :: body
     ok = .false.
     p = index(line, " ")
@@ -325,15 +324,15 @@ contains
   end subroutine next_token
 
   !> Adler-32 checksum of a string (RFC 1950).
-  pure integer(int64) function adler32(s) result(h)
+  pure integer(i8) function adler32(s) result(h)
     character(len=*), intent(in) :: s
-    integer(int64) :: a, b
+    integer(i8) :: a, b
     integer :: i
     a = 1
     b = 0
     do i = 1, len(s)
-      a = mod(a + iachar(s(i:i)), 65521_int64)
-      b = mod(b + a, 65521_int64)
+      a = mod(a + iachar(s(i:i)), 65521_i8)
+      b = mod(b + a, 65521_i8)
     end do
     h = ior(ishft(b, 16), a)
   end function adler32
