@@ -192,7 +192,9 @@ contains
     do k = 1, self%n
       do j = 1, self%n
         if (j < k) then
-          self%cvec(:, j, k) = self%link(j)%distal - self%link(j)%proximal
+          ! body 1 has no previous body: its proximal point is ignored (r_1 is its CG)
+          self%cvec(:, j, k) = self%link(j)%distal
+          if (j > 1) self%cvec(:, j, k) = self%cvec(:, j, k) - self%link(j)%proximal
         else if (j == k .and. k > 1) then
           self%cvec(:, j, k) = -self%link(k)%proximal
         else

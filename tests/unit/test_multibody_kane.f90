@@ -31,6 +31,8 @@ program test_multibody_kane
   end do
   call section("probe wrench on the rocket = the same wrench added to its loads (CFA linearity)")
   call probe_linearity()
+  call section("the rocket's proximal point is ignored (body 1 has no previous body)")
+  call first_proximal_ignored()
   call section("Newton-Euler (47)-(48) of one body: gyroscopic term")
   call gyroscopic()
   call finish()
@@ -182,6 +184,47 @@ contains
     call check(maxval(abs(u1 - chain%rhs(:, 1))) <= 1.0e-12_dp*maxval(abs(u1)), &
       "udot(loads) + udot(probe) = udot(loads + probe): diff " // fmt(maxval(abs(u1 - chain%rhs(:, 1)))))
   end subroutine probe_linearity
+
+  !> Body 1 has no previous body: its `proximal` is documented as ignored.  A chain
+  !> whose link 1 carries a nonzero proximal point must be the same chain as with
+  !> zero there (reference: the same chain with proximal_1 = 0, and the spherical
+  !> joints' own closure, which is exact by construction: 1e-12 m is round-off).
+  subroutine first_proximal_ignored()
+    type(kane_chain) :: chain, ref
+    type(rigid_body) :: bodies(3), rbodies(3)
+    type(error_type), allocatable :: error
+    real(dp) :: y(27), f(3, 3), m(3, 3), pf(3, 1), pm(3, 1), q(4), jk(3, 3), pk(3), dk(3), dr, du
+    integer :: k
+    call chain%init(3, 1, error)
+    call ref%init(3, 1, error)
+    do k = 1, 3
+      jk = random_inertia()
+      pk = rvec(1.0_dp)
+      dk = rvec(1.0_dp)
+      call chain%set_link(k, "body", 1.0_dp + k, jk, pk, dk, error)
+      if (k == 1) pk = 0.0_dp
+      call ref%set_link(k, "body", 1.0_dp + k, jk, pk, dk, error)
+      f(:, k) = rvec(5.0_dp); m(:, k) = rvec(5.0_dp)
+      call random_number(q)
+      y(6+7*(k-1)+1:6+7*(k-1)+4) = quat_normalize(q - 0.5_dp)
+      y(6+7*(k-1)+5:6+7*k) = rvec(2.0_dp)
+    end do
+    y(1:6) = [rvec(1.0_dp), rvec(1.0_dp)]
+    pf = 0.0_dp; pm = 0.0_dp
+    call chain%load_bodies(y, bodies)
+    call ref%load_bodies(y, rbodies)
+    call check(chain%joint_residual(bodies) <= 1.0e-12_dp, "spherical joints closed: residual " // &
+      fmt(chain%joint_residual(bodies)) // " m (tol 1e-12)")
+    dr = 0.0_dp
+    do k = 1, 3
+      dr = max(dr, maxval(abs(bodies(k)%r - rbodies(k)%r)), maxval(abs(bodies(k)%v - rbodies(k)%v)))
+    end do
+    call check(dr <= 1.0e-14_dp, "positions and velocities as with proximal_1 = 0: diff " // fmt(dr))
+    call chain%accelerations(bodies, f, m, pf, pm, 0, error)
+    call ref%accelerations(rbodies, f, m, pf, pm, 0, error)
+    du = maxval(abs(chain%rhs(:, 1) - ref%rhs(:, 1)))
+    call check(du <= 1.0e-14_dp*maxval(abs(ref%rhs(:, 1))), "udot as with proximal_1 = 0: diff " // fmt(du))
+  end subroutine first_proximal_ignored
 
   !> Torque-free symmetric top: J wdot = -w x J w, closed form for diagonal J.
   subroutine gyroscopic()
