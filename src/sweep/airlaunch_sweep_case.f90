@@ -31,7 +31,7 @@ module airlaunch_sweep_case
   type :: known_variable
     character(len=32) :: group = ""
     character(len=32) :: name = ""
-    character(len=8) :: kind = ""      !< real, integer, logical or string
+    character(len=8) :: kind = ""      !< real, integer, logical, string or vector (several values)
   end type known_variable
 
   !> The base scenario of a sweep.
@@ -159,6 +159,11 @@ contains
             call fatal_error(error, where // s%name // " is an integer: its values must be integers")
             return
           end if
+        case ("vector")
+          call fatal_error(error, where // s%name // " is a vector (several values); a sweep varies variables " // &
+            "of one real or integer value, not a vector or its elements (set the whole vector in the base " // &
+            "scenario, or in every case with &fixed value = 'x, y, z')")
+          return
         case default
           call fatal_error(error, where // s%name // " is a " // trim(base%known(hit)%kind) // &
             " variable; only real and integer variables can be varied")
@@ -621,6 +626,8 @@ contains
     else if (u == "T" .or. u == "F" .or. u == ".TRUE." .or. u == ".FALSE." .or. u == ".true." .or. &
       u == ".false.") then
       k = "logical"
+    else if (scan(u, ",*") > 0) then   ! several values (`x, y, z`, `3*0.0`): a vector
+      k = "vector"
     else if (scan(u, ".eEdD") > 0) then
       k = "real"
     else

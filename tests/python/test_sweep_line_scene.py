@@ -271,3 +271,25 @@ def test_touchdown_criterion_needs_a_ground(tmp_path):
     definition = absolute_definition("sweep_airdrop", tmp_path, "&fixed name = 'line_scene%ground', value = 'T' /\n")
     res = run_python(["envelope", definition, "--no-figures", "--check", "--criteria", criteria], tmp_path)
     assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("name", ["line%wind", "line_scene%a_position"])
+def test_a_vector_cannot_be_varied(tmp_path, name):
+    """A vector (the line scene's wind, an end's position) holds three values:
+    a case's one drawn number assigned to it is a vector of one value, which
+    the scenario readers refuse, so every case of such a sweep was
+    invalid_input while the check (and so the table step) passed it (found by
+    a new user's walkthrough varying the airdrop's wind).  Refused before any
+    case, in one line; the whole vector can still be set with &fixed, which
+    the check passes."""
+    definition = absolute_definition(
+        "sweep_airdrop", tmp_path,
+        f"&input name = '{name}', distribution = 'uniform', lower = -5.0, upper = 5.0, units = 'm' /\n")
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 2 and res.stderr.strip().count("\n") == 0, res.stdout + res.stderr
+    assert (f"&input #5 '{name}': {name} is a vector (several values); a sweep varies variables of one real or "
+            "integer value, not a vector or its elements") in res.stderr
+    definition = absolute_definition("sweep_airdrop", tmp_path,
+                                     "&fixed name = 'line%wind', value = '5.0, 0.0, 0.0' /\n")
+    res = run_sweep(definition, tmp_path, None, "--check")
+    assert res.returncode == 0, res.stderr
