@@ -943,7 +943,8 @@ contains
     end if
     if (.not. air) then
       call fatal_error(error, f%path // ": &line: air = .false. is not allowed with " // e // "_kind = " // &
-        "'canopy': a canopy's drag, filling and apparent mass come from the air; use a point_mass end")
+        "'canopy' (a canopy's drag, filling and apparent mass come from the air): set air = .true. " // &
+        "(the line scene's default is .false.), or use a point_mass end")
       return
     end if
     call read_parachute(f, chute, echo, error)

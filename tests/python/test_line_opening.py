@@ -136,6 +136,11 @@ def test_the_paper_marching_scheme_opens_it_alike(airlaunch_exe, tmp_path):
      "&parachute: the group is not allowed without a canopy end"),
     ([(r"^  air = .true.$", "  air = .false.")],
      "air = .false. is not allowed with b_kind = 'canopy'"),
+    # air left out: the line scene's default, .false. (a new user's canopy case; the message said
+    # only "use a point_mass end" before)
+    ([(r"^  air = .true.$", "")],
+     "air = .false. is not allowed with b_kind = 'canopy' (a canopy's drag, filling and apparent mass come "
+     "from the air): set air = .true. (the line scene's default is .false.), or use a point_mass end"),
     ([(r"^  deploy_time = 0.2 .*$", "  deploy_time = 2.0")],
      "deploy_time = 2.0 s is not allowed: must be < &run t_end = 2.0 s"),
     ([(r"^  packed_drag_area = 0.1 .*$", "  packed_drag_area = 20.0")],
