@@ -17,7 +17,7 @@ from test_sweep_support import run_python
 from postproc.sweep.criteria import parse_criteria
 from postproc.sweep.definition import DefinitionError
 from postproc.sweep.envelope import (clopper_pearson_interval, evaluate, pass_probability_map, wilson_interval,
-                                     worst_cases)
+                                     worst_case_table, worst_cases)
 
 METRICS = ("min_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg",
            "max_load_factor_excursion", "pitch_max_deg", "pitch_max_time_s")
@@ -238,6 +238,19 @@ def test_worst_cases_not_computed_before_computed_cases_with_a_nan_metric():
     assert list(worst_cases(env, 6)) == [1, 4, 0, 3, 2, 5]
     assert list(worst_cases(env, 3)) == [1, 4, 0]
 
+
+
+def test_worst_case_table_says_its_columns_are_margins():
+    """The table's criterion columns hold margins (limit less metric, or metric less
+    limit), in the metric's units: a header `touchdown [m s-1]` over 0.004 read as a
+    touchdown speed of 0.004 m/s (a new user's walkthrough). Two cases by hand:
+    clearance 1.6 and 20 m against 1.5 m, margins 0.1 and 18.5 m."""
+    a = np.array([0.1, 0.2])
+    env = evaluate(synthetic_summary(a, a, np.array([1.6, 20.0])), parse_criteria("&criteria min_clearance_m = 1.5 /"))
+    head, _, first, second = worst_case_table(env, 2).splitlines()
+    assert head == "| case | status | a | b | worst | clearance margin [m] |"
+    assert first == "| 0 | ok | 0.1 | 0.1 | clearance | 0.1 |"
+    assert second == "| 1 | ok | 0.2 | 0.2 | clearance | 18.5 |"
 
 @pytest.mark.parametrize("limit_var, limit, bad, criterion, metric, values, margins", [
     # min_line_clearance_m: margin = min_line_clearance_m - limit; NaN: no line
