@@ -166,6 +166,13 @@ def main(argv):
         text = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         return fail(f"{path}: cannot read it as netCDF ({text})")
     with ds:
+        if "n_cases" in ds.attrs and "inputs" in ds.attrs:
+            # a sweep's table.nc, summary.nc or envelope.nc: one row per case, no time history
+            return fail(f"{path}: a sweep's file of {ds.attrs['n_cases']} cases (its table, summary or envelope), "
+                        "not the output of one run: the sweep's figures are drawn by `python -m postproc.sweep "
+                        "envelope SWEEP.nml` into its figures/; plot a case's own run: its trajectories/case_ID.nc "
+                        "(keep_ids, keep_worst), or airlaunch on the namelist `airlaunch-sweep SWEEP.nml "
+                        "--case-namelist ID` prints")
         scene = ds.attrs.get("scene", "")
         plotter = PLOTTERS.get(scene)
         if plotter is None:
@@ -175,7 +182,11 @@ def main(argv):
         try:
             plotter(ds, fig)
         except KeyError as exc:
-            return fail(f"{path}: variable {exc} is missing (an output written with trajectory = .false., or "
+            # xarray's KeyError reads "No variable named 'x'. Variables on the dataset include [...]"
+            text = str(exc.args[0]) if exc.args else ""
+            named = re.search(r"No variable named '([^']*)'", text)
+            name = repr(named.group(1)) if named else repr(text)
+            return fail(f"{path}: variable {name} is missing (an output written with trajectory = .false., or "
                         "not of this version of airlaunch?)")
         fig.suptitle(f"{ds.attrs.get('title', scene)} ({ds.attrs.get('status', '')})")
         fig.tight_layout()

@@ -225,6 +225,15 @@ def test_plot_script_names_what_it_cannot_draw_in_one_line(airlaunch_exe, tmp_pa
     text.write_text("not netCDF\n")
     bare = tmp_path / "bare.nc"
     xr.Dataset({"x": ("t", np.zeros(2))}).to_netcdf(bare)
+    # a sweep's summary (one row per case) handed to plot_run, and a line-scene file without its
+    # node positions: before, the first failed in the second's way, and the message quoted xarray's
+    # whole KeyError ("variable "No variable named 'line_node_position'. Variables on the dataset
+    # include [...]" is missing"; a new user's walkthrough)
+    summary = tmp_path / "summary.nc"
+    xr.Dataset({"status": ("case", np.zeros(2, dtype=np.int32))},
+               attrs={"scene": "line", "sweep_name": "s", "n_cases": 2, "inputs": "line%ea"}).to_netcdf(summary)
+    partial = tmp_path / "partial.nc"
+    xr.Dataset({"time": ("time", np.zeros(2))}, attrs={"scene": "line"}).to_netcdf(partial)
     dotted = tmp_path / "dir.x"
     dotted.mkdir()
     (dotted / "run").write_bytes(out.read_bytes())
@@ -235,6 +244,9 @@ def test_plot_script_names_what_it_cannot_draw_in_one_line(airlaunch_exe, tmp_pa
     for args, fragment in [((tmp_path / "missing.nc",), "missing.nc: no such file"),
                            ((text,), "text.nc: cannot read it as netCDF"),
                            ((bare,), "bare.nc: no figure for scene ''"),
+                           ((summary,), "summary.nc: a sweep's file of 2 cases (its table, summary or envelope), "
+                                        "not the output of one run"),
+                           ((partial,), "partial.nc: variable 'line_node_position' is missing (an output written"),
                            ((out, tmp_path / "nodir" / "f.png"), "f.png: its directory"),
                            ((out, tmp_path / "f.xyz"), "f.xyz: no figure format 'xyz' (give a name ending in one of"),
                            ((), "usage: plot_run.py OUTPUT.nc [FIGURE.png]"),
