@@ -30,9 +30,11 @@ module airlaunch_sweep_definition
   !> direction in which they get worse.
   !> (the airlaunch scene's five, then the line scene's own: load_sweep checks
   !> that it is one of the base scene's)
-  character(len=40), parameter :: worst_by_names(9) = [character(len=40) :: "min_clearance_m", &
+  !> (ground_speed_m_s, the touchdown speed, is both scenes' and comes last:
+  !> a scene's default is its first)
+  character(len=40), parameter :: worst_by_names(10) = [character(len=40) :: "min_clearance_m", &
     "min_line_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
-    "max_end_tension_a_N", "max_end_tension_b_N", "line_recoil_speed_m_s", "final_tip_speed_m_s"]
+    "max_end_tension_a_N", "max_end_tension_b_N", "line_recoil_speed_m_s", "final_tip_speed_m_s", "ground_speed_m_s"]
 
   !> One varied input.
   type :: sweep_input

@@ -118,7 +118,8 @@ contains
         else if (clearance) then
           ! a clearance never reached (the rocket never separated): the worst,
           ! as the envelope ranks it (its margin NaN fails); a NaN load or
-          ! speed is no event (no break: no recoil) and is not kept
+          ! speed is no event (no break: no recoil; no touchdown before t_end)
+          ! and is not kept
           key(k) = -huge(1.0_dp)
         end if
       end do

@@ -133,7 +133,51 @@ def test_worst_by_of_the_airlaunch_scene_is_refused(airdrop_sweep, tmp_path):
     assert res.stderr.strip().count("\n") == 0
     assert "&sweep: worst_by = 'min_clearance_m' is not allowed with a base scenario of scene 'line' (with " \
            "keep_worst > 0 it must be one of its summary variables: peak_line_tension_N, max_end_tension_a_N, " \
-           "max_end_tension_b_N, line_recoil_speed_m_s, final_tip_speed_m_s)" in res.stderr
+           "max_end_tension_b_N, line_recoil_speed_m_s, final_tip_speed_m_s, ground_speed_m_s)" in res.stderr
+
+
+def test_keep_worst_by_the_touchdown_speed(tmp_path):
+    """worst_by = 'ground_speed_m_s' keeps the fastest touchdowns: the airdrop's
+    platform leaves at 70 m/s at 1500 m onto grounds 6 to 18 m below while its
+    canopy (opening from 0.5 s) brakes it, so the nearer grounds see the faster
+    touchdowns; a ground 100 m below is not reached in the 3 s (NaN touchdown
+    speed: no event, not kept, as a sweep without a break keeps no recoil)."""
+    base = tmp_path / "drop.nml"
+    base.write_text((ROOT / "input" / "line_airdrop.nml").read_text()
+                    .replace("t_end = 200.0", "t_end = 3.0")
+                    .replace("a_kind = 'point_mass'", "a_kind = 'point_mass', ground = .true."))
+    definition = tmp_path / "touchdown.nml"
+    definition.write_text(f"""&sweep
+  name = 'touchdown'
+  base = '{base}'
+  output_dir = 'out'
+  design = 'grid'
+  keep_worst = 2
+  worst_by = 'ground_speed_m_s'
+/
+&input name = 'line_scene%ground_altitude', distribution = 'list', values = 1494.0, 1482.0, 1400.0, 1490.0, 1486.0,
+       units = 'm' /
+""")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        speed = s["ground_speed_m_s"].values
+        ground = s["line_scene%ground_altitude"].values
+    assert np.isnan(speed[ground == 1400.0]).all()
+    landed = ~np.isnan(speed)
+    assert landed.sum() == 4
+    # the touchdown speed rises with the ground's altitude (a nearer ground: less time to brake) ...
+    order = np.argsort(ground[landed])
+    assert (np.diff(speed[landed][order]) > 0).all()
+    # ... and the two kept are the two fastest, the two nearest grounds
+    fastest = sorted(np.flatnonzero(landed)[np.argsort(-speed[landed])[:2]].tolist())
+    assert fastest == sorted(np.flatnonzero(np.isin(ground, [1494.0, 1490.0])).tolist())
+    kept = sorted(int(p.stem.split("_")[1]) for p in (tmp_path / "out" / "trajectories").glob("case_*.nc"))
+    assert kept == fastest
+    for case in kept:
+        with xr.open_dataset(tmp_path / "out" / "trajectories" / f"case_{case:06d}.nc") as ds:
+            assert ds.attrs["ground_speed_m_s"] == speed[case]
 
 
 def test_invalid_and_failed_cases_of_a_line_sweep(tmp_path):
