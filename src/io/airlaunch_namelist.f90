@@ -438,7 +438,7 @@ contains
     do i = 1, size(self%groups)
       if (.not. any([(lower(trim(allowed(j))) == trim(self%groups(i)), j = 1, size(allowed))])) then
         call fatal_error(error, self%path // ":" // str(self%group_lines(i)) // ": unknown group &" // &
-          trim(self%groups(i)) // " (allowed: " // join(allowed) // ")")
+          trim(self%groups(i)) // " (allowed: " // join(allowed) // ")" // other_kind_hint(self%groups(i)))
         return
       end if
       do j = 1, i - 1
@@ -450,6 +450,21 @@ contains
       end do
     end do
   end subroutine nml_check_groups
+
+  !> For a scenario's unknown group that belongs to the package's other input
+  !> files, what that file is and where it goes ("" otherwise).
+  pure function other_kind_hint(group) result(hint)
+    character(len=*), intent(in) :: group   !< the group's name, lower case
+    character(len=:), allocatable :: hint
+    select case (trim(group))
+    case ("sweep", "input", "fixed")
+      hint = ": this is a sweep definition, run by scripts/sweep (docs/sweep.md)"
+    case ("criteria")
+      hint = ": this is a criteria file, named by a sweep's &sweep criteria (docs/sweep.md)"
+    case default
+      hint = ""
+    end select
+  end function other_kind_hint
 
   !> Every variable written in `group` must be one of `vars`.
   subroutine nml_check_group(self, group, vars, error)

@@ -119,7 +119,7 @@ contains
         n_fixed = n_fixed + 1
       case default
         call fatal_error(error, path // ":" // str(f%group_lines(i)) // ": unknown group &" // &
-          trim(f%groups(i)) // " (allowed: sweep, input, fixed)")
+          trim(f%groups(i)) // " (allowed: sweep, input, fixed)" // scenario_hint(f%groups(i)))
         return
       end select
     end do
@@ -684,4 +684,18 @@ contains
       s = s // trim(names(i))
     end do
   end function join
+  !> For a sweep definition's unknown group that is a scenario's, what the
+  !> file is and where it goes ("" otherwise).
+  pure function scenario_hint(group) result(hint)
+    character(len=*), intent(in) :: group   !< the group's name, lower case
+    character(len=:), allocatable :: hint
+    select case (trim(group))
+    case ("run", "flight", "aircraft", "bay", "rocket", "parachute", "line", "gust", "line_scene", "store")
+      hint = ": this looks like a scenario, run by airlaunch, or named as a sweep's &sweep base (docs/sweep.md)"
+    case ("criteria")
+      hint = ": this is a criteria file, named by a sweep's &sweep criteria (docs/sweep.md)"
+    case default
+      hint = ""
+    end select
+  end function scenario_hint
 end module airlaunch_sweep_definition

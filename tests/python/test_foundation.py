@@ -192,6 +192,26 @@ def test_a_missing_closing_quote_is_found_on_its_line(airlaunch_exe, tmp_path):
                        "value must end with its ' on the same line)", out)
 
 
+@pytest.mark.parametrize("program, file, hint", [
+    ("airlaunch", "sweep_paper.nml", "unknown group &sweep (allowed: run, flight, aircraft, bay, rocket, parachute, "
+     "line, gust): this is a sweep definition, run by scripts/sweep (docs/sweep.md)"),
+    ("airlaunch", "criteria_paper.nml", "unknown group &criteria (allowed: run, flight, aircraft, bay, rocket, "
+     "parachute, line, gust): this is a criteria file, named by a sweep's &sweep criteria (docs/sweep.md)"),
+    ("airlaunch-sweep", "airlaunch_paper.nml", "unknown group &run (allowed: sweep, input, fixed): this looks like "
+     "a scenario, run by airlaunch, or named as a sweep's &sweep base (docs/sweep.md)"),
+    ("airlaunch-sweep", "line_airdrop.nml", "unknown group &run (allowed: sweep, input, fixed): this looks like "
+     "a scenario"),
+])
+def test_another_kind_of_input_file_is_named(airlaunch_exe, tmp_path, program, file, hint):
+    """The package's three kinds of input file (scenario, sweep definition,
+    criteria) given to the wrong program: the one-line error says what the file
+    is and where it goes."""
+    res = subprocess.run([str(airlaunch_exe.parent / program), str(ROOT / "input" / file), "--check"],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert res.returncode == 2
+    assert res.stderr.count("\n") == 1 and hint in res.stderr, res.stderr
+
+
 def test_unknown_group_and_missing_file(airlaunch_exe, tmp_path):
     nml = write(tmp_path / "g.nml", "&run scene='drop' /\n&stor mass=1.0 /\n")
     res = run_airlaunch(airlaunch_exe, nml)
