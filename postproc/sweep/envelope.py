@@ -56,7 +56,9 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
     rel = np.where(np.isnan(relative[:-1]), -np.inf, relative[:-1])
     relative[-1] = rel.min(axis=0)
     worst = np.where(ok, np.array(names[:-1])[rel.argmin(axis=0)], "not computed")
-    ds = xr.Dataset(coords={"case": summary["case"], "criterion": ("criterion", names)})
+    ds = xr.Dataset(coords={"case": summary["case"],
+                            "criterion": ("criterion", names,
+                                          {"long_name": "criterion (the criteria file's, then 'all': every one)"})})
     for name in input_names(summary):
         ds[name] = summary[name]
     ds["status"] = summary["status"]
@@ -69,10 +71,14 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
                              {"long_name": "margin / criterion scale ('all': the smallest; -inf: not computed)",
                               "units": "1"})
     ds["worst_criterion"] = (("case",), worst.astype(str), {"long_name": "criterion with the smallest relative margin"})
-    ds["criterion_units"] = (("criterion",), np.array([c.units for c in criteria] + ["1"]))
-    ds["criterion_scale"] = (("criterion",), np.array([c.scale for c in criteria] + [1.0]))
+    ds["criterion_units"] = (("criterion",), np.array([c.units for c in criteria] + ["1"]),
+                             {"long_name": "units of each criterion's margins"})
+    ds["criterion_scale"] = (("criterion",), np.array([c.scale for c in criteria] + [1.0]),
+                             {"long_name": "scale of the criterion's margins (relative_margin = margin / scale)",
+                              "units": "criterion units (see criterion_units)"})
     ds["criterion_description"] = (("criterion",), np.array([c.description for c in criteria]
-                                                           + ["every criterion above"]))
+                                                           + ["every criterion above"]),
+                                   {"long_name": "what the criterion asks"})
     k = passed.sum(axis=1)
     n_all = np.full(len(names), n)
     p = k / n_all

@@ -161,7 +161,8 @@ def sensitivity(env: xr.Dataset) -> xr.Dataset:
             spearman[i, varies], prcc[i, varies] = rank_correlations(x[:, varies], y)
             srrc[i, varies], r2[i] = rank_regression(x[:, varies], y)
     low, high = fisher_interval(prcc, n, k - 1)
-    ds = xr.Dataset(coords={"criterion": env["criterion"], "input": ("input", np.array(inputs))})
+    ds = xr.Dataset(coords={"criterion": env["criterion"],
+                            "input": ("input", np.array(inputs), {"long_name": "varied input (group%variable)"})})
     ds["spearman"] = (("criterion", "input"), spearman,
                       {"long_name": "Spearman rank correlation of the margin with the input (cases computed; "
                                     "'all': the smallest relative margin)", "units": "1"})

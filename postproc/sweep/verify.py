@@ -261,7 +261,8 @@ def verify(env, criteria, scene, ids, definition, sweep_exe, exe, work, segments
     passed_sweep = sel["passed"].sel(criterion=names).values.astype(bool)
     passed_refined = np.where(np.isnan(margin_refined), False, margin_refined >= 0.0)
     scale = np.array([c.scale for c in criteria])[:, None]
-    ds = xr.Dataset(coords={"case": ("case", np.asarray(ids)), "criterion": ("criterion", names)})
+    ds = xr.Dataset(coords={"case": ("case", np.asarray(ids)),
+                            "criterion": ("criterion", names, {"long_name": "criterion (the criteria file's)"})})
     for name in env.attrs["inputs"].split():
         ds[name] = sel[name]
     ds["margin_sweep"] = (("criterion", "case"), margin_sweep,

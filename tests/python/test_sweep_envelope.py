@@ -76,6 +76,25 @@ def test_margins_are_their_formulas():
     assert list(passed) == list((a >= 0.5) & (pitch >= 75.0))
 
 
+def test_every_envelope_variable_is_described():
+    """envelope.nc describes each variable it makes, as the run outputs and
+    verify.nc do (docs/output.md: every variable and coordinate has a long_name;
+    numbers have units): criterion_units, criterion_scale, criterion_description
+    and the coordinates criterion and input had neither (an audit of the output
+    files, thirty-second session; ncdump -h showed them bare).  The inputs and
+    status are the summary's own, copied."""
+    a = np.linspace(0, 1, 7)
+    env = evaluate(synthetic_summary(a, 1.0 - a, 1.5 + a), parse_criteria(CRITERIA))
+    made = [name for name in env.variables if name not in ("a", "b", "status", "case")]
+    assert {"criterion", "input", "criterion_units", "criterion_scale", "criterion_description"} <= set(made)
+    for name in made:
+        var = env[name]
+        assert var.attrs.get("long_name"), f"{name} has no long_name"
+        assert var.dtype.kind in "OSU" or var.attrs.get("units"), f"{name} has no units"
+    # the scale is in the criterion's units, as the margin; the relative margin is margin / scale
+    assert env["criterion_scale"].attrs["units"] == env["margin"].attrs["units"]
+
+
 def test_boundary_of_the_safe_region_is_recovered():
     """Pass iff b > 0.3 + 0.4 a^2 (a, b on a Latin hypercube): the 0.5 level of
     the estimated pass probability lies within 0.05 of the curve, and the map

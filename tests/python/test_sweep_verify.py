@@ -57,7 +57,8 @@ def test_unrefined_rerun_is_the_summary_row(paper_sweep):
         assert np.isfinite(clearance).any() and np.isnan(firing).all()   # both kinds compared
         # every variable described, as in the other outputs (docs/output.md); numbers with units
         # (the margins' and differences' were missing: found by an audit, thirty-first session)
-        for name, var in ds.data_vars.items():
+        # (and the coordinate criterion: bare before the thirty-second session's audit)
+        for name, var in ds.variables.items():
             assert var.attrs.get("long_name"), f"{name} has no long_name"
             assert var.dtype.kind in "OSU" or var.attrs.get("units"), f"{name} has no units"
     assert "0 of 6 case(s) change pass/fail" in res.stdout
