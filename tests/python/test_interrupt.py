@@ -73,6 +73,11 @@ def test_sigint_ends_the_line_scene_with_its_output(airlaunch_exe, tmp_path):
     nml.write_text(text)
     t_stop = _check(airlaunch_exe, nml, tmp_path / "line.nc", signal.SIGINT, "SIGINT")
     assert 0.0 <= t_stop < 6000.0
+    # docs/line.md lists the line scene's status values: "interrupted" among them (it gave
+    # "completed" | "failed" only: an audit of the output files, thirty-second session)
+    doc = (ROOT / "docs" / "line.md").read_text()
+    listed = re.search(r"`status`\s*\(([^)]*)\)", doc)
+    assert listed and '"interrupted"' in listed.group(1), listed and listed.group(1)
 
 
 def test_sigterm_ends_the_launch_scene_with_its_output(airlaunch_exe, tmp_path):

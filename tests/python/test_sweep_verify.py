@@ -62,6 +62,15 @@ def test_unrefined_rerun_is_the_summary_row(paper_sweep):
             assert var.attrs.get("long_name"), f"{name} has no long_name"
             assert var.dtype.kind in "OSU" or var.attrs.get("units"), f"{name} has no units"
     assert "0 of 6 case(s) change pass/fail" in res.stdout
+    # docs/sweep.md's description of verify.nc names every variable the file has
+    # (criterion_units was missing: an audit of the output files, thirty-second session)
+    doc = (ROOT / "docs" / "sweep.md").read_text()
+    what = doc[doc.index("**What**: `verify.nc`"):]
+    what = what[:what.index("Printed:")]
+    with xr.open_dataset(tmp / "out" / "verify.nc") as ds:
+        inputs = set(str(ds.attrs.get("inputs", "")).split()) | {n for n in ds.data_vars if "%" in n}
+        for name in set(ds.variables) - inputs - {"case", "criterion"}:
+            assert f"`{name}`" in what, f"docs/sweep.md does not describe verify.nc's {name}"
 
 
 def test_line_scene_unrefined_rerun_is_the_summary_row(tmp_path):
