@@ -64,6 +64,8 @@ def test_drop_without_drag_is_a_parabola(airlaunch_exe, tmp_path):
         np.testing.assert_allclose(pos[:, 0], v0 * t, rtol=1e-6)
         # the event is located by root finding, not at an output sample
         assert ds.attrs["fall_time_s"] == pytest.approx(np.sqrt(2 * 500.0 / G0), abs=1e-6)
+        # the run ends there and its last record is that instant, off the output grid (output.md)
+        assert t[-1] == ds.attrs["fall_time_s"]
 
 
 def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
