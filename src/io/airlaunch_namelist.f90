@@ -593,6 +593,14 @@ contains
             " is not allowed (not a finite number)")
           return
         end if
+        if (.not. all_normal(v)) then
+          ! e.g. a stop time 1e-310 after t = 0: CVODE's first step is subnormal,
+          ! 1/h overflows and CVode does not return
+          call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // v // &
+            " is not allowed (a subnormal number, 0 < |x| < 2.2e-308: too small to compute with; give 0 or " // &
+            "a normal number)")
+          return
+        end if
       end select
       select case (var%kind)
       case ("real", "real_list", "real3", "integer", "integer_list")
@@ -1110,6 +1118,23 @@ contains
       call next_item(v, last + 1, first, last)
     end do
   end function all_finite
+
+  !> Every value of the (finite) list is 0 or normal: none subnormal, 0 < |x| < tiny.
+  logical function all_normal(v) result(ok)
+    character(len=*), intent(in) :: v
+    integer :: first, last, star, ios
+    real(dp) :: x
+    ok = .true.
+    call next_item(v, 1, first, last)
+    do while (first > 0)
+      star = index(v(first:last), "*")
+      if (first + star <= last) then
+        read(v(first+star:last), *, iostat=ios) x
+        if (ios == 0) ok = ok .and. (x == 0.0_dp .or. abs(x) >= tiny(x))
+      end if
+      call next_item(v, last + 1, first, last)
+    end do
+  end function all_normal
 
   !> Comma-separated list of names.
   pure function join(names) result(s)

@@ -98,6 +98,9 @@ def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
     # a tab before a name hid the assignment from the checks (here: the second value)
     ("mass = 28000.0,\n\tmass = 2800.0", "'mass' = 2800.0 is assigned a second time (first at line 3: 28000.0)"),
     ("mass = 100.0, altitude = -Inf", "'altitude' = -Inf is not allowed (not a finite number)"),
+    # a subnormal number passes "> 0"; as a stop time (deploy_time, break_time) it hung CVode
+    # (test_line_airdrop.py)
+    ("mass = 1.0e-310", "'mass' = 1.0e-310 is not allowed (a subnormal number, 0 < |x| < 2.2e-308"),
     # Fortran's namelist read would keep the second value without a word
     ("mass = 28000.0, drag_area = 10.0,\n mass = 2800.0",
      "'mass' = 2800.0 is assigned a second time (first at line 3: 28000.0)"),

@@ -13,6 +13,7 @@ Independent references:
   positive (+ (3/2) (dm_a/dt) v^2)."""
 import math
 import re
+import subprocess
 
 import numpy as np
 import pytest
@@ -131,3 +132,34 @@ def test_a_line_below_the_atmosphere_model_stops_the_run(airlaunch_exe, tmp_path
         assert ds.attrs["status"] == "failed" and "outside the atmosphere model" in ds.attrs["failure"]
         assert ds["line_node_position"].values[-1, :, 1].min() >= -2000.0
         assert ds["time"].values[-1] > 300.0
+
+
+@pytest.mark.parametrize("group,edit", [
+    ("&parachute", ("  deploy_time = 0.5 ", "  deploy_time = 1.0e-310 ")),
+    ("&line", ("  n_seg = 10\n", "  n_seg = 10\n  break_time = 1.0e-310\n")),
+])
+def test_a_subnormal_stop_time_is_refused_not_hung(airlaunch_exe, tmp_path, group, edit):
+    """A stop time a subnormal distance after t = 0 (`deploy_time`, `break_time`
+    = 1e-310: > 0, so allowed by their ranges) made CVODE's first step
+    subnormal, 1/h overflowed, and CVode never returned (found by an audit: the
+    line scene spun inside CVode, where SIGTERM is not looked at; the air-launch
+    scene's deployment at 4.9e-324 failed with an aircraft altitude of NaN).  A
+    subnormal input is now refused when read, one line naming file, group,
+    variable and value, exit 2, as a non-finite one is; the timeout turns the
+    hang into a failure here."""
+    text = AIRDROP.read_text()
+    assert text.count(edit[0]) == 1, edit[0]
+    nml = tmp_path / "subnormal.nml"
+    nml.write_text(text.replace(edit[0], edit[1]))
+    out = tmp_path / "subnormal.nc"
+    try:
+        res = subprocess.run([str(airlaunch_exe), str(nml), "--output", str(out)], capture_output=True, text=True,
+                             timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail("the run did not end within 60 s (a run of the example takes 0.06 s)")
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1, res.stderr
+    assert f"{nml}:" in lines[0] and f"{group}: " in lines[0], lines[0]
+    assert "= 1.0e-310 is not allowed (a subnormal number" in lines[0], lines[0]
+    assert not out.exists()
