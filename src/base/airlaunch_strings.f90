@@ -31,6 +31,10 @@ contains
       if (s(len(s):len(s)) == '.') s = s // '0'
       if (s(1:1) == '.') s = '0' // s
       if (s(1:2) == '-.') s = '-0' // s(2:)
+    else if (abs(x) < 1.0e-99_dp .or. abs(x) >= 1.0e100_dp) then
+      ! three exponent digits: es16.8 would drop the E (1.00000000+300)
+      write(buf, '(es17.8e3)') x
+      s = trim(adjustl(buf))
     else
       write(buf, '(es16.8)') x
       s = trim(adjustl(buf))

@@ -101,6 +101,8 @@ def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
     # a subnormal number passes "> 0"; as a stop time (deploy_time, break_time) it hung CVode
     # (test_line_airdrop.py)
     ("mass = 1.0e-310", "'mass' = 1.0e-310 is not allowed (a subnormal number, 0 < |x| < 2.2e-308"),
+    # a three-digit exponent was printed without its E (es16.8): "-2.50000000-150", read as a difference
+    ("mass = -2.5e-150", "mass = -2.50000000E-150 is not allowed (must be > 0 kg)"),
     # Fortran's namelist read would keep the second value without a word
     ("mass = 28000.0, drag_area = 10.0,\n mass = 2800.0",
      "'mass' = 2800.0 is assigned a second time (first at line 3: 28000.0)"),
