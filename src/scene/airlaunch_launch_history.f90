@@ -288,15 +288,14 @@ contains
     nrec = self%nrec
       call w%add_dim("time", self%time(1:nrec), "s", "time since the start (trimmed flight)", werr)
       call w%add_dim("xyz", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
-        "earth-frame component: 0 = x forward, 1 = y up, 2 = z right", werr)
+        "component: 0 = x forward, 1 = y up, 2 = z right (earth), or rocket axes 0 = x, 1 = y, 2 = z " // &
+        "(constraint_moment)", werr)
       call w%add_dim("angle", [0.0_dp, 1.0_dp, 2.0_dp], "1", "Euler angle: 0 = yaw, 1 = pitch, 2 = roll", werr)
       if (self%has_line) then
         n = ubound(self%nodes, 2)
         node_index = [(real(j, dp), j = 0, n)]
         call w%add_dim("node", node_index, "1", "line node: 0 = rocket tie-down, N = parachute", werr)
       end if
-      call w%add_dim("wrench", [0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp], "1", &
-        "0-2 force on the rocket (earth x, y, z), 3-5 moment on the rocket about its CG (rocket axes)", werr)
       call w%add_var_1d("phase", ["time"], self%phase(1:nrec), "1", "phase: 0 locked, 1 rail extraction, " // &
         "2 rotation on the ramp edge, 3 free flight", werr)
       call w%add_var_2d("aircraft_position", ["xyz ", "time"], self%ac_pos(:, 1:nrec), "m", "aircraft CG, earth frame", werr)
@@ -326,8 +325,12 @@ contains
         call w%add_var_3d("line_nodes", ["xyz ", "node", "time"], self%nodes(:, :, 1:nrec), "m", &
           "line node positions" // line_text // ", earth frame", werr)
       end if
-      call w%add_var_2d("constraint_force", ["wrench", "time  "], self%cforce(:, 1:nrec), "N or N m", &
-        "cut-joint constraint wrench R_H on the rocket (CFA)", werr)
+      ! the wrench R_H as two variables of one unit each (one "N or N m"
+      ! variable parses in no unit library: UDUNITS-2, pint, CF checkers)
+      call w%add_var_2d("constraint_force", ["xyz ", "time"], self%cforce(1:3, 1:nrec), "N", &
+        "cut-joint constraint force of R_H on the rocket (CFA), earth frame", werr)
+      call w%add_var_2d("constraint_moment", ["xyz ", "time"], self%cforce(4:6, 1:nrec), "N m", &
+        "cut-joint constraint moment of R_H on the rocket about its CG (CFA), rocket axes (0 = x, 1 = y, 2 = z)", werr)
       call w%add_var_1d("edge_normal_force_N", ["time"], self%normal(1:nrec), "N", &
         "contact normal force of the rail / ramp edge on the rocket", werr)
       call w%add_var_1d("friction_force_N", ["time"], self%friction(1:nrec), "N", &

@@ -104,6 +104,7 @@ module airlaunch_line_scene
     real(dp), allocatable :: tensions(:, :)          !< segment tensions (N, n_out) [N]
     real(dp), allocatable :: tip(:, :)               !< node N position (3, n_out) [m]
     real(dp), allocatable :: tip_velocity(:, :)      !< node N velocity (3, n_out) [m/s]
+    real(dp), allocatable :: end_velocity(:, :, :)   !< node 0 / node N velocity (3, 2, n_out) [m/s]
     real(dp), allocatable :: end_tension(:, :)       !< T_1 and T_N (2, n_out) [N]
     real(dp), allocatable :: end_force(:, :, :)      !< force of the line on node 0 / node N (3, 2, n_out) [N]
     real(dp), allocatable :: energy(:, :)            !< kinetic, elastic, potential (3, n_out) [J]
@@ -252,13 +253,13 @@ contains
     if (allocated(error)) return
 
     n_max = ceiling(cfg%t_end/cfg%output_interval - 1.0e-9_dp) + 1
-    allocate(self%time(n_max), self%tip(3, n_max), self%tip_velocity(3, n_max), &
+    allocate(self%time(n_max), self%tip(3, n_max), self%tip_velocity(3, n_max), self%end_velocity(3, 2, n_max), &
       self%end_tension(2, n_max), self%end_force(3, 2, n_max), self%energy(3, n_max), self%rigid(n_max), stat=st)
     if (st == 0 .and. cfg%record_nodes) allocate(self%nodes(3, 0:n, n_max), stat=st)
     if (st == 0 .and. cfg%record_tensions) allocate(self%tensions(n, n_max), stat=st)
     if (st /= 0) then
-      ! (a record: 18 reals, the equivalent rigid body, 3 per node, 1 per segment)
-      call refuse_records(error, cfg%output_interval, n_max, real(n_max, dp)*(8.0_dp*18 + &
+      ! (a record: 24 reals, the equivalent rigid body, 3 per node, 1 per segment)
+      call refuse_records(error, cfg%output_interval, n_max, real(n_max, dp)*(8.0_dp*24 + &
         storage_size(self%rigid)/8.0_dp + merge(24.0_dp*(n + 1), 0.0_dp, cfg%record_nodes) + &
         merge(8.0_dp*n, 0.0_dp, cfg%record_tensions)))
       return
@@ -596,6 +597,8 @@ contains
     self%time(m) = t
     self%tip(:, m) = self%x(:, n)
     self%tip_velocity(:, m) = self%v(:, n)
+    self%end_velocity(:, 1, m) = self%v(:, 0)
+    self%end_velocity(:, 2, m) = self%v(:, n)
     if (self%recoil_open .and. t <= self%recoil_end) call take_recoil(self)
     self%end_tension(:, m) = [self%tension(1), self%tension(n)]
     self%end_force(:, 1, m) = self%f(:, 0)
@@ -631,6 +634,7 @@ contains
     if (allocated(self%time)) deallocate(self%time)
     if (allocated(self%tip)) deallocate(self%tip)
     if (allocated(self%tip_velocity)) deallocate(self%tip_velocity)
+    if (allocated(self%end_velocity)) deallocate(self%end_velocity)
     if (allocated(self%end_tension)) deallocate(self%end_tension)
     if (allocated(self%end_force)) deallocate(self%end_force)
     if (allocated(self%energy)) deallocate(self%energy)
@@ -1180,6 +1184,8 @@ contains
       "position of node N (end b), earth frame", error)
     call w%add_var_2d("line_tip_velocity", ["xyz ", "time"], scene%tip_velocity(:, 1:m), "m s-1", &
       "velocity of node N (end b), earth frame", error)
+    call w%add_var_3d("line_end_velocity", ["xyz ", "end ", "time"], scene%end_velocity(:, :, 1:m), "m s-1", &
+      "velocity of the end nodes (node 0 at end a, node N at end b), earth frame", error)
     allocate(r1(m), r3(3, m))
     r1 = scene%energy(1, 1:m)
     call w%add_var_1d("line_energy_kinetic", ["time"], r1, "J", &

@@ -111,7 +111,7 @@ contains
     call w%add_text_att("/", "criteria", def%criteria, error)
     call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
     call w%add_text_att("/", "created", trim(stamp), error)
-    call w%add_text_att("/", "conventions", "one row per case, sorted by case id; NaN: event not reached or " // &
+    call w%add_text_att("/", "comment", "one row per case, sorted by case id; NaN: event not reached or " // &
       "value not defined; metrics of failed cases are those up to the failure; invalid_input: the scenario " // &
       "reader rejected the case's values (message in failure)", error)
     if (allocated(error)) then

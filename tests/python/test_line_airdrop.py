@@ -59,6 +59,13 @@ def test_the_airdrop_opens_and_settles_into_the_steady_descent(airlaunch_exe, tm
         # balance by 3e-5) and CVODE's tolerance (rtol 1e-5 on a state that no longer
         # changes) within 1e-4; measured 2.7e-6
         assert -v[-1, 1] == pytest.approx(v_t, rel=1e-4), (v[-1], v_t)
+        # the end nodes' velocities: end b is the tip (node N) bit for bit; end a, the
+        # platform, descends with the canopy at the same steady rate (the same 1e-4)
+        ends = ds["line_end_velocity"].values        # (time, end, xyz)
+        np.testing.assert_array_equal(ends[:, 1], v)
+        assert -ends[-1, 0, 1] == pytest.approx(v_t, rel=1e-4), (ends[-1, 0], v_t)
+        # and left the aircraft with its exit velocity (the record at t = 0)
+        np.testing.assert_array_equal(ends[0, 0], [value("a_velocity"), 0.0, 0.0])
         # the forward motion is gone (70 m/s at the exit): what is left is the swing's, at most
         # 2 pi / 10 s x 0.16 m = 0.1 m/s at the platform and far less at the canopy, which
         # with its apparent mass (5.7 t) sits near the pivot: bound 1 % of v_t (0.057 m/s),
@@ -104,6 +111,10 @@ def test_the_platform_touches_down_at_the_steady_descent_rate(airlaunch_exe, tmp
         y0 = ds["line_node_position"].values[:, 0, 1]
         assert abs(y0[-1]) < 1e-6 and np.all(y0[:-1] > 0.0)
         assert ds.attrs["ground_speed_m_s"] == pytest.approx(v_t, rel=1e-4)
+        # the touchdown speed is the platform's (node 0, end a) at the event, the last record
+        # (Fortran's norm2 and numpy's norm may round the last bit apart)
+        assert np.linalg.norm(ds["line_end_velocity"].values[-1, 0]) == pytest.approx(
+            ds.attrs["ground_speed_m_s"], rel=1e-15)
     assert f"ground (0.0 m): reached by node 0 at t = " in res.stdout, res.stdout
 
 

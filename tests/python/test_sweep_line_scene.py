@@ -36,6 +36,10 @@ def test_rows_are_the_single_runs_of_the_cases(airdrop_sweep):
     tmp, summary = airdrop_sweep
     with xr.open_dataset(summary) as s:
         assert s.attrs["scene"] == "line"
+        # no attribute that CF readers (netCDF-Java, Panoply: case-insensitive) take for the
+        # file's Conventions: the rows' reading guide is a comment
+        assert [k for k in s.attrs if k.lower() == "conventions"] == []
+        assert s.attrs["comment"].startswith("one row per case, sorted by case id")
         assert (s["status"].values == 0).all() and (s["completed"].values == 1).all()
         for case in (0, 3, 5):
             nml = tmp / f"case_{case}.nml"

@@ -1,0 +1,67 @@
+"""Every `units` attribute of a run's output is a unit string that unit
+libraries read: UDUNITS-2 (which CF tools use) and pint (pint-xarray's
+`quantify`) reject the whole file's quantification on one string they cannot
+parse, as the air-launch scene's `N or N m` was before version 0.2.0.
+
+The reference is the UDUNITS-2 grammar for the strings these files need: "1",
+or a product of unit symbols separated by blanks, each with an optional
+integer power written after it ("m s-2", "kg m2", "degree s-1"), the symbols
+taken from the UDUNITS-2 SI and accepted-unit tables (the library is not a
+dependency of the suite).
+"""
+import re
+
+import pytest
+import xarray as xr
+
+from conftest import ROOT, run_airlaunch
+
+#: unit symbols of UDUNITS-2's SI base/derived and accepted tables that a
+#: dynamics output may use
+UDUNITS_SYMBOLS = {"m", "s", "kg", "N", "J", "W", "Pa", "K", "rad", "degree", "sr"}
+TERM = r"([A-Za-z]+)(-?[0-9]+)?"
+UNITS = re.compile(rf"^(1|{TERM}( {TERM})*)$")
+
+
+def bad_units(ds):
+    """The (variable, units) pairs of `ds` that are not such a string."""
+    bad = []
+    for name, var in {**ds.variables}.items():
+        units = var.attrs.get("units")
+        if units is None:
+            continue
+        ok = UNITS.match(units) is not None and all(
+            symbol in UDUNITS_SYMBOLS for symbol, _ in re.findall(TERM, units) if units != "1")
+        if not ok:
+            bad.append((name, units))
+    return bad
+
+
+@pytest.mark.parametrize("example, edits", [
+    ("airlaunch_paper.nml", ()),
+    ("airlaunch_gravity_drop.nml", ()),
+    ("line_airdrop.nml", (("t_end = 200.0", "t_end = 2.0"),)),
+    ("drop_demo.nml", ()),
+])
+def test_every_unit_string_parses(airlaunch_exe, tmp_path, example, edits):
+    text = (ROOT / "input" / example).read_text()
+    for old, new in edits:
+        assert old in text
+        text = text.replace(old, new)
+    nml = tmp_path / example
+    nml.write_text(text)
+    out = tmp_path / "run.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        assert len(ds.variables) >= 5
+        assert bad_units(ds) == []
+
+
+def test_the_rule_rejects_what_it_must():
+    """The grammar above refuses the strings it exists to catch."""
+    ds = xr.Dataset({"a": ((), 0.0, {"units": "N or N m"}), "b": ((), 0.0, {"units": "m s-1"}),
+                     "c": ((), 0.0, {"units": "criterion units (see criterion_units)"}),
+                     "d": ((), 0.0, {"units": "1"}), "e": ((), 0.0, {"units": "degree s-1"}),
+                     "f": ((), 0.0, {"units": "furlong"})})
+    assert bad_units(ds) == [("a", "N or N m"), ("c", "criterion units (see criterion_units)"), ("f", "furlong")]
