@@ -102,9 +102,12 @@ def plot_airlaunch(ds, fig):
 
 
 def plot_line(ds, fig):
-    """Standalone line: the line's shape at a few times and its end tensions."""
+    """Standalone line: the line's shape at a few times, its end tensions and,
+    where the file has them (version 0.2.0 on), its ends' speeds - an airdrop's
+    platform and canopy - with the touchdown marked."""
     pos = ds["line_node_position"]
-    ax1 = fig.add_subplot(1, 2, 1)
+    speeds = "line_end_velocity" in ds
+    ax1 = fig.add_subplot(1, 3 if speeds else 2, 1)
     for k in np.linspace(0, ds.sizes["time"] - 1, 6).astype(int):
         p = pos.isel(time=k)
         ax1.plot(p.sel(xyz=0), p.sel(xyz=1), ".-", ms=2, label=f"t = {float(ds['time'][k]):.2f} s")
@@ -114,7 +117,7 @@ def plot_line(ds, fig):
     ax1.axis("equal")
     ax1.grid(True)
     ax1.legend(fontsize=7)
-    ax2 = fig.add_subplot(1, 2, 2)
+    ax2 = fig.add_subplot(1, 3 if speeds else 2, 2)
     ten = ds["line_end_tension"]
     for k in range(ten.shape[-1]):
         ax2.plot(ds["time"], ten.isel({ten.dims[-1]: k}), label=f"end {'ab'[k] if k < 2 else k}")
@@ -122,6 +125,24 @@ def plot_line(ds, fig):
     ax2.set_ylabel("end tension [N]")
     ax2.grid(True)
     ax2.legend(fontsize=7)
+    if not speeds:
+        return
+    ax3 = fig.add_subplot(1, 3, 3)
+    vel = ds["line_end_velocity"]
+    for k, name in enumerate("ab"):
+        v = vel.isel(end=k)
+        ax3.plot(ds["time"], np.sqrt((v ** 2).sum("xyz")), label=f"end {name}: speed")
+        ax3.plot(ds["time"], -v.sel(xyz=1), ":", label=f"end {name}: descent rate")
+    t_ground = float(ds.attrs.get("ground_time_s", -1.0))
+    if t_ground >= 0:
+        ax3.axvline(t_ground, color="0.5", ls="--", lw=0.8)
+        ax3.text(t_ground, ax3.get_ylim()[1], f" touchdown {float(ds.attrs['ground_speed_m_s']):.2f} m/s",
+                 rotation=90, va="top", fontsize=7, color="0.3")
+    ax3.set_xlabel("time [s]")
+    ax3.set_ylabel("[m/s]")
+    ax3.set_title("end speeds")
+    ax3.grid(True)
+    ax3.legend(fontsize=7)
 
 
 PLOTTERS = {"drop": plot_drop, "airlaunch": plot_airlaunch, "line": plot_line}
@@ -178,7 +199,7 @@ def main(argv):
         if plotter is None:
             return fail(f"{path}: no figure for scene '{scene}' (the file's 'scene' attribute must be one of "
                         f"{', '.join(PLOTTERS)}: is it an airlaunch output?)")
-        fig = plt.figure(figsize=(16, 5) if scene == "airlaunch" else (11, 4.5))
+        fig = plt.figure(figsize=(16, 5) if scene == "airlaunch" or "line_end_velocity" in ds else (11, 4.5))
         try:
             plotter(ds, fig)
         except KeyError as exc:

@@ -14,10 +14,12 @@ Independent references:
 import math
 import re
 import subprocess
+import sys
 
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib import image
 
 from conftest import ROOT, nml_scalar, run_airlaunch
 
@@ -116,6 +118,27 @@ def test_the_platform_touches_down_at_the_steady_descent_rate(airlaunch_exe, tmp
         assert np.linalg.norm(ds["line_end_velocity"].values[-1, 0]) == pytest.approx(
             ds.attrs["ground_speed_m_s"], rel=1e-15)
     assert f"ground (0.0 m): reached by node 0 at t = " in res.stdout, res.stdout
+
+
+def test_the_figure_draws_the_end_speeds(airlaunch_exe, tmp_path):
+    """plot_run.py draws a line run's figure with the ends' speeds (a third panel,
+    version 0.2.0's line_end_velocity), and a file of an earlier version without
+    that variable with the first two panels alone."""
+    text = AIRDROP.read_text().replace("  t_end = 200.0", "  t_end = 5.0", 1)
+    nml = tmp_path / "short.nml"
+    nml.write_text(text)
+    out = tmp_path / "short.nc"
+    assert run_airlaunch(airlaunch_exe, nml, "--output", out).returncode == 0
+    old = tmp_path / "old.nc"
+    with xr.open_dataset(out) as ds:
+        ds.drop_vars("line_end_velocity").to_netcdf(old)
+    for path, width in ((out, 16), (old, 11)):
+        fig = path.with_suffix(".png")
+        res = subprocess.run([sys.executable, str(ROOT / "postproc" / "plot_run.py"), str(path), str(fig)],
+                             capture_output=True, text=True, timeout=120)
+        assert res.returncode == 0, res.stderr
+        # (the figure's width: 16 inches at plot_run's 110 dpi with three panels, 11 with two)
+        assert image.imread(fig).shape[1] == width * 110
 
 
 def test_a_line_below_the_atmosphere_model_stops_the_run(airlaunch_exe, tmp_path):
