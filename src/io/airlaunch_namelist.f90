@@ -53,6 +53,8 @@ module airlaunch_namelist
   integer, parameter, public :: max_list_items = 4096
   !> Largest file read as a namelist [bytes] (the paper scenario: 5.6 kB)
   integer, parameter :: max_file_size = 16*1024*1024
+  !> value_class: what the values of a real list read as
+  integer, parameter :: normal_values = 0, subnormal = 1, not_finite = 2
 
   !> A scanned namelist file.
   type :: nml_file
@@ -588,19 +590,19 @@ contains
       end if
       select case (var%kind)
       case ("real", "real_list", "real3")
-        if (.not. all_finite(v)) then
+        select case (value_class(v))
+        case (not_finite)
           call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // v // &
             " is not allowed (not a finite number)")
           return
-        end if
-        if (.not. all_normal(v)) then
+        case (subnormal)
           ! e.g. a stop time 1e-310 after t = 0: CVODE's first step is subnormal,
           ! 1/h overflows and CVode does not return
           call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // v // &
             " is not allowed (a subnormal number, 0 < |x| < 2.2e-308: too small to compute with; give 0 or " // &
             "a normal number)")
           return
-        end if
+        end select
       end select
       select case (var%kind)
       case ("real", "real_list", "real3", "integer", "integer_list")
@@ -1085,7 +1087,7 @@ contains
   end function count_values
 
   !> Every value of a list has the form of a number (repeat counts `k*v` and
-  !> null values `k*` allowed; called after `all_finite`, so no NaN or Inf).
+  !> null values `k*` allowed; called after `value_class`, so no NaN or Inf).
   logical function all_numbers(v) result(ok)
     character(len=*), intent(in) :: v
     integer :: first, last, star
@@ -1100,41 +1102,32 @@ contains
     end do
   end function all_numbers
 
-  !> No value of a list (repeat counts allowed) reads as NaN or infinity;
-  !> values that do not read as numbers are left to `diagnose`.
-  logical function all_finite(v) result(ok)
+  !> What the values of a list (repeat counts allowed) read as: one NaN or
+  !> infinite (not_finite) before one subnormal, 0 < |x| < tiny (subnormal),
+  !> else normal_values; values that do not read as numbers are left to
+  !> `diagnose`.
+  integer function value_class(v) result(worst)
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     character(len=*), intent(in) :: v
     integer :: first, last, star, ios
     real(dp) :: x
-    ok = .true.
+    worst = normal_values
     call next_item(v, 1, first, last)
     do while (first > 0)
       star = index(v(first:last), "*")
       if (first + star <= last) then
         read(v(first+star:last), *, iostat=ios) x
-        if (ios == 0) ok = ok .and. ieee_is_finite(x)
+        if (ios == 0) then
+          if (.not. ieee_is_finite(x)) then
+            worst = not_finite
+            return
+          end if
+          if (x /= 0.0_dp .and. abs(x) < tiny(x)) worst = subnormal
+        end if
       end if
       call next_item(v, last + 1, first, last)
     end do
-  end function all_finite
-
-  !> Every value of the (finite) list is 0 or normal: none subnormal, 0 < |x| < tiny.
-  logical function all_normal(v) result(ok)
-    character(len=*), intent(in) :: v
-    integer :: first, last, star, ios
-    real(dp) :: x
-    ok = .true.
-    call next_item(v, 1, first, last)
-    do while (first > 0)
-      star = index(v(first:last), "*")
-      if (first + star <= last) then
-        read(v(first+star:last), *, iostat=ios) x
-        if (ios == 0) ok = ok .and. (x == 0.0_dp .or. abs(x) >= tiny(x))
-      end if
-      call next_item(v, last + 1, first, last)
-    end do
-  end function all_normal
+  end function value_class
 
   !> Comma-separated list of names.
   pure function join(names) result(s)
