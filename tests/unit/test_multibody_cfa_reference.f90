@@ -43,20 +43,6 @@ contains
     write(fmt, '(es10.2)') x
   end function fmt
 
-  pure function diag(a, b, c) result(j)
-    real(dp), intent(in) :: a, b, c
-    real(dp) :: j(3, 3)
-    j = 0.0_dp
-    j(1, 1) = a; j(2, 2) = b; j(3, 3) = c
-  end function diag
-
-  function rvec(scale) result(v)
-    real(dp), intent(in) :: scale
-    real(dp) :: v(3)
-    call random_number(v)
-    v = scale*(2*v - 1)
-  end function rvec
-
   pure function sk(a) result(s)
     real(dp), intent(in) :: a(3)
     real(dp) :: s(3, 3)
@@ -113,8 +99,8 @@ contains
     logical :: stick, slide_row, friction
     nb = n + 1
     nu = 6*nb
-    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
-    rocket = new_rigid_body("rocket", 28000.0_dp, diag(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
+    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag3(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
+    rocket = new_rigid_body("rocket", 28000.0_dp, diag3(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
     geo%rail_direction = rail
     geo%floor_point = floor_pt
     geo%edge_point = geo%floor_point + 14.0_dp*geo%rail_direction
@@ -124,33 +110,33 @@ contains
     call sys%init(aircraft, rocket, [9.25_dp, 0.0_dp, 0.0_dp], n, geo, opt, 5.0_dp, error)
     if (n == 3) then
       call sys%set_line_body(2, 20.0_dp, [6000.0_dp, 6000.0_dp, 0.0_dp], 30.0_dp, error)
-      call sys%chain%set_link(3, "parachute", 40.0_dp, diag(30.0_dp, 40.0_dp, 30.0_dp), &
+      call sys%chain%set_link(3, "parachute", 40.0_dp, diag3(30.0_dp, 40.0_dp, 30.0_dp), &
         [0.0_dp, 0.0_dp, 4.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], error)
     else if (n == 2) then
-      call sys%chain%set_link(2, "parachute", 40.0_dp, diag(30.0_dp, 40.0_dp, 30.0_dp), &
+      call sys%chain%set_link(2, "parachute", 40.0_dp, diag3(30.0_dp, 40.0_dp, 30.0_dp), &
         [0.1_dp, 0.2_dp, 4.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], error)
     end if
     sys%edge_bilateral = .true.   ! the edge may pull: the phase stays for any loads
-    sys%bodies(0)%r = rvec(5.0_dp)
-    call sys%bodies(0)%set_attitude(quat_from_euler(rvec(0.2_dp)))
-    sys%bodies(0)%v = rvec(3.0_dp)
-    sys%bodies(0)%w = rvec(0.08_dp)
+    sys%bodies(0)%r = random_vector(5.0_dp)
+    call sys%bodies(0)%set_attitude(quat_from_euler(random_vector(0.2_dp)))
+    sys%bodies(0)%v = random_vector(3.0_dp)
+    sys%bodies(0)%w = random_vector(0.08_dp)
     if (phase == phase_rotation) then
       call sys%joint%place_on_edge(sys%bodies(0), 2.0_dp, 0.1_dp, slide_rate, 0.2_dp, sys%bodies(1))
     else
       call sys%joint%place_on_rail(sys%bodies(0), 6.0_dp, slide_rate, sys%bodies(1))
     end if
-    if (phase == phase_free) sys%bodies(1)%w = sys%bodies(1)%w + rvec(0.3_dp)
+    if (phase == phase_free) sys%bodies(1)%w = sys%bodies(1)%w + random_vector(0.3_dp)
     do k = 2, n
-      call sys%bodies(k)%set_attitude(quat_from_euler(rvec(1.0_dp)))
-      sys%bodies(k)%w = rvec(0.6_dp)
+      call sys%bodies(k)%set_attitude(quat_from_euler(random_vector(1.0_dp)))
+      sys%bodies(k)%w = random_vector(0.6_dp)
     end do
     do k = 0, n
       sc = load_scale(k)
       src%body = k
-      src%force = rvec(sc)
-      src%point = rvec(point_scale(k))
-      src%moment = rvec(sc)
+      src%force = random_vector(sc)
+      src%point = random_vector(point_scale(k))
+      src%moment = random_vector(sc)
       call sys%add_source(src)
     end do
     allocate(y(sys%state_size()))

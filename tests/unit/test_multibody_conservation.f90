@@ -37,13 +37,6 @@ contains
     write(fmt, '(es11.3)') x
   end function fmt
 
-  pure function diag(a, b, c) result(j)
-    real(dp), intent(in) :: a, b, c
-    real(dp) :: j(3, 3)
-    j = 0.0_dp
-    j(1, 1) = a; j(2, 2) = b; j(3, 3) = c
-  end function diag
-
   subroutine run(phase, gravity)
     integer, intent(in) :: phase
     logical, intent(in) :: gravity
@@ -62,14 +55,14 @@ contains
     g = [0.0_dp, -g0, 0.0_dp]
     if (.not. gravity) g = 0.0_dp
     call section(trim(phase_name(phase)) // merge(", gravity on ", ", gravity off", gravity))
-    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
-    rocket = new_rigid_body("rocket", 28000.0_dp, diag(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
+    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag3(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
+    rocket = new_rigid_body("rocket", 28000.0_dp, diag3(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
     geo%rail_direction = [-1.0_dp, -0.05_dp, 0.0_dp]
     geo%floor_point = [3.0_dp, -1.2_dp, 0.0_dp]
     geo%edge_point = geo%floor_point + 14.0_dp*geo%rail_direction
     call sys%init(aircraft, rocket, [9.25_dp, 0.0_dp, 0.0_dp], 3, geo, opt, 5.0_dp, error)
     call sys%set_line_body(2, 20.0_dp, [6000.0_dp, 6000.0_dp, 0.0_dp], 30.0_dp, error)
-    call sys%chain%set_link(3, "parachute", 40.0_dp, diag(30.0_dp, 40.0_dp, 30.0_dp), &
+    call sys%chain%set_link(3, "parachute", 40.0_dp, diag3(30.0_dp, 40.0_dp, 30.0_dp), &
       [0.0_dp, 0.0_dp, 4.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], error)
     call check(.not. allocated(error), "scene built")
     if (allocated(error)) then

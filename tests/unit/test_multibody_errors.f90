@@ -56,13 +56,6 @@ contains
     g%rocket_radius = 1.0_dp
   end function base_geometry
 
-  pure function diag(a, b, c) result(j)
-    real(dp), intent(in) :: a, b, c
-    real(dp) :: j(3, 3)
-    j = 0.0_dp
-    j(1, 1) = a; j(2, 2) = b; j(3, 3) = c
-  end function diag
-
   !> Check that `msg` is an error naming a phase, a time and `what`.
   subroutine expect(msg, case_name, what)
     character(len=*), intent(in) :: msg, case_name, what
@@ -89,14 +82,14 @@ contains
     msg = ""
     td = [9.25_dp, 0.0_dp, 0.0_dp]
     if (present(tie_down)) td = tie_down
-    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag(540740.0_dp, 737480.0_dp, 117030.0_dp), err)
-    rocket = new_rigid_body("rocket", 28000.0_dp, diag(7870.0_dp, 545000.0_dp, 545000.0_dp), err)
+    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag3(540740.0_dp, 737480.0_dp, 117030.0_dp), err)
+    rocket = new_rigid_body("rocket", 28000.0_dp, diag3(7870.0_dp, 545000.0_dp, 545000.0_dp), err)
     call sys%init(aircraft, rocket, td, nchain, g, opt, t0, err)
     if (nchain >= 2) call sys%set_line_body(2, 20.0_dp, [6000.0_dp, 6000.0_dp, 0.0_dp], 30.0_dp, err)
-    if (nchain >= 3) call sys%chain%set_link(3, "parachute", 40.0_dp, diag(30.0_dp, 40.0_dp, 30.0_dp), &
+    if (nchain >= 3) call sys%chain%set_link(3, "parachute", 40.0_dp, diag3(30.0_dp, 40.0_dp, 30.0_dp), &
       [0.0_dp, 0.0_dp, 4.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], err)
     if (present(massless_line)) then
-      if (massless_line) call sys%chain%set_link(2, "line", 0.0_dp, diag(0.0_dp, 0.0_dp, 0.0_dp), &
+      if (massless_line) call sys%chain%set_link(2, "line", 0.0_dp, diag3(0.0_dp, 0.0_dp, 0.0_dp), &
         [0.0_dp, 0.0_dp, 15.0_dp], [0.0_dp, 0.0_dp, -15.0_dp], err)
     end if
     if (allocated(err)) then
@@ -126,11 +119,11 @@ contains
     type(cvode_solver) :: solver
     type(error_type), allocatable :: err
     real(dp), allocatable :: y(:)
-    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag(540740.0_dp, 737480.0_dp, 117030.0_dp), err)
-    rocket = new_rigid_body("rocket", 28000.0_dp, diag(7870.0_dp, 545000.0_dp, 545000.0_dp), err)
+    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag3(540740.0_dp, 737480.0_dp, 117030.0_dp), err)
+    rocket = new_rigid_body("rocket", 28000.0_dp, diag3(7870.0_dp, 545000.0_dp, 545000.0_dp), err)
     call sys%init(aircraft, rocket, [9.25_dp, 0.0_dp, 0.0_dp], 3, base_geometry(), opt, 0.2_dp, err)
     call sys%set_line_body(2, 20.0_dp, [6000.0_dp, 6000.0_dp, 0.0_dp], 30.0_dp, err)
-    call sys%chain%set_link(3, "parachute", 40.0_dp, diag(30.0_dp, 40.0_dp, 30.0_dp), &
+    call sys%chain%set_link(3, "parachute", 40.0_dp, diag3(30.0_dp, 40.0_dp, 30.0_dp), &
       [0.0_dp, 0.0_dp, 4.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], err)
     call sys%add_source(gravity_source())
     call sys%joint%place_on_rail(sys%bodies(0), 6.0_dp, 0.0_dp, sys%bodies(1))
@@ -165,8 +158,8 @@ contains
     g%nose_x = 5.0_dp
     g%rocket_length = 10.0_dp
     g%rocket_radius = h
-    aircraft = new_rigid_body("ramp", 1.0e5_dp, diag(1.0e5_dp, 1.0e5_dp, 1.0e5_dp), err)
-    rocket = new_rigid_body("plank", m, diag(50.0_dp, jz, jz), err)
+    aircraft = new_rigid_body("ramp", 1.0e5_dp, diag3(1.0e5_dp, 1.0e5_dp, 1.0e5_dp), err)
+    rocket = new_rigid_body("plank", m, diag3(50.0_dp, jz, jz), err)
     ! below the limit the sliding contact is solvable
     opt%mu_edge = 0.5_dp*mu_crit
     call sys%init(aircraft, rocket, [5.0_dp, 0.0_dp, 0.0_dp], 1, g, opt, 0.0_dp, err, aircraft_prescribed=.true.)

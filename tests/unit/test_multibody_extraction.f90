@@ -46,8 +46,8 @@ contains
     type(rigid_body) :: aircraft, rocket
     type(cut_joint_geometry) :: geo
     type(cut_joint_options) :: opt
-    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
-    rocket = new_rigid_body("rocket", 28000.0_dp, diag(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
+    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag3(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
+    rocket = new_rigid_body("rocket", 28000.0_dp, diag3(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
     geo%rail_direction = [-1.0_dp, 0.0_dp, 0.0_dp]
     geo%floor_point = [3.0_dp, -1.0_dp, 0.0_dp]
     geo%edge_point = [-12.0_dp, -1.0_dp, 0.0_dp]
@@ -60,13 +60,6 @@ contains
     call sys%init(aircraft, rocket, [9.25_dp, 0.0_dp, 0.0_dp], 1, geo, opt, t0, error, &
       aircraft_prescribed=prescribed)
   end subroutine make_scene
-
-  pure function diag(a, b, c) result(j)
-    real(dp), intent(in) :: a, b, c
-    real(dp) :: j(3, 3)
-    j = 0.0_dp
-    j(1, 1) = a; j(2, 2) = b; j(3, 3) = c
-  end function diag
 
   subroutine rail_with_prescribed_aircraft()
     type(separation_system), target :: sys

@@ -65,13 +65,6 @@ contains
     j = 0.5_dp*(j + transpose(j))
   end function random_inertia
 
-  function rvec(scale) result(v)
-    real(dp), intent(in) :: scale
-    real(dp) :: v(3)
-    call random_number(v)
-    v = scale*(2*v - 1)
-  end function rvec
-
   !> One random state: returns max_i |udot_kane - udot_ne| / max|udot|.
   real(dp) function compare(n) result(rel)
     integer, intent(in) :: n
@@ -87,19 +80,19 @@ contains
       call random_number(mass(k))
       mass(k) = 0.5_dp + 3*mass(k)
       jin(:, :, k) = random_inertia()
-      prox(:, k) = rvec(2.0_dp)
-      dist(:, k) = rvec(2.0_dp)
+      prox(:, k) = random_vector(2.0_dp)
+      dist(:, k) = random_vector(2.0_dp)
       if (k == 1) prox(:, k) = 0.0_dp
       call chain%set_link(k, "body", mass(k), jin(:, :, k), prox(:, k), dist(:, k), error)
-      f(:, k) = rvec(10.0_dp)
-      m(:, k) = rvec(10.0_dp)
+      f(:, k) = random_vector(10.0_dp)
+      m(:, k) = random_vector(10.0_dp)
     end do
-    y(1:3) = rvec(5.0_dp)
-    y(4:6) = rvec(5.0_dp)
+    y(1:3) = random_vector(5.0_dp)
+    y(4:6) = random_vector(5.0_dp)
     do k = 1, n
       call random_number(q)
       y(6+7*(k-1)+1:6+7*(k-1)+4) = quat_normalize(q - 0.5_dp)
-      y(6+7*(k-1)+5:6+7*k) = rvec(3.0_dp)
+      y(6+7*(k-1)+5:6+7*k) = random_vector(3.0_dp)
     end do
     call chain%load_bodies(y, bodies)
     pf = 0.0_dp; pm = 0.0_dp
@@ -166,15 +159,15 @@ contains
     integer :: k
     call chain%init(3, 3, error)
     do k = 1, 3
-      call chain%set_link(k, "body", 1.0_dp + k, random_inertia(), rvec(1.0_dp), rvec(1.0_dp), error)
-      f(:, k) = rvec(5.0_dp); m(:, k) = rvec(5.0_dp)
+      call chain%set_link(k, "body", 1.0_dp + k, random_inertia(), random_vector(1.0_dp), random_vector(1.0_dp), error)
+      f(:, k) = random_vector(5.0_dp); m(:, k) = random_vector(5.0_dp)
       call random_number(q)
       y(6+7*(k-1)+1:6+7*(k-1)+4) = quat_normalize(q - 0.5_dp)
-      y(6+7*(k-1)+5:6+7*k) = rvec(2.0_dp)
+      y(6+7*(k-1)+5:6+7*k) = random_vector(2.0_dp)
     end do
-    y(1:6) = [rvec(1.0_dp), rvec(1.0_dp)]
+    y(1:6) = [random_vector(1.0_dp), random_vector(1.0_dp)]
     call chain%load_bodies(y, bodies)
-    pf(:, 1) = rvec(3.0_dp); pm(:, 1) = rvec(3.0_dp)
+    pf(:, 1) = random_vector(3.0_dp); pm(:, 1) = random_vector(3.0_dp)
     pf(:, 2) = 0.0_dp; pm(:, 2) = 0.0_dp
     call chain%accelerations(bodies, f, m, pf, pm, 1, error)
     u1 = chain%rhs(:, 1) + chain%rhs(:, 2)
@@ -199,17 +192,17 @@ contains
     call ref%init(3, 1, error)
     do k = 1, 3
       jk = random_inertia()
-      pk = rvec(1.0_dp)
-      dk = rvec(1.0_dp)
+      pk = random_vector(1.0_dp)
+      dk = random_vector(1.0_dp)
       call chain%set_link(k, "body", 1.0_dp + k, jk, pk, dk, error)
       if (k == 1) pk = 0.0_dp
       call ref%set_link(k, "body", 1.0_dp + k, jk, pk, dk, error)
-      f(:, k) = rvec(5.0_dp); m(:, k) = rvec(5.0_dp)
+      f(:, k) = random_vector(5.0_dp); m(:, k) = random_vector(5.0_dp)
       call random_number(q)
       y(6+7*(k-1)+1:6+7*(k-1)+4) = quat_normalize(q - 0.5_dp)
-      y(6+7*(k-1)+5:6+7*k) = rvec(2.0_dp)
+      y(6+7*(k-1)+5:6+7*k) = random_vector(2.0_dp)
     end do
-    y(1:6) = [rvec(1.0_dp), rvec(1.0_dp)]
+    y(1:6) = [random_vector(1.0_dp), random_vector(1.0_dp)]
     pf = 0.0_dp; pm = 0.0_dp
     call chain%load_bodies(y, bodies)
     call ref%load_bodies(y, rbodies)

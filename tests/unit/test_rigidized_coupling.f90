@@ -80,13 +80,6 @@ program test_rigidized_coupling
 
 contains
 
-  pure function diag(a, b, c) result(j)
-    real(dp), intent(in) :: a, b, c
-    real(dp) :: j(3, 3)
-    j = 0.0_dp
-    j(1, 1) = a; j(2, 2) = b; j(3, 3) = c
-  end function diag
-
   character(len=11) function fmt(x)
     real(dp), intent(in) :: x
     write(fmt, '(es11.3)') x
@@ -112,8 +105,8 @@ contains
     real(dp) :: e(3), w2(3), x0(3), v0(3), tie(3), stretch
     integer :: k
     tie = [9.25_dp, 0.0_dp, 0.0_dp]
-    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
-    rocket = new_rigid_body("rocket", 28000.0_dp, diag(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
+    aircraft = new_rigid_body("aircraft", 89000.0_dp, diag3(540740.0_dp, 737480.0_dp, 117030.0_dp), error)
+    rocket = new_rigid_body("rocket", 28000.0_dp, diag3(7870.0_dp, 545000.0_dp, 545000.0_dp), error)
     geo%rail_direction = [-1.0_dp, -0.05_dp, 0.0_dp]
     geo%floor_point = [3.0_dp, -1.2_dp, 0.0_dp]
     geo%edge_point = geo%floor_point + 14.0_dp*geo%rail_direction

@@ -6,11 +6,27 @@ module testing
   use airlaunch_strings, only: str
   implicit none
   private
-  public :: check, check_close, finish, section, fixed_seed, paper_input
+  public :: check, check_close, finish, section, fixed_seed, paper_input, diag3, random_vector
 
   integer, save :: n_pass = 0, n_fail = 0
 
 contains
+
+  !> The 3x3 diagonal matrix diag(a, b, c) (a principal inertia tensor).
+  pure function diag3(a, b, c) result(j)
+    real(dp), intent(in) :: a, b, c
+    real(dp) :: j(3, 3)
+    j = 0.0_dp
+    j(1, 1) = a; j(2, 2) = b; j(3, 3) = c
+  end function diag3
+
+  !> A random 3-vector, each component uniform in [-scale, scale].
+  function random_vector(scale) result(v)
+    real(dp), intent(in) :: scale
+    real(dp) :: v(3)
+    call random_number(v)
+    v = scale*(2*v - 1)
+  end function random_vector
 
   !> Seed the random numbers of a test with a fixed sequence: the same states
   !> in every run (gfortran seeds each run differently otherwise), so a test
