@@ -15,8 +15,9 @@ t = 0 (tension of the first segment along it, half that segment's weight and
 drag).  Measured: trim C_L0 within 1.2e-10 relative, C_m0 6.5e-9, thrust
 1.8e-8, alpha 7e-10 deg, elevator 9e-9 deg (calibrate and fly, four flight
 conditions); in a 1 m/s gust pitch, pitch rate, alpha, elevator and load
-factor within 6.3e-6 of their ranges; steady flight drifts 1e-8 m, 1.4e-9 deg in
-60 s.
+factor within 6.3e-6 of their ranges, in a 1 m/s lateral gust (six degrees of
+freedom, the lateral derivatives and the fin's lagged side force) yaw and roll
+within 1.3e-6; steady flight drifts 1e-8 m, 1.4e-9 deg in 60 s.
 """
 import math
 
@@ -324,3 +325,89 @@ def test_gust_response_against_rigid_pitch_plane_reference(airlaunch_exe, tmp_pa
         got = d[name].values[:, 1] if name == "aircraft_euler_deg" else d[name].values
         span = max(np.ptp(ref[:, k]), 1e-12)
         assert np.max(np.abs(got - ref[:, k])) <= 2e-5 * span + 1e-12, name
+
+
+# lateral-directional derivatives (model.md, "Carrier aircraft"), the fin's slope, span
+CYB, CLB, CLP, CLR, CNB, CNP, CNR, CYBF, SPAN = -0.96, -0.221, -0.45, 0.101, 0.150, -0.121, -0.30, -0.677, 51.0
+
+
+def aero3(rho, vb, om, cl0, cm0, vtail=None):
+    """Body force (without thrust) and moment, six degrees of freedom, stick fixed at zero elevator."""
+    v = np.linalg.norm(vb)
+    qbar = 0.5 * rho * v * v
+    alpha = math.atan2(-vb[1], vb[0])
+    beta = math.asin(vb[2] / v)
+    ph, rh, qh = om[0] * SPAN / (2 * v), -om[1] * SPAN / (2 * v), om[2] * CBAR / (2 * v)
+    cl = cl0 + CLA * alpha
+    cd = CD0 + KIND * cl * cl
+    lift_dir = np.array([-vb[1], vb[0], 0.0]) / math.hypot(vb[0], vb[1])
+    f = qbar * S * (cl * lift_dir - cd * vb / v + [0.0, 0.0, CYB * beta])
+    m = qbar * S * np.array([SPAN * (CLB * beta + CLP * ph + CLR * rh), -SPAN * (CNB * beta + CNP * ph + CNR * rh),
+                             CBAR * (cm0 + CMA * alpha + CMQ * qh)])
+    if vtail is not None:
+        bt = math.asin(vtail[2] / np.linalg.norm(vtail))
+        df = qbar * S * (CLAT * (math.atan2(-vtail[1], vtail[0]) - alpha) * lift_dir + [0.0, 0.0, CYBF * (bt - beta)])
+        f = f + df
+        m = m + np.cross([*R_TAIL, 0.0], df)
+    return f, m
+
+
+def euler_matrix(e):
+    """C = R_y(psi) R_z(theta) R_x(gamma), body to earth (model.md, "Frames")."""
+    ps, th, ga = e
+    ry = np.array([[math.cos(ps), 0, math.sin(ps)], [0, 1, 0], [-math.sin(ps), 0, math.cos(ps)]])
+    rz = np.array([[math.cos(th), -math.sin(th), 0], [math.sin(th), math.cos(th), 0], [0, 0, 1]])
+    rx = np.array([[1, 0, 0], [0, math.cos(ga), -math.sin(ga)], [0, math.sin(ga), math.cos(ga)]])
+    return ry @ rz @ rx, rz, rx
+
+
+@pytest.mark.parametrize("pen", [True, False])
+def test_lateral_gust_against_rigid_body_reference(airlaunch_exe, tmp_path, pen):
+    """A 1 m/s lateral gust (to the right, H = 60 m), stick fixed, no line: the
+    aircraft and the locked rocket as one rigid body in six degrees of freedom
+    (its inertia tensor with the rocket's offset, Euler angles integrated by
+    Eqs. (49)-(50), far from their singularity), the fin's lagged side force
+    with penetration.  Tolerance 1e-5 of the yaw and roll ranges (measured
+    1.3e-6); a 1 % change of the fin's slope C_Ybeta,f fails it."""
+    d = run(airlaunch_exe, tmp_path, "lat", line=False, gust=GUST.format(pen=str(pen).lower()).replace(
+        "vertical", "lateral"), t_end=3.0, dt=0.005, control="stick_fixed", release=2.99)
+    d = d.sel(time=slice(0.0, 2.985))
+    rho0, a = us76(10000.0)
+    v0 = 0.65 * a
+    cl0, cm0, thrust = d.attrs["trim_cl0"], d.attrs["trim_cm0"], d.attrs["trim_thrust_N"]
+    th0 = math.radians(1.2174)
+    m = MA + MR
+    rr = np.array([*R_ROCKET, 0.0])
+    rs = MR * rr / m
+
+    def steiner(mass, dv):
+        return mass * (dv @ dv * np.eye(3) - np.outer(dv, dv))
+
+    js = (np.diag([540740.0, 737480.0, IA]) + np.diag([7870.0, IR, IR]) + steiner(MA, -rs) + steiner(MR, rr - rs))
+
+    def gust(x):
+        s = x - v0 * 1.0
+        return 0.5 * (1 - math.cos(math.pi * s / 60.0)) if 0.0 <= s <= 120.0 else 0.0
+
+    def rhs(t, y):
+        p, vs, e, om = y[0:3], y[3:6], y[6:9], y[9:12]
+        c, rz, rx = euler_matrix(e)
+        arm = -(c @ rs)
+        ra = p + arm
+        va = vs + np.cross(c @ om, arm)
+        vb = c.T @ (va - [0.0, 0.0, gust(ra[0])])
+        vt = c.T @ (va - [0.0, 0.0, gust((ra + c @ [*R_TAIL, 0.0])[0])]) if pen else None
+        f, mo = aero3(us76(10000.0 + ra[1])[0], vb, om, cl0, cm0, vt)
+        f = f + [thrust, 0.0, 0.0]
+        mo = mo + np.cross(-rs, f)
+        a_mat = np.column_stack([rx.T @ rz.T @ [0.0, 1.0, 0.0], rx.T @ [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+        return np.concatenate([vs, c @ f / m - [0.0, G0, 0.0], np.linalg.solve(a_mat, om),
+                               np.linalg.solve(js, mo - np.cross(om, js @ om))])
+
+    t = d.time.values
+    y0 = np.concatenate([euler_matrix([0.0, th0, 0.0])[0] @ rs, [v0, 0.0, 0.0], [0.0, th0, 0.0], np.zeros(3)])
+    sol = solve_ivp(rhs, [0.0, t[-1]], y0, method="DOP853", rtol=1e-11, atol=1e-11, max_step=0.01, dense_output=True)
+    eul = np.degrees(sol.sol(t)[6:9])
+    for k in (0, 2):                               # yaw, roll
+        got = d.aircraft_euler_deg[:, k].values
+        assert np.max(np.abs(got - eul[k])) <= 1e-5 * np.ptp(eul[k]), k
