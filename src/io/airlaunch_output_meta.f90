@@ -6,7 +6,7 @@ module airlaunch_output_meta
   use airlaunch_version, only: code_version
   implicit none
   private
-  public :: write_run_metadata
+  public :: write_run_metadata, creation_time
 
 contains
 
@@ -17,16 +17,27 @@ contains
     character(len=*), intent(in) :: title                 !< one-line description
     character(len=*), intent(in) :: echo                  !< resolved namelist text
     type(error_type), allocatable, intent(inout) :: error !< set on failure
-    character(len=32) :: stamp
-    integer :: v(8)
-    call date_and_time(values=v)
-    write(stamp, '(i4.4,"-",i2.2,"-",i2.2,"T",i2.2,":",i2.2,":",i2.2)') v(1), v(2), v(3), v(5), v(6), v(7)
     call w%add_text_att("/", "title", title, error)
     call w%add_text_att("/", "scene", scene, error)
     call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
-    call w%add_text_att("/", "created", trim(stamp), error)
+    call w%add_text_att("/", "created", creation_time(), error)
     call w%add_text_att("/", "input_namelist", echo, error)
     call w%add_text_att("/", "frames", "earth: x forward, y up, z right; body: x nose, y up, z right; " // &
       "Euler yaw about y, pitch about z, roll about x (Zheng & Zhang 2018, Eqs. (49)-(50))", error)
   end subroutine write_run_metadata
+
+  !> The local time now as ISO 8601 with its offset from UTC
+  !> (2026-11-29T22:08:39+01:00), so that files made at different sites
+  !> compare; without the offset where the system gives none.
+  function creation_time() result(stamp)
+    character(len=:), allocatable :: stamp
+    character(len=32) :: buf
+    integer :: v(8)
+    call date_and_time(values=v)
+    write(buf, '(i4.4,"-",i2.2,"-",i2.2,"T",i2.2,":",i2.2,":",i2.2)') v(1), v(2), v(3), v(5), v(6), v(7)
+    stamp = trim(buf)
+    if (v(4) == -huge(v(4))) return
+    write(buf, '(a1,i2.2,":",i2.2)') merge("+", "-", v(4) >= 0), abs(v(4))/60, mod(abs(v(4)), 60)
+    stamp = stamp // trim(buf)
+  end function creation_time
 end module airlaunch_output_meta

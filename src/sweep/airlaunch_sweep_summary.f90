@@ -11,6 +11,7 @@ module airlaunch_sweep_summary
   use airlaunch_strings, only: str
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_version, only: code_version
+  use airlaunch_output_meta, only: creation_time
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_table, only: case_table
   use airlaunch_sweep_case, only: base_scenario
@@ -35,8 +36,6 @@ contains
     integer, allocatable :: ibuf(:)
     real(dp), allocatable :: rbuf(:)
     integer :: maxlen
-    character(len=32) :: stamp
-    integer :: v(8)
 
     n = size(rows)
     if (any(rows%id /= [(k, k = 0, n - 1)])) then
@@ -88,8 +87,6 @@ contains
         end if
       end do
     end associate
-    call date_and_time(values=v)
-    write(stamp, '(i4.4,"-",i2.2,"-",i2.2,"T",i2.2,":",i2.2,":",i2.2)') v(1), v(2), v(3), v(5), v(6), v(7)
     call w%add_text_att("/", "title", "airlaunch sweep summary: " // def%name, error)
     call w%add_text_att("/", "sweep_name", def%name, error)
     call w%add_text_att("/", "definition", def%path, error)
@@ -110,7 +107,7 @@ contains
     call w%add_text_att("/", "table", def%table_path(), error)
     call w%add_text_att("/", "criteria", def%criteria, error)
     call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
-    call w%add_text_att("/", "created", trim(stamp), error)
+    call w%add_text_att("/", "created", creation_time(), error)
     call w%add_text_att("/", "comment", "one row per case, sorted by case id; NaN: event not reached or " // &
       "value not defined; metrics of failed cases are those up to the failure; invalid_input: the scenario " // &
       "reader rejected the case's values (message in failure)", error)

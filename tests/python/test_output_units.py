@@ -65,3 +65,24 @@ def test_the_rule_rejects_what_it_must():
                      "d": ((), 0.0, {"units": "1"}), "e": ((), 0.0, {"units": "degree s-1"}),
                      "f": ((), 0.0, {"units": "furlong"})})
     assert bad_units(ds) == [("a", "N or N m"), ("c", "criterion units (see criterion_units)"), ("f", "furlong")]
+
+
+def test_created_carries_its_offset_from_utc(airlaunch_exe, tmp_path):
+    """`created` is ISO 8601 with the offset from UTC (files made at different
+    sites compare): read by Python's own ISO parser, it is this moment, in the
+    time zone the run was given (a POSIX TZ string, needing no tz database: India's
+    +05:30, a half-hour offset)."""
+    import datetime
+    import os
+    import subprocess
+    out = tmp_path / "drop.nc"
+    before = datetime.datetime.now(datetime.timezone.utc)
+    res = subprocess.run([str(airlaunch_exe), str(ROOT / "input" / "drop_demo.nml"), "--output", str(out)],
+                         capture_output=True, text=True, timeout=60, env={**os.environ, "TZ": "IST-5:30"})
+    after = datetime.datetime.now(datetime.timezone.utc)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        created = datetime.datetime.fromisoformat(ds.attrs["created"])
+    assert created.utcoffset() == datetime.timedelta(hours=5, minutes=30)
+    # (the stamp has whole seconds)
+    assert before.replace(microsecond=0) <= created <= after
