@@ -63,12 +63,17 @@ class InputSpec:
     @property
     def group(self) -> str:
         """Namelist group of the scenario variable."""
-        return self.name.split("%", 1)[0]
+        return split_name(self.name)[0]
 
     @property
     def variable(self) -> str:
-        """Variable name inside its group."""
-        return self.name.split("%", 1)[1]
+        """Variable name inside its group (without an element's index)."""
+        return split_name(self.name)[1]
+
+    @property
+    def element(self) -> int:
+        """The varied element i of a vector, ``group%variable(i)`` (0: the variable itself)."""
+        return split_name(self.name)[2]
 
     def grid_size(self) -> int:
         """Number of grid levels of this input (design = 'grid')."""
@@ -560,9 +565,29 @@ def _as_list(value):
     return list(value) if isinstance(value, list) else [value]
 
 
+_NAME = re.compile(r"([a-z0-9_]+)%([a-z0-9_]+)(?:\(([0-9]{1,9})\))?")
+
+
 def _valid_name(name):
-    """group%variable of ASCII letters, digits and '_' (valid_name in the Fortran reader)."""
-    return re.fullmatch(r"[a-z0-9_]+%[a-z0-9_]+", name) is not None
+    """group%variable of ASCII letters, digits and '_', or group%variable(i)
+    for element i of a vector, i of 1 to 9 digits (valid_name in the Fortran
+    reader)."""
+    return _NAME.fullmatch(name) is not None
+
+
+def split_name(name):
+    """(group, variable, element) of a valid name; element 0: no index."""
+    m = _NAME.fullmatch(name)
+    return m.group(1), m.group(2), int(m.group(3)) if m.group(3) is not None else 0
+
+
+def _normal_name(where, name):
+    """The name with its index without leading zeros ('wind(01)' is 'wind(1)'); index 0 refused."""
+    group, variable, element = split_name(name)
+    if "(" in name and element == 0:
+        raise DefinitionError(f"{where}name = '{name}' is not allowed (an element index starts at 1: "
+                              "group%variable(1), (2), ...)")
+    return f"{group}%{variable}" + (f"({element})" if element else "")
 
 
 def _read_fixed(path, index, group_vars, varied):
@@ -571,9 +596,11 @@ def _read_fixed(path, index, group_vars, varied):
     _check_names(where, group_vars, FIXED_VARS)
     name = ascii_lower(_str(where, group_vars, "name"))
     if not _valid_name(name):
-        raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, e.g. "
-                              "'flight%trim_mode')")
-    if name in OWNED_BY_SWEEP:
+        raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, or "
+                              "group%variable(i) for element i of a vector, e.g. 'flight%trim_mode', "
+                              "'line%wind(1)')")
+    name = _normal_name(where, name)
+    if "%".join(split_name(name)[:2]) in OWNED_BY_SWEEP:
         raise DefinitionError(f"{where}name = '{name}' is not allowed: {OWNED_NOTE}")
     where = f"{path}: &fixed #{index} '{name}': "
     value = _str(where, group_vars, "value", "")
@@ -592,9 +619,12 @@ def _read_input(path, index, group_vars, design):
     name = ascii_lower(_str(where, group_vars, "name"))
     where = f"{path}: &input #{index} '{name}': "
     if not _valid_name(name):
-        raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, "
-                              "e.g. 'bay%release_time')")
-    if name in OWNED_BY_SWEEP:
+        raise DefinitionError(f"{where}name = '{name}' is not allowed (write group%variable, or "
+                              "group%variable(i) for element i of a vector, e.g. 'bay%release_time', "
+                              "'line%wind(1)')")
+    name = _normal_name(where, name)
+    where = f"{path}: &input #{index} '{name}': "
+    if "%".join(split_name(name)[:2]) in OWNED_BY_SWEEP:
         raise DefinitionError(f"{where}name = '{name}' is not allowed: {OWNED_NOTE}")
     dist = ascii_lower(_str(where, group_vars, "distribution"))
     _choice(where, "distribution", dist, DISTRIBUTIONS)

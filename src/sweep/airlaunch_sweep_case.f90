@@ -18,7 +18,7 @@ module airlaunch_sweep_case
   use airlaunch_scenario_config, only: scenario_config, read_scenario_config
   use airlaunch_launch_scene, only: launch_result, run_launch
   use airlaunch_line_scene, only: line_scene_config, read_line_scene_config, run_line_scene, line_result
-  use airlaunch_sweep_definition, only: sweep_definition, sweep_input
+  use airlaunch_sweep_definition, only: sweep_definition, sweep_input, whole_and_element, both_note
   use airlaunch_sweep_files, only: read_text_file, write_text_file
   use airlaunch_sweep_row, only: sweep_row, row_from_result, row_from_line_result, invalid_row, metric_set, &
     metrics_of
@@ -26,12 +26,15 @@ module airlaunch_sweep_case
   private
   public :: base_scenario, known_variable, load_base_scenario, check_varied_inputs, case_namelist
   public :: run_case, run_trajectory, inject_assignments, strike_assignments, value_text, check_common_settings
+  public :: echo_elements
 
   !> A variable the scenario readers know (from the resolved input they echo).
   type :: known_variable
     character(len=32) :: group = ""
     character(len=32) :: name = ""
     character(len=8) :: kind = ""      !< real, integer, logical, string or vector (several values)
+    !> its value as echoed (a vector's values, `x, y, z` or `3*x`; '' for strings)
+    character(len=1024) :: value = ""
   end type known_variable
 
   !> The base scenario of a sweep.
@@ -108,9 +111,17 @@ contains
         cycle
       end if
       eq = index(line, "=")
-      if (eq < 2 .or. len(group) == 0) cycle
+      if (eq < 2 .or. len(group) == 0) then
+        ! a continuation line of a long vector: more of its values
+        if (size(known) > 0 .and. len(group) > 0 .and. eq == 0) then
+          if (known(size(known))%kind == "vector") known(size(known))%value = trim(known(size(known))%value) // &
+            " " // line
+        end if
+        cycle
+      end if
       if (verify(lower(line(:eq-1)), "abcdefghijklmnopqrstuvwxyz0123456789_") /= 0) cycle
-      known = [known, known_variable(group, lower(line(:eq-1)), value_kind(line(eq+1:)))]
+      known = [known, known_variable(group, lower(line(:eq-1)), value_kind(line(eq+1:)), "")]
+      if (known(size(known))%kind == "vector") known(size(known))%value = line(eq+1:)
     end do
   end function echo_variables
 
@@ -120,8 +131,9 @@ contains
     type(sweep_definition), intent(in) :: def             !< the sweep
     type(base_scenario), intent(in) :: base               !< its base scenario
     type(error_type), allocatable, intent(inout) :: error !< set on bad input
-    integer :: k, j, hit
+    integer :: k, j, hit, n
     character(len=:), allocatable :: where, groups, names
+    character(len=8) :: kind
     do k = 1, size(def%inputs)
       associate(s => def%inputs(k))
         where = def%path // ":" // str(s%line) // ": &input #" // str(k) // " '" // s%name // "': "
@@ -147,7 +159,12 @@ contains
             closest(s%variable, base%known, s%group) // " (allowed: " // names(:len(names)-2) // ")")
           return
         end if
-        select case (trim(base%known(hit)%kind))
+        kind = base%known(hit)%kind
+        if (s%element > 0) then
+          call check_element(where, s%name, s%group // "%" // s%variable, s%element, base%known(hit), kind, error)
+          if (allocated(error)) return
+        end if
+        select case (trim(kind))
         case ("real")
         case ("integer")
           if (s%distribution /= "list") then
@@ -160,9 +177,10 @@ contains
             return
           end if
         case ("vector")
-          call fatal_error(error, where // s%name // " is a vector (several values); a sweep varies variables " // &
-            "of one real or integer value, not a vector or its elements (set the whole vector in the base " // &
-            "scenario, or in every case with &fixed value = 'x, y, z')")
+          n = size(echo_elements(base%known(hit)%value))
+          call fatal_error(error, where // s%name // " is a vector of " // str(n) // " values; a sweep varies " // &
+            "one value: vary its elements one by one (allowed: " // s%name // "(1) to " // s%name // "(" // &
+            str(n) // "), each an &input), or set the whole vector in every case with &fixed value = 'x, y, z'")
           return
         case default
           call fatal_error(error, where // s%name // " is a " // trim(base%known(hit)%kind) // &
@@ -183,9 +201,113 @@ contains
             closest(x%variable, base%known, x%group))
           return
         end if
+        if (x%element > 0) then
+          hit = findloc(base%known%group == x%group .and. base%known%name == x%variable, .true., dim=1)
+          call check_element(where, x%name, x%group // "%" // x%variable, x%element, base%known(hit), kind, error)
+          if (allocated(error)) return
+        end if
       end associate
     end do
+    call check_vectors_once(def, error)
   end subroutine check_varied_inputs
+
+  !> A vector is set whole or by its elements, not both (the readers refuse
+  !> an element that the whole vector also assigns): by the varied inputs and
+  !> the &fixed ones.  After the checks of each against the base, so that a
+  !> vector varied whole or a scalar with an index gets its own message.
+  subroutine check_vectors_once(def, error)
+    type(sweep_definition), intent(in) :: def             !< the sweep
+    type(error_type), allocatable, intent(inout) :: error !< set if a vector is set both ways
+    integer :: k, j
+    character(len=:), allocatable :: where
+    do k = 1, size(def%inputs)
+      associate(s => def%inputs(k))
+        where = def%path // ":" // str(s%line) // ": &input #" // str(k) // " '" // s%name // "': "
+        do j = 1, k - 1
+          if (whole_and_element(def%inputs(j)%group, def%inputs(j)%variable, def%inputs(j)%element, &
+              s%group, s%variable, s%element)) then
+            call fatal_error(error, where // s%name // " and " // def%inputs(j)%name // " (&input #" // str(j) // &
+              ") both set " // s%group // "%" // s%variable // both_note(s%group // "%" // s%variable))
+            return
+          end if
+        end do
+      end associate
+    end do
+    do k = 1, size(def%fixed)
+      associate(x => def%fixed(k))
+        where = def%path // ":" // str(x%line) // ": &fixed #" // str(k) // " '" // x%name // "': "
+        do j = 1, size(def%inputs)
+          if (whole_and_element(def%inputs(j)%group, def%inputs(j)%variable, def%inputs(j)%element, &
+              x%group, x%variable, x%element)) then
+            call fatal_error(error, where // x%name // " and the varied input " // def%inputs(j)%name // &
+              " (&input #" // str(j) // ") both set " // x%group // "%" // x%variable // &
+              both_note(x%group // "%" // x%variable))
+            return
+          end if
+        end do
+        do j = 1, k - 1
+          if (whole_and_element(def%fixed(j)%group, def%fixed(j)%variable, def%fixed(j)%element, &
+              x%group, x%variable, x%element)) then
+            call fatal_error(error, where // x%name // " and " // def%fixed(j)%name // " (&fixed #" // str(j) // &
+              ") both set " // x%group // "%" // x%variable // both_note(x%group // "%" // x%variable))
+            return
+          end if
+        end do
+      end associate
+    end do
+  end subroutine check_vectors_once
+
+  !> An element `name` = vector(element) must be one of a vector's: `kind`
+  !> is then the element's kind (real or integer).
+  subroutine check_element(where, name, vector, element, known, kind, error)
+    character(len=*), intent(in) :: where, name, vector   !< message start; the element; its vector
+    integer, intent(in) :: element                        !< its index
+    type(known_variable), intent(in) :: known             !< the vector as the base resolves it
+    character(len=8), intent(out) :: kind                 !< the element's kind
+    type(error_type), allocatable, intent(inout) :: error !< set if it is none of the vector's
+    character(len=40), allocatable :: items(:)
+    kind = known%kind
+    if (known%kind /= "vector") then
+      call fatal_error(error, where // vector // " is a " // trim(known%kind) // " of one value, not a " // &
+        "vector: it has no element " // str(element) // " (allowed: " // vector // ", without an index)")
+      return
+    end if
+    items = echo_elements(known%value)
+    if (element > size(items)) then
+      call fatal_error(error, where // name // " is not allowed: index " // str(element) // " is out of " // &
+        "range (" // vector // " has " // str(size(items)) // " elements: allowed " // vector // "(1) to " // &
+        vector // "(" // str(size(items)) // "))")
+      return
+    end if
+    kind = value_kind(items(element))
+  end subroutine check_element
+
+  !> The values of a vector as echoed (`a, b, c`, `2*a, b`), one per element.
+  pure function echo_elements(value) result(items)
+    character(len=*), intent(in) :: value
+    character(len=40), allocatable :: items(:)
+    character(len=:), allocatable :: rest, item
+    integer :: c, star, n, ios, j
+    allocate(items(0))
+    rest = value
+    do while (len_trim(rest) > 0)
+      c = index(rest, ",")
+      if (c == 0) c = len(rest) + 1
+      item = trim(adjustl(rest(:c-1)))
+      rest = rest(min(c + 1, len(rest) + 1):)
+      if (len(item) == 0) cycle
+      star = index(item, "*")
+      n = 1
+      if (star > 0) then
+        read(item(:star-1), *, iostat=ios) n
+        if (ios /= 0) n = 1
+        item = item(star+1:)
+      end if
+      do j = 1, n
+        items = [character(len=40) :: items, item]
+      end do
+    end do
+  end function echo_elements
 
   !> Read the base scenario with the sweep's t_end and &fixed values (no
   !> varied input) through the scenario readers, so that a bad fixed value
@@ -217,6 +339,10 @@ contains
   end function case_namelist
 
   !> Base text + t_end + fixed values (+ the case's values if `varied`).
+  !> An element of a vector, `wind(1) = v`, is written as such; the base's
+  !> own assignments of that vector are taken out (whole or by elements: the
+  !> readers refuse an element the whole vector also assigns), so its other
+  !> elements are written one by one with the base's resolved values.
   function sweep_namelist(def, base, id, values, varied) result(text)
     type(sweep_definition), intent(in) :: def
     type(base_scenario), intent(in) :: base
@@ -224,33 +350,28 @@ contains
     real(dp), intent(in) :: values(:)
     logical, intent(in) :: varied
     character(len=:), allocatable :: text
-    character(len=32) :: groups(size(def%inputs) + size(def%fixed) + 1)
-    character(len=32) :: names(size(def%inputs) + size(def%fixed) + 1)
-    character(len=1200) :: lines(size(def%inputs) + size(def%fixed) + 1)
+    character(len=32), allocatable :: groups(:), names(:)
+    integer, allocatable :: elements(:)
+    character(len=1200), allocatable :: lines(:)
     logical, allocatable :: replaced(:)
     integer :: k, m, j
-    m = 0
-    if (def%t_end > 0.0_dp) then
-      m = m + 1
-      groups(m) = "run"
-      names(m) = "t_end"
-      lines(m) = "t_end = " // value_text(def%t_end) // "   ! sweep " // def%name
-    end if
+    allocate(groups(0), names(0), elements(0), lines(0))
+    if (def%t_end > 0.0_dp) call add("run", "t_end", 0, "t_end = " // value_text(def%t_end) // "   ! sweep " // &
+      def%name)
     do k = 1, size(def%fixed)
-      m = m + 1
-      groups(m) = def%fixed(k)%group
-      names(m) = def%fixed(k)%variable
-      lines(m) = def%fixed(k)%variable // " = " // def%fixed(k)%value // "   ! sweep " // def%name // ", fixed"
+      call add(def%fixed(k)%group, def%fixed(k)%variable, def%fixed(k)%element, &
+        target_name(def%fixed(k)%variable, def%fixed(k)%element) // " = " // def%fixed(k)%value // &
+        "   ! sweep " // def%name // ", fixed")
     end do
     if (varied) then
       do k = 1, size(def%inputs)
-        m = m + 1
-        groups(m) = def%inputs(k)%group
-        names(m) = def%inputs(k)%variable
-        lines(m) = def%inputs(k)%variable // " = " // value_text(values(k)) // "   ! sweep " // def%name // &
-          ", case " // str(id)
+        call add(def%inputs(k)%group, def%inputs(k)%variable, def%inputs(k)%element, &
+          target_name(def%inputs(k)%variable, def%inputs(k)%element) // " = " // value_text(values(k)) // &
+          "   ! sweep " // def%name // ", case " // str(id))
       end do
     end if
+    call keep_other_elements()
+    m = size(lines)
     if (.not. allocated(base%assigned)) then   ! not from load_base_scenario: nothing located
       text = inject_assignments(base%text, groups(1:m), lines(1:m))
       return
@@ -265,7 +386,45 @@ contains
     end do
     text = inject_assignments(strike_assignments(base%text, pack(base%assigned, replaced)), &
       groups(1:m), lines(1:m))
+  contains
+    subroutine add(group, name, element, line)
+      character(len=*), intent(in) :: group, name, line
+      integer, intent(in) :: element
+      groups = [groups, [character(len=32) :: group]]
+      names = [names, [character(len=32) :: name]]
+      elements = [elements, element]
+      lines = [lines, [character(len=1200) :: line]]
+    end subroutine add
+    !> For each vector of which only elements are set: its other elements,
+    !> with the base's resolved values.
+    subroutine keep_other_elements()
+      character(len=40), allocatable :: items(:)
+      integer :: n, i, h, q
+      n = size(lines)
+      do i = 1, n
+        if (elements(i) == 0) cycle
+        if (any(groups(:i-1) == groups(i) .and. names(:i-1) == names(i))) cycle   ! done with its first
+        if (.not. allocated(base%known)) cycle
+        h = findloc(base%known%group == groups(i) .and. base%known%name == names(i), .true., dim=1)
+        if (h == 0) cycle   ! refused by check_varied_inputs
+        items = echo_elements(base%known(h)%value)
+        do q = 1, size(items)
+          if (any(groups(:n) == groups(i) .and. names(:n) == names(i) .and. elements(:n) == q)) cycle
+          call add(groups(i), names(i), q, trim(names(i)) // "(" // str(q) // ") = " // trim(adjustl(items(q))) // &
+            "   ! the base's value (sweep " // def%name // " sets another element)")
+        end do
+      end do
+    end subroutine keep_other_elements
   end function sweep_namelist
+
+  !> `variable` or `variable(element)`.
+  pure function target_name(variable, element) result(s)
+    character(len=*), intent(in) :: variable
+    integer, intent(in) :: element
+    character(len=:), allocatable :: s
+    s = variable
+    if (element > 0) s = s // "(" // str(element) // ")"
+  end function target_name
 
   !> `text` without the assignments `items` (as located by nml_file%load in
   !> that text): an assignment alone on its lines is commented out there (so

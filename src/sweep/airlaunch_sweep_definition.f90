@@ -14,7 +14,7 @@ module airlaunch_sweep_definition
   implicit none
   private
   public :: sweep_input, sweep_fixed, sweep_definition, read_sweep_definition
-  public :: design_names, distribution_names, worst_by_names, max_list_values
+  public :: design_names, distribution_names, worst_by_names, max_list_values, whole_and_element, both_note
 
   !> Largest number of values of a 'list' input and of keep_ids.
   integer, parameter :: max_list_values = max_list_items
@@ -38,9 +38,10 @@ module airlaunch_sweep_definition
 
   !> One varied input.
   type :: sweep_input
-    character(len=:), allocatable :: name          !< group%variable (lower case)
+    character(len=:), allocatable :: name          !< group%variable or group%variable(i) (lower case)
     character(len=:), allocatable :: group         !< namelist group of the scenario
-    character(len=:), allocatable :: variable      !< variable inside the group
+    character(len=:), allocatable :: variable      !< variable inside the group (without the index)
+    integer :: element = 0                         !< the varied element i of a vector (0: the variable)
     character(len=:), allocatable :: distribution  !< uniform, normal, truncnorm or list
     character(len=:), allocatable :: units         !< units (documentation only)
     character(len=:), allocatable :: description   !< description (long_name of table and summary)
@@ -54,9 +55,10 @@ module airlaunch_sweep_definition
 
   !> A scenario variable set to the same value in every case (&fixed).
   type :: sweep_fixed
-    character(len=:), allocatable :: name       !< group%variable (lower case)
+    character(len=:), allocatable :: name       !< group%variable or group%variable(i) (lower case)
     character(len=:), allocatable :: group      !< namelist group of the scenario
-    character(len=:), allocatable :: variable   !< variable inside the group
+    character(len=:), allocatable :: variable   !< variable inside the group (without the index)
+    integer :: element = 0                      !< the element i of a vector it sets (0: the variable)
     character(len=:), allocatable :: value      !< value as namelist text, e.g. 'fly' or 0.3656
     integer :: line = 0                         !< line of the group in the file
   end type sweep_fixed
@@ -194,15 +196,20 @@ contains
         x%line = lines(k)
         if (.not. valid_name(x%name)) then
           call fatal_error(error, where // "name = '" // x%name // "' is not allowed (write group%variable, " // &
-            "e.g. 'flight%trim_mode')")
+            "or group%variable(i) for element i of a vector, e.g. 'flight%trim_mode', 'line%wind(1)')")
           exit
         end if
-        if (owned_by_sweep(x%name)) then
+        call split_name(x%name, x%group, x%variable, x%element)
+        if (index(x%name, "(") > 0 .and. x%element == 0) then
+          call fatal_error(error, where // "name = '" // x%name // "' is not allowed (an element index " // &
+            "starts at 1: group%variable(1), (2), ...)")
+          exit
+        end if
+        x%name = joined_name(x%group, x%variable, x%element)
+        if (owned_by_sweep(x%group // "%" // x%variable)) then
           call fatal_error(error, where // "name = '" // x%name // "' is not allowed: " // owned_note)
           exit
         end if
-        x%group = x%name(:index(x%name, "%") - 1)
-        x%variable = x%name(index(x%name, "%") + 1:)
         x%value = trim(adjustl(value))
         if (len(x%value) == 0) then
           call fatal_error(error, where // "missing required value value (the value as namelist text: " // &
@@ -465,15 +472,21 @@ contains
         where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // s%name // "': "
         if (.not. valid_name(s%name)) then
           call fatal_error(error, where // "name = '" // s%name // "' is not allowed (write group%variable, " // &
-            "e.g. 'bay%release_time')")
+            "or group%variable(i) for element i of a vector, e.g. 'bay%release_time', 'line%wind(1)')")
           exit
         end if
-        if (owned_by_sweep(s%name)) then
+        call split_name(s%name, s%group, s%variable, s%element)
+        if (index(s%name, "(") > 0 .and. s%element == 0) then
+          call fatal_error(error, where // "name = '" // s%name // "' is not allowed (an element index " // &
+            "starts at 1: group%variable(1), (2), ...)")
+          exit
+        end if
+        s%name = joined_name(s%group, s%variable, s%element)
+        where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // s%name // "': "
+        if (owned_by_sweep(s%group // "%" // s%variable)) then
           call fatal_error(error, where // "name = '" // s%name // "' is not allowed: " // owned_note)
           exit
         end if
-        s%group = s%name(:index(s%name, "%") - 1)
-        s%variable = s%name(index(s%name, "%") + 1:)
         s%distribution = lower_trim(distribution)
         s%units = trim(units)
         s%description = trim(description)
@@ -619,14 +632,68 @@ contains
 
   ! ---------------------------------------------------------------------
 
-  !> group%variable with letters, digits and underscores on both sides.
+  !> group%variable with letters, digits and underscores on both sides,
+  !> optionally followed by an element index (i), i of 1 to 9 digits.
   pure logical function valid_name(s)
     character(len=*), intent(in) :: s
-    integer :: p
-    p = index(s, "%")
-    valid_name = p > 1 .and. p < len(s) .and. index(s(p+1:), "%") == 0 .and. &
-      verify(s, "abcdefghijklmnopqrstuvwxyz0123456789_%") == 0
+    integer :: p, q
+    q = len(s) + 1
+    if (len(s) > 0) then
+      if (s(len(s):) == ")") then
+        q = index(s, "(")
+        valid_name = q > 0 .and. q < len(s) - 1 .and. len(s) - 1 - q <= 9
+        if (.not. valid_name) return
+        valid_name = verify(s(q+1:len(s)-1), "0123456789") == 0
+        if (.not. valid_name) return
+      end if
+    end if
+    p = index(s(:q-1), "%")
+    valid_name = p > 1 .and. p < q - 1 .and. index(s(p+1:q-1), "%") == 0 .and. &
+      verify(s(:q-1), "abcdefghijklmnopqrstuvwxyz0123456789_%") == 0
   end function valid_name
+
+  !> The group, variable and element index (0: none) of a valid name.
+  pure subroutine split_name(s, group, variable, element)
+    character(len=*), intent(in) :: s                          !< a valid_name
+    character(len=:), allocatable, intent(out) :: group, variable
+    integer, intent(out) :: element
+    integer :: p, q
+    p = index(s, "%")
+    q = index(s, "(")
+    element = 0
+    if (q == 0) then
+      q = len(s) + 1
+    else
+      read(s(q+1:len(s)-1), *) element
+    end if
+    group = s(:p-1)
+    variable = s(p+1:q-1)
+  end subroutine split_name
+
+  !> group%variable, or group%variable(i) for element i > 0 (the index
+  !> without leading zeros: 'wind(01)' and 'wind(1)' are one name).
+  pure function joined_name(group, variable, element) result(s)
+    character(len=*), intent(in) :: group, variable
+    integer, intent(in) :: element
+    character(len=:), allocatable :: s
+    s = group // "%" // variable
+    if (element > 0) s = s // "(" // str(element) // ")"
+  end function joined_name
+
+  !> One of two names is a whole vector and the other an element of it.
+  pure logical function whole_and_element(g1, v1, e1, g2, v2, e2)
+    character(len=*), intent(in) :: g1, v1, g2, v2
+    integer, intent(in) :: e1, e2
+    whole_and_element = g1 == g2 .and. v1 == v2 .and. (e1 == 0 .neqv. e2 == 0)
+  end function whole_and_element
+
+  !> The end of the message for a vector set whole and by an element.
+  pure function both_note(vector) result(s)
+    character(len=*), intent(in) :: vector
+    character(len=:), allocatable :: s
+    s = ", whole and one element (allowed: the whole vector once, or its elements one by one, " // &
+      vector // "(1), " // vector // "(2), ...)"
+  end function both_note
 
   !> Lower case without trailing blanks; a leading blank stays (and makes a
   !> name invalid), as in the table step, which takes strings as written.

@@ -328,15 +328,16 @@ def test_a_vector_cannot_be_varied(tmp_path, name):
     the scenario readers refuse, so every case of such a sweep was
     invalid_input while the check (and so the table step) passed it (found by
     a new user's walkthrough varying the airdrop's wind).  Refused before any
-    case, in one line; the whole vector can still be set with &fixed, which
-    the check passes."""
+    case, in one line naming its elements, which can be varied one by one
+    (test_sweep_vector_elements.py); the whole vector can still be set with
+    &fixed, which the check passes."""
     definition = absolute_definition(
         "sweep_airdrop", tmp_path,
         f"&input name = '{name}', distribution = 'uniform', lower = -5.0, upper = 5.0, units = 'm' /\n")
     res = run_sweep(definition, tmp_path, None, "--check")
     assert res.returncode == 2 and res.stderr.strip().count("\n") == 0, res.stdout + res.stderr
-    assert (f"&input #5 '{name}': {name} is a vector (several values); a sweep varies variables of one real or "
-            "integer value, not a vector or its elements") in res.stderr
+    assert (f"&input #5 '{name}': {name} is a vector of 3 values; a sweep varies one value: vary its elements "
+            f"one by one (allowed: {name}(1) to {name}(3), each an &input)") in res.stderr
     definition = absolute_definition("sweep_airdrop", tmp_path,
                                      "&fixed name = 'line%wind', value = '5.0, 0.0, 0.0' /\n")
     res = run_sweep(definition, tmp_path, None, "--check")

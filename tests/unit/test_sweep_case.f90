@@ -3,19 +3,21 @@
 !> base's own assignment of the variable is taken out (commented out when alone
 !> on its lines, cut out of a shared line), so that the standard readers (which
 !> reject a variable assigned twice) read the case's value; a group the base
-!> lacks is appended; values round-trip bit for bit through their text.
+!> lacks is appended; values round-trip bit for bit through their text; a
+!> vector's elements are read from the resolved input as the runtime writes it.
 program test_sweep_case
   use, intrinsic :: iso_fortran_env, only: int64
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type
   use airlaunch_namelist, only: nml_file, nml_assignment
   use airlaunch_run_config, only: run_config, read_run_config
-  use airlaunch_sweep_case, only: inject_assignments, strike_assignments, value_text
+  use airlaunch_sweep_case, only: inject_assignments, strike_assignments, value_text, echo_elements
   use airlaunch_sweep_files, only: write_text_file
   use testing
   implicit none
   character(len=1), parameter :: nl = new_line("a")
   character(len=:), allocatable :: base, text, echo
+  character(len=40), allocatable :: items(:)
   type(nml_file) :: f, f2
   type(run_config) :: run
   type(error_type), allocatable :: error
@@ -95,6 +97,17 @@ program test_sweep_case
   call check(n_bad == 0, "20000 random doubles: all identical after value_text and a read")
   call check(value_text(60.0_dp) == "60" .and. value_text(-3.0_dp) == "-3", "integral values as integers")
   call check(value_text(0.65_dp) == "6.5000000000000002E-001", "0.65 with 17 significant digits")
+
+  call section("a vector's elements from the resolved input (the values of the other elements of a varied one)")
+  ! as gfortran's namelist write gives them: repeat counts, separators, a trailing comma
+  items = echo_elements(" 3*0.0000000000000000       ,")
+  call check(size(items) == 3, "3*x: three elements")
+  call check(all(items == "0.0000000000000000"), "each the repeated value")
+  items = echo_elements("  70.000000000000000     , 2*0.0000000000000000       ,")
+  call check(size(items) == 3 .and. items(1) == "70.000000000000000" .and. items(3) == "0.0000000000000000", &
+    "x, 2*y: x, y, y")
+  items = echo_elements(" -20.000000000000000     ,  1500.0000000000000     ,  0.0000000000000000     ,")
+  call check(size(items) == 3 .and. items(2) == "1500.0000000000000", "x, y, z: one element each")
   call finish()
 contains
 
