@@ -390,10 +390,10 @@ contains
     subroutine add(group, name, element, line)
       character(len=*), intent(in) :: group, name, line
       integer, intent(in) :: element
-      groups = [groups, [character(len=32) :: group]]
-      names = [names, [character(len=32) :: name]]
+      groups = [character(len=32) :: groups, group]
+      names = [character(len=32) :: names, name]
       elements = [elements, element]
-      lines = [lines, [character(len=1200) :: line]]
+      lines = [character(len=1200) :: lines, line]
     end subroutine add
     !> For each vector of which only elements are set: its other elements,
     !> with the base's resolved values.
