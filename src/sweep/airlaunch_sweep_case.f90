@@ -205,6 +205,13 @@ contains
           hit = findloc(base%known%group == x%group .and. base%known%name == x%variable, .true., dim=1)
           call check_element(where, x%name, x%group // "%" // x%variable, x%element, base%known(hit), kind, error)
           if (allocated(error)) return
+          ! several values (`1.0, 2.0`, `2*1.0`, `1.0 2.0`) would run on into the next elements
+          if (scan(x%value, ", *") > 0) then
+            call fatal_error(error, where // "value = '" // x%value // "' is not allowed: " // x%name // &
+              " is one element (allowed: one number; the whole vector is &fixed name = '" // x%group // "%" // &
+              x%variable // "', value = 'x, y, z')")
+            return
+          end if
         end if
       end associate
     end do

@@ -170,7 +170,10 @@ def check_refused(tmp_path, definition, message):
     ("&input name = 'line%wind', distribution = 'uniform', lower = -5.0, upper = 5.0 /",
      "&input #5 'line%wind': line%wind is a vector of 3 values; a sweep varies one value: vary its elements one "
      "by one (allowed: line%wind(1) to line%wind(3), each an &input)"),
-], ids=["index-out-of-range", "scalar-with-index", "fixed-out-of-range", "whole-vector"])
+    ("&fixed name = 'line%wind(2)', value = '1.0, 2.0' /",
+     "&fixed #1 'line%wind(2)': value = '1.0, 2.0' is not allowed: line%wind(2) is one element (allowed: one "
+     "number; the whole vector is &fixed name = 'line%wind', value = 'x, y, z')"),
+], ids=["index-out-of-range", "scalar-with-index", "fixed-out-of-range", "whole-vector", "fixed-element-of-two"])
 def test_bad_elements_are_refused_against_the_base(tmp_path, extra, message):
     check_refused(tmp_path, airdrop_with(tmp_path, extra), message)
 
