@@ -192,20 +192,10 @@ contains
       end if
       where = f%path // ":" // str(lines(k)) // ": &fixed #" // str(k) // ": "
       associate(x => def%fixed(k))
-        x%name = lower_trim(name)
         x%line = lines(k)
-        if (.not. valid_name(x%name)) then
-          call fatal_error(error, where // "name = '" // x%name // "' is not allowed (write group%variable, " // &
-            "or group%variable(i) for element i of a vector, e.g. 'flight%trim_mode', 'line%wind(1)')")
-          exit
-        end if
-        call split_name(x%name, x%group, x%variable, x%element)
-        if (index(x%name, "(") > 0 .and. x%element == 0) then
-          call fatal_error(error, where // "name = '" // x%name // "' is not allowed (an element index " // &
-            "starts at 1: group%variable(1), (2), ...)")
-          exit
-        end if
-        x%name = joined_name(x%group, x%variable, x%element)
+        call parse_name(lower_trim(name), where, "'flight%trim_mode'", x%name, x%group, x%variable, x%element, &
+          error)
+        if (allocated(error)) exit
         if (owned_by_sweep(x%group // "%" // x%variable)) then
           call fatal_error(error, where // "name = '" // x%name // "' is not allowed: " // owned_note)
           exit
@@ -467,21 +457,11 @@ contains
         exit
       end if
       associate(s => def%inputs(k))
-        s%name = lower_trim(name)
         s%line = lines(k)
-        where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // s%name // "': "
-        if (.not. valid_name(s%name)) then
-          call fatal_error(error, where // "name = '" // s%name // "' is not allowed (write group%variable, " // &
-            "or group%variable(i) for element i of a vector, e.g. 'bay%release_time', 'line%wind(1)')")
-          exit
-        end if
-        call split_name(s%name, s%group, s%variable, s%element)
-        if (index(s%name, "(") > 0 .and. s%element == 0) then
-          call fatal_error(error, where // "name = '" // s%name // "' is not allowed (an element index " // &
-            "starts at 1: group%variable(1), (2), ...)")
-          exit
-        end if
-        s%name = joined_name(s%group, s%variable, s%element)
+        where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // lower_trim(name) // "': "
+        call parse_name(lower_trim(name), where, "'bay%release_time'", s%name, s%group, s%variable, s%element, &
+          error)
+        if (allocated(error)) exit
         where = f%path // ":" // str(lines(k)) // ": &input #" // str(k) // " '" // s%name // "': "
         if (owned_by_sweep(s%group // "%" // s%variable)) then
           call fatal_error(error, where // "name = '" // s%name // "' is not allowed: " // owned_note)
@@ -651,6 +631,32 @@ contains
     valid_name = p > 1 .and. p < q - 1 .and. index(s(p+1:q-1), "%") == 0 .and. &
       verify(s(:q-1), "abcdefghijklmnopqrstuvwxyz0123456789_%") == 0
   end function valid_name
+
+  !> An input's name as written (lower case) checked and taken apart: its
+  !> group, variable and element index (0: none), and the name rejoined
+  !> ('wind(01)' is 'wind(1)'); `example` is a scalar's name for the message.
+  subroutine parse_name(raw, where, example, name, group, variable, element, error)
+    character(len=*), intent(in) :: raw       !< the name, lower case
+    character(len=*), intent(in) :: where     !< the message's start: file, line, group
+    character(len=*), intent(in) :: example   !< a scalar's name, quoted
+    character(len=:), allocatable, intent(out) :: name, group, variable
+    integer, intent(out) :: element
+    type(error_type), allocatable, intent(inout) :: error
+    name = raw
+    element = 0
+    if (.not. valid_name(raw)) then
+      call fatal_error(error, where // "name = '" // raw // "' is not allowed (write group%variable, " // &
+        "or group%variable(i) for element i of a vector, e.g. " // example // ", 'line%wind(1)')")
+      return
+    end if
+    call split_name(raw, group, variable, element)
+    if (index(raw, "(") > 0 .and. element == 0) then
+      call fatal_error(error, where // "name = '" // raw // "' is not allowed (an element index " // &
+        "starts at 1: group%variable(1), (2), ...)")
+      return
+    end if
+    name = joined_name(group, variable, element)
+  end subroutine parse_name
 
   !> The group, variable and element index (0: none) of a valid name.
   pure subroutine split_name(s, group, variable, element)

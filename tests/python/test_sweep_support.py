@@ -121,6 +121,22 @@ def assert_same_summary(a_path, b_path, ignore_vars=("wall_time_s",), ignore_att
                 assert np.array_equal(np.asarray(a.attrs.get(key)), np.asarray(b.attrs.get(key))), key
 
 
+def assert_line_row_is_the_run(row, ds, t_end):
+    """A line-scene sweep's summary row (`row`: variable -> value) holds what the
+    single run of its case namelist (`ds`, its output) reports."""
+    assert row["peak_line_tension_N"] == ds.attrs["peak_tension_N"]
+    assert row["peak_line_tension_time_s"] == ds.attrs["peak_tension_time_s"]
+    ends = ds["line_end_tension"].values
+    assert row["max_end_tension_a_N"] == ends[:, 0].max()
+    assert row["max_end_tension_b_N"] == ends[:, 1].max()
+    assert row["canopy_deploy_air_speed_m_s"] == ds.attrs["canopy_deploy_air_speed_m_s"]
+    # (Fortran's norm2 and numpy's norm may round the last bit apart)
+    tip_speed = np.linalg.norm(ds["line_tip_velocity"].values[-1])
+    assert abs(row["final_tip_speed_m_s"] - tip_speed) <= 1e-15 * tip_speed
+    assert row["end_time_s"] == ds["time"].values[-1] == t_end
+    assert row["steps"] == ds.attrs["steps"]
+
+
 def journal_rows(journal_dir):
     """(valid case ids, bad lines) of the journal files, checked with zlib's Adler-32."""
     import zlib
