@@ -38,6 +38,13 @@ def input_names(summary: xr.Dataset) -> list:
     return summary.attrs["inputs"].split()
 
 
+#: The attributes of a variable along `criterion` whose units are each criterion's
+#: own (metres for one row, newtons for the next): no `units` attribute, which
+#: one string cannot give and unit libraries (UDUNITS-2, pint-xarray's
+#: `quantify`) would refuse, but `units_from` naming the variable that has them.
+PER_CRITERION_UNITS = {"units_from": "criterion_units"}
+
+
 def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
     """Pass/fail and margins of every case against every criterion (and 'all')."""
     ok = summary["status"].values == 0
@@ -66,7 +73,7 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
                     {"long_name": "1 if the case meets the criterion ('all': every criterion)", "units": "1"})
     ds["margin"] = (("criterion", "case"), margin,
                     {"long_name": "margin in the criterion's units (>= 0 passes; NaN: not computed or event "
-                                  "not reached)", "units": "criterion units (see criterion_units)"})
+                                  "not reached)", **PER_CRITERION_UNITS})
     ds["relative_margin"] = (("criterion", "case"), relative,
                              {"long_name": "margin / criterion scale ('all': the smallest; -inf: not computed)",
                               "units": "1"})
@@ -75,7 +82,7 @@ def evaluate(summary: xr.Dataset, criteria: list) -> xr.Dataset:
                              {"long_name": "units of each criterion's margins"})
     ds["criterion_scale"] = (("criterion",), np.array([c.scale for c in criteria] + [1.0]),
                              {"long_name": "scale of the criterion's margins (relative_margin = margin / scale)",
-                              "units": "criterion units (see criterion_units)"})
+                              **PER_CRITERION_UNITS})
     ds["criterion_description"] = (("criterion",), np.array([c.description for c in criteria]
                                                            + ["every criterion above"]),
                                    {"long_name": "what the criterion asks"})

@@ -26,6 +26,7 @@ import threading
 import numpy as np
 import xarray as xr
 
+from .envelope import PER_CRITERION_UNITS
 from .definition import DefinitionError
 from .files import write_text_atomic
 
@@ -266,13 +267,13 @@ def verify(env, criteria, scene, ids, definition, sweep_exe, exe, work, segments
     for name in env.attrs["inputs"].split():
         ds[name] = sel[name]
     ds["margin_sweep"] = (("criterion", "case"), margin_sweep,
-                          {"long_name": "margin at the sweep's settings (the summary's)", "units": "criterion units (see criterion_units)"})
+                          {"long_name": "margin at the sweep's settings (the summary's)", **PER_CRITERION_UNITS})
     ds["margin_refined"] = (("criterion", "case"), margin_refined,
                             {"long_name": "margin at the refined settings (NaN: not computed or event not reached)",
-                             "units": "criterion units (see criterion_units)"})
+                             **PER_CRITERION_UNITS})
     ds["difference"] = (("criterion", "case"), margin_sweep - margin_refined,
                         {"long_name": "margin at the sweep's settings less the refined one (the sweep's numerical "
-                                      "error, in the criterion's units)", "units": "criterion units (see criterion_units)"})
+                                      "error, in the criterion's units)", **PER_CRITERION_UNITS})
     ds["relative_difference"] = (("criterion", "case"), (margin_sweep - margin_refined) / scale,
                                  {"long_name": "difference / the criterion's scale", "units": "1"})
     ds["flipped"] = (("criterion", "case"), (passed_sweep != passed_refined).astype(np.int8),

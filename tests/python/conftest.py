@@ -10,6 +10,43 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 BIN = pathlib.Path(os.environ.get("AIRLAUNCH_BIN", ROOT / "build" / "release" / "bin"))
 PAPER = ROOT / "input" / "airlaunch_paper.nml"
 
+#: unit symbols of UDUNITS-2's SI base/derived and accepted tables that the
+#: outputs may use (test_output_units.py: the grammar and why)
+UDUNITS_SYMBOLS = {"m", "s", "kg", "N", "J", "W", "Pa", "K", "rad", "degree", "sr"}
+_UNIT_TERM = r"([A-Za-z]+)(-?[0-9]+)?"
+_UNIT_STRING = re.compile(rf"^(1|{_UNIT_TERM}( {_UNIT_TERM})*)$")
+
+
+def unit_string_parses(units):
+    """True if `units` is in the UDUNITS-2 grammar the outputs need: "1", or
+    blank-separated unit symbols each with an optional integer power
+    ("m s-2", "kg m2"), the symbols from UDUNITS_SYMBOLS."""
+    return _UNIT_STRING.match(units) is not None and (
+        units == "1" or all(symbol in UDUNITS_SYMBOLS for symbol, _ in re.findall(_UNIT_TERM, units)))
+
+
+def units_problems(ds, skip=()):
+    """Numeric variables of `ds` (except `skip`) without readable units: each
+    needs a `units` string that parses, or, along a dimension whose rows have
+    different units (a sweep's criteria), no `units` but `units_from` naming a
+    string variable on that dimension whose every entry parses."""
+    problems = []
+    for name, var in ds.variables.items():
+        if name in skip or var.dtype.kind in "OSU":
+            continue
+        if "units" in var.attrs:
+            if not unit_string_parses(str(var.attrs["units"])):
+                problems.append(f"{name}: units {var.attrs['units']!r} do not parse")
+        elif "units_from" in var.attrs:
+            source = ds[var.attrs["units_from"]]
+            if source.ndim != 1 or source.dims[0] not in var.dims:
+                problems.append(f"{name}: units_from {source.name} is not along one of its dimensions")
+            problems += [f"{name}: {source.name} entry {u!r} does not parse"
+                         for u in map(str, source.values) if not unit_string_parses(u)]
+        else:
+            problems.append(f"{name} has no units")
+    return problems
+
 
 @pytest.fixture(scope="session")
 def root():

@@ -12,6 +12,7 @@ import scipy.stats as st
 import xarray as xr
 from scipy.stats import qmc
 
+from conftest import unit_string_parses, units_problems
 from test_sweep_support import run_python
 
 from postproc.sweep.criteria import parse_criteria
@@ -88,11 +89,32 @@ def test_every_envelope_variable_is_described():
     made = [name for name in env.variables if name not in ("a", "b", "status", "case")]
     assert {"criterion", "input", "criterion_units", "criterion_scale", "criterion_description"} <= set(made)
     for name in made:
-        var = env[name]
-        assert var.attrs.get("long_name"), f"{name} has no long_name"
-        assert var.dtype.kind in "OSU" or var.attrs.get("units"), f"{name} has no units"
+        assert env[name].attrs.get("long_name"), f"{name} has no long_name"
+    # numbers have units a unit library reads; the margins and scales, one unit
+    # per criterion, name criterion_units instead (they carried the string
+    # "criterion units (see criterion_units)", which pint-xarray's quantify()
+    # refuses, until the thirty-third session)
+    assert units_problems(env, skip=("a", "b", "status", "case")) == []
     # the scale is in the criterion's units, as the margin; the relative margin is margin / scale
-    assert env["criterion_scale"].attrs["units"] == env["margin"].attrs["units"]
+    assert env["criterion_scale"].attrs["units_from"] == env["margin"].attrs["units_from"] == "criterion_units"
+
+
+def test_every_criterion_has_units_a_unit_library_reads():
+    """Each criterion a criteria file can ask for (every variable of the
+    criteria namelist set) carries units in the grammar of the run outputs
+    (test_output_units.py), and 'all' is dimensionless."""
+    from postproc.sweep.criteria import CRITERIA_VARS
+    limits = {"line_safety_factor": 1.5, "firing_pitch_min_deg": 60.0, "firing_pitch_max_deg": 90.0}
+    text = "&criteria\n" + "\n".join(f"  {k} = {limits.get(k, 2.0)}" for k in CRITERIA_VARS) + "\n/\n"
+    criteria = parse_criteria(text)
+    a = np.linspace(0, 1, 3)
+    summary = synthetic_summary(a, a, a + 2.0)
+    summary["min_line_clearance_m"] = ("case", a + 3.0)
+    summary["ground_speed_m_s"] = ("case", a + 1.0)
+    env = evaluate(summary, criteria)
+    assert len(criteria) == len(set(env["criterion"].values)) - 1 >= 8
+    assert [u for u in env["criterion_units"].values if not unit_string_parses(str(u))] == []
+    assert str(env["criterion_units"].sel(criterion="all").values) == "1"
 
 
 def test_boundary_of_the_safe_region_is_recovered():

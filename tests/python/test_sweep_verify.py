@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import units_problems
 from test_sweep_support import (AIRLAUNCH_EXE, ENV, PAPER, ROOT, make_table, run_example_sweep, run_python, run_sweep,
                                 small_definition)
 
@@ -57,10 +58,12 @@ def test_unrefined_rerun_is_the_summary_row(paper_sweep):
         assert np.isfinite(clearance).any() and np.isnan(firing).all()   # both kinds compared
         # every variable described, as in the other outputs (docs/output.md); numbers with units
         # (the margins' and differences' were missing: found by an audit, thirty-first session)
-        # (and the coordinate criterion: bare before the thirty-second session's audit)
+        # (and the coordinate criterion: bare before the thirty-second session's audit);
+        # units a unit library reads, the margins' those of each criterion (criterion_units)
         for name, var in ds.variables.items():
             assert var.attrs.get("long_name"), f"{name} has no long_name"
-            assert var.dtype.kind in "OSU" or var.attrs.get("units"), f"{name} has no units"
+        assert units_problems(ds) == []
+        assert ds["difference"].attrs["units_from"] == "criterion_units"
     assert "0 of 6 case(s) change pass/fail" in res.stdout
     # docs/sweep.md's description of verify.nc names every variable the file has
     # (criterion_units was missing: an audit of the output files, thirty-second session)
