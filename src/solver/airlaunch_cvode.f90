@@ -206,7 +206,6 @@ contains
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer(c_int) :: ierr, lmm
     integer(c_long) :: neq
-    real(c_double), pointer :: atol(:)
 
     call self%free()
     neq = int(size(y0), c_long)
@@ -252,6 +251,24 @@ contains
     if (failed(ierr, "FCVodeInit failed", error)) return
     ierr = FCVodeSetUserData(self%mem, c_loc(self%cb))
     if (failed(ierr, "cannot set the user data", error)) return
+    call set_tolerances(self, opts, neq, error)
+    if (allocated(error)) return
+    call attach_linear_solver(self, sys, opts, neq, error)
+    if (allocated(error)) return
+    call apply_options(self, sys, opts, lmm, error)
+    if (allocated(error)) return
+    call self%set_roots(sys%nroots(), error)
+  end subroutine init_parts
+
+  !> The relative and absolute tolerances (a scalar atol, or one per state).
+  subroutine set_tolerances(self, opts, neq, error)
+    class(cvode_solver), intent(inout) :: self            !< solver being initialised
+    type(cvode_options), intent(in) :: opts               !< method and tolerances
+    integer(c_long), intent(in) :: neq                    !< number of states
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer(c_int) :: ierr
+    real(c_double), pointer :: atol(:)
+
     if (allocated(opts%atol_vector)) then
       if (size(opts%atol_vector) /= neq) then
         call fatal_error(error, "CVODE: atol_vector has " // str(size(opts%atol_vector)) // &
@@ -269,6 +286,18 @@ contains
       call fatal_error(error, "CVODE: tolerances rejected (rtol = " // str(opts%rtol) // ")")
       return
     end if
+
+  end subroutine set_tolerances
+
+  !> The Newton iteration's linear solver (or the fixed-point iteration, "none")
+  !> and the system's analytic Jacobian or node blocks where it has them.
+  subroutine attach_linear_solver(self, sys, opts, neq, error)
+    class(cvode_solver), intent(inout) :: self            !< solver being initialised
+    class(ode_system), intent(inout) :: sys               !< the system
+    type(cvode_options), intent(in) :: opts               !< method and tolerances
+    integer(c_long), intent(in) :: neq                    !< number of states
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer(c_int) :: ierr
 
     select case (opts%linear_solver)
     case ("dense")
@@ -354,6 +383,18 @@ contains
         if (failed(ierr, "cannot install the analytic Jacobian", error)) return
       end select
     end if
+  end subroutine attach_linear_solver
+
+  !> Step limits, wall-time budget, order, Newton coefficient, projection and
+  !> stability-limit detection from the options.
+  subroutine apply_options(self, sys, opts, lmm, error)
+    class(cvode_solver), intent(inout) :: self            !< solver being initialised
+    class(ode_system), intent(in) :: sys                  !< the system
+    type(cvode_options), intent(in) :: opts               !< method and tolerances
+    integer(c_int), intent(in) :: lmm                     !< CV_BDF or CV_ADAMS
+    type(error_type), allocatable, intent(inout) :: error !< set on failure
+    integer(c_int) :: ierr
+
     ! max_num_steps <= 0: no per-output limit.  CVODE itself reads 0 as its
     ! default of 500 and a negative value as no limit, so <= 0 goes in as -1.
     self%max_interval = max(0_c_long, int(opts%max_num_steps, c_long))
@@ -398,8 +439,7 @@ contains
       ierr = FCVodeSetStabLimDet(self%mem, 1_c_int)
       if (failed(ierr, "cannot switch on stability limit detection", error)) return
     end if
-    call self%set_roots(sys%nroots(), error)
-  end subroutine init_parts
+  end subroutine apply_options
 
   !> True (and `error` set to "CVODE: <what> (flag <ierr>)") if a SUNDIALS call
   !> returned a nonzero flag.
