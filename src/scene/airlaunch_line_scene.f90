@@ -795,51 +795,7 @@ contains
     call require_nonnegative(f, "line_scene", "initial_sag", initial_sag, "m", error)
     call require_choice(f, "line_scene", "scheme", scheme, [character(len=16) :: "cvode", "marching"], error)
     call require_choice(f, "line", "mass", mass, [character(len=16) :: "lumped", "mixed"], error)
-    if (trim(scheme) == "marching" .and. trim(mass) == "mixed" .and. .not. allocated(error)) call fatal_error( &
-      error, f%path // ": &line: mass = 'mixed' is not allowed with scheme = 'marching': the paper's " // &
-      "explicit marching needs the lumped (diagonal) mass; use mass = 'lumped' (the default)")
-    if (trim(scheme) == "marching") then
-      call require_positive(f, "line_scene", "dt", dt, "s", error)
-      call require_positive(f, "line_scene", "force_tol", force_tol, "N", error)
-      call require_int_range(f, "line_scene", "max_iterations", max_iterations, 1, 1000, error)
-    end if
-    call check_break(f, "direct", n_seg, breaking_strength, break_time, break_segment, scene_line_ends, error)
-    call check_weak_link(f, "direct", n_seg, breaking_strength, weak_link_strength, weak_link_segment, &
-      scene_line_ends, error)
     if (allocated(error)) return
-    if ((breaking_strength > 0.0_dp .or. weak_link_strength > 0.0_dp .or. break_time > 0.0_dp) .and. &
-        trim(scheme) == "marching") then
-      call fatal_error(error, f%path // ": &line: a line break (breaking_strength, weak_link_strength or " // &
-        "break_time) is not allowed with scheme = 'marching' (the paper's explicit marching neither locates " // &
-        "the break nor restarts on the parted line: use scheme = 'cvode', the default)")
-      return
-    end if
-    call check_break_before_end(f, break_time, run%t_end, error)
-    if (allocated(error)) return
-    ! (the default value passes: the resolved input, run again, sets it)
-    if (.not. ground .and. ground_altitude /= d%ground_altitude) then
-      call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(ground_altitude) // &
-        " m is not allowed with ground = .false. (the default: the scene has no ground); set ground = .true.")
-      return
-    end if
-    if (ground) then
-      if (trim(scheme) == "marching") then
-        call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(ground_altitude) // &
-          " m is not allowed with scheme = 'marching' (the paper's explicit marching does not locate events: " // &
-          "use scheme = 'cvode', the default)")
-        return
-      end if
-    end if
-    if ((breaking_strength > 0.0_dp .or. weak_link_strength > 0.0_dp) .and. n_seg == 1 .and. &
-        is_kinematic(a_kind) .and. is_kinematic(b_kind)) then
-      ! no node of the line is integrated: nothing would watch the strength
-      call fatal_error(error, f%path // ": &line: " // trim(merge("breaking_strength ", "weak_link_strength", &
-        breaking_strength > 0.0_dp)) // " = " // str(max(breaking_strength, weak_link_strength)) // &
-        " N is not allowed on a line of n_seg = 1 between two kinematic ends (a_kind = '" // trim(a_kind) // &
-        "', b_kind = '" // trim(b_kind) // "'): no node of it is integrated, so no event watches its " // &
-        "tension; use n_seg >= 2 (break_time cuts it at a given time)")
-      return
-    end if
 
     cfg%line = line_params(length=length, n_seg=n_seg, ea=ea, mass_per_length=mass_per_length, &
       damping=damping, settling_damping=settling_damping, diameter=diameter, cd_normal=cd_normal, &
@@ -871,18 +827,13 @@ contains
     if (f%is_set("run", "max_order")) cfg%integration%max_order = run%max_order
     cfg%integration%max_steps = run%max_steps
     cfg%integration%max_wall_time = run%max_wall_time
-    if (scheme == "marching" .and. run%max_steps > 0) then
-      if (run%t_end/dt > run%max_steps) then
-        call fatal_error(error, f%path // ": &line_scene: dt = " // str(dt) // " s is not allowed with t_end = " // &
-          str(run%t_end) // " s (" // str(run%t_end/dt) // " marching steps; &run max_steps = " // &
-          str(run%max_steps) // ": raise dt or max_steps)")
-        return
-      end if
-    end if
     cfg%t_end = run%t_end
     cfg%output_interval = run%output_dt
     cfg%record_nodes = run%trajectory
     cfg%record_tensions = record_tensions .and. run%trajectory
+    call check_scene_combinations(f, run, cfg, a_kind, b_kind, error)
+    if (allocated(error)) return
+    weak_link_segment = cfg%weak_link_segment   ! (resolved there: the echo gives it)
 
     ! the geometry and the scheme's stability are checked by building the scene
     call probe_scene(cfg, error)
@@ -906,6 +857,76 @@ contains
     call scene_buffer%append_to(echo)
     if (allocated(chute_echo)) echo = echo // chute_echo
   end subroutine read_line_scene_config
+
+  !> The scene's choices that exclude each other (the paper's marching with the
+  !> mixed mass, a line break, a ground or too many steps; a strength nothing
+  !> watches; a ground altitude without a ground), checked on the resolved
+  !> scene; each refusal names the variables, the values and what is allowed.
+  !> An unset weak_link_segment becomes the last segment (check_weak_link).
+  subroutine check_scene_combinations(f, run, cfg, a_kind, b_kind, error)
+    type(nml_file), intent(in) :: f                       !< scanned input
+    type(run_config), intent(in) :: run                   !< &run settings
+    type(line_scene_config), intent(inout) :: cfg         !< resolved scene
+    character(len=*), intent(in) :: a_kind, b_kind        !< &line_scene a_kind, b_kind
+    type(error_type), allocatable, intent(inout) :: error !< set on bad input
+    type(line_scene_config) :: d
+
+    if (trim(cfg%integration%scheme) == "marching" .and. trim(cfg%line%mass) == "mixed") call fatal_error(error, &
+      f%path // ": &line: mass = 'mixed' is not allowed with scheme = 'marching': the paper's " // &
+      "explicit marching needs the lumped (diagonal) mass; use mass = 'lumped' (the default)")
+    if (trim(cfg%integration%scheme) == "marching") then
+      call require_positive(f, "line_scene", "dt", cfg%integration%dt, "s", error)
+      call require_positive(f, "line_scene", "force_tol", cfg%integration%force_tol, "N", error)
+      call require_int_range(f, "line_scene", "max_iterations", cfg%integration%max_iterations, 1, 1000, error)
+    end if
+    call check_break(f, "direct", cfg%line%n_seg, cfg%breaking_strength, cfg%break_time, cfg%break_segment, &
+      scene_line_ends, error)
+    call check_weak_link(f, "direct", cfg%line%n_seg, cfg%breaking_strength, cfg%weak_link_strength, &
+      cfg%weak_link_segment, scene_line_ends, error)
+    if (allocated(error)) return
+    if ((cfg%breaking_strength > 0.0_dp .or. cfg%weak_link_strength > 0.0_dp .or. cfg%break_time > 0.0_dp) .and. &
+        trim(cfg%integration%scheme) == "marching") then
+      call fatal_error(error, f%path // ": &line: a line break (breaking_strength, weak_link_strength or " // &
+        "break_time) is not allowed with scheme = 'marching' (the paper's explicit marching neither locates " // &
+        "the break nor restarts on the parted line: use scheme = 'cvode', the default)")
+      return
+    end if
+    call check_break_before_end(f, cfg%break_time, run%t_end, error)
+    if (allocated(error)) return
+    ! (the default value passes: the resolved input, run again, sets it)
+    if (.not. cfg%ground .and. cfg%ground_altitude /= d%ground_altitude) then
+      call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(cfg%ground_altitude) // &
+        " m is not allowed with ground = .false. (the default: the scene has no ground); set ground = .true.")
+      return
+    end if
+    if (cfg%ground) then
+      if (trim(cfg%integration%scheme) == "marching") then
+        call fatal_error(error, f%path // ": &line_scene: ground_altitude = " // str(cfg%ground_altitude) // &
+          " m is not allowed with scheme = 'marching' (the paper's explicit marching does not locate events: " // &
+          "use scheme = 'cvode', the default)")
+        return
+      end if
+    end if
+    if ((cfg%breaking_strength > 0.0_dp .or. cfg%weak_link_strength > 0.0_dp) .and. cfg%line%n_seg == 1 .and. &
+        is_kinematic(a_kind) .and. is_kinematic(b_kind)) then
+      ! no node of the line is integrated: nothing would watch the strength
+      call fatal_error(error, f%path // ": &line: " // trim(merge("breaking_strength ", "weak_link_strength", &
+        cfg%breaking_strength > 0.0_dp)) // " = " // str(max(cfg%breaking_strength, cfg%weak_link_strength)) // &
+        " N is not allowed on a line of n_seg = 1 between two kinematic ends (a_kind = '" // trim(a_kind) // &
+        "', b_kind = '" // trim(b_kind) // "'): no node of it is integrated, so no event watches its " // &
+        "tension; use n_seg >= 2 (break_time cuts it at a given time)")
+      return
+    end if
+
+    if (trim(cfg%integration%scheme) == "marching" .and. run%max_steps > 0) then
+      if (run%t_end/cfg%integration%dt > run%max_steps) then
+        call fatal_error(error, f%path // ": &line_scene: dt = " // str(cfg%integration%dt) // &
+          " s is not allowed with t_end = " // str(run%t_end) // " s (" // str(run%t_end/cfg%integration%dt) // " marching steps; &run max_steps = " // &
+          str(run%max_steps) // ": raise dt or max_steps)")
+        return
+      end if
+    end if
+  end subroutine check_scene_combinations
 
   !> The canopy of a 'canopy' end: the group &parachute (the air-launch
   !> scene's, docs/input.md), allowed only with such an end.  Its mass and
