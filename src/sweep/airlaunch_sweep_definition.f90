@@ -232,7 +232,6 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     character(len=256) :: name, base, output_dir, design, worst_by, criteria
     integer :: n_cases, seed, keep_worst, keep_ids(max_list_values), u, ios, i, n_ids
-    integer(i8) :: n_grid
     real(dp) :: t_end, progress_interval
     logical :: keep_failed, present, exists, is_dir
     character(len=512) :: msg
@@ -296,70 +295,10 @@ contains
       return
     end if
     if (len(def%output_dir) == 0) def%output_dir = "output/sweep_" // def%name
-    do i = 1, size(def%inputs)
-      associate(s => def%inputs(i))
-        if (s%levels_given .and. s%distribution == "list") then
-          call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
-            "': levels is not used by distribution = 'list' (its values are the grid's levels)")
-          return
-        else if (s%levels_given .and. def%design /= "grid") then
-          call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
-            "': levels is not used with design = '" // def%design // "' (only with 'grid')")
-          return
-        end if
-      end associate
-    end do
-    if (def%design == "grid") then
-      n_grid = 1
-      do i = 1, size(def%inputs)
-        associate(s => def%inputs(i))
-          if (s%distribution == "list") then
-            n_grid = n_grid*size(s%values, kind=i8)
-          else if (s%levels < 1) then
-            call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
-              "': missing required value levels (design = 'grid' needs levels >= 1 or a list of values)")
-            return
-          else
-            n_grid = n_grid*s%levels
-          end if
-          n_grid = min(n_grid, int(max_cases, i8) + 1)   ! no overflow in the next product
-        end associate
-      end do
-      if (n_grid > max_cases) then
-        call fatal_error(error, where // "design = 'grid' is not allowed with these levels (the grid has " // &
-          "more than " // str(max_cases) // " points, the most a sweep may have)")
-        return
-      end if
-      if (n_cases == unset_int) n_cases = int(n_grid)
-      if (n_cases /= n_grid) then
-        call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (the grid has " // &
-          str(int(n_grid)) // " points: the product of the levels)")
-        return
-      end if
-      if (seed == unset_int) seed = 0
-    else
-      if (n_cases == unset_int) then
-        call fatal_error(error, where // "missing required value n_cases")
-        return
-      end if
-      if (seed == unset_int) then
-        call fatal_error(error, where // "missing required value seed")
-        return
-      end if
-    end if
-    if (n_cases < 1) then
-      call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (must be >= 1: zero cases)")
-      return
-    end if
-    if (n_cases > max_cases) then
-      call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (at most " // &
-        str(max_cases) // ")")
-      return
-    end if
-    if (seed < 0) then
-      call fatal_error(error, where // "seed = " // str(seed) // " is not allowed (must be in [0, 2147483647])")
-      return
-    end if
+    call check_levels_use(f, def, error)
+    if (allocated(error)) return
+    call resolve_case_count(f, def, where, n_cases, seed, error)
+    if (allocated(error)) return
     if (t_end < 0.0_dp .or. t_end /= t_end) then
       call fatal_error(error, where // "t_end = " // str(t_end) // " is not allowed (must be > 0 s, or 0 for " // &
         "the base scenario's)")
@@ -414,6 +353,94 @@ contains
     def%criteria = trim(criteria)
     def%progress_interval = progress_interval
   end subroutine read_sweep_group
+
+  !> `levels` is the grid's: refused on a 'list' input (its values are the
+  !> levels) and with a design other than 'grid'.
+  subroutine check_levels_use(f, def, error)
+    type(nml_file), intent(in) :: f
+    type(sweep_definition), intent(in) :: def
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: i
+
+    do i = 1, size(def%inputs)
+      associate(s => def%inputs(i))
+        if (s%levels_given .and. s%distribution == "list") then
+          call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
+            "': levels is not used by distribution = 'list' (its values are the grid's levels)")
+          return
+        else if (s%levels_given .and. def%design /= "grid") then
+          call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
+            "': levels is not used with design = '" // def%design // "' (only with 'grid')")
+          return
+        end if
+      end associate
+    end do
+  end subroutine check_levels_use
+
+  !> The number of cases and the seed: a grid's are the product of its levels
+  !> (n_cases, if given, must equal it; the seed defaults to 0), the random
+  !> designs' are required; then both in range.
+  subroutine resolve_case_count(f, def, where, n_cases, seed, error)
+    type(nml_file), intent(in) :: f
+    type(sweep_definition), intent(in) :: def
+    character(len=*), intent(in) :: where                 !< "<file>: &sweep: "
+    integer, intent(inout) :: n_cases, seed               !< as read (unset_int: not given); resolved
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: i
+    integer(i8) :: n_grid
+
+    if (def%design == "grid") then
+      n_grid = 1
+      do i = 1, size(def%inputs)
+        associate(s => def%inputs(i))
+          if (s%distribution == "list") then
+            n_grid = n_grid*size(s%values, kind=i8)
+          else if (s%levels < 1) then
+            call fatal_error(error, f%path // ":" // str(s%line) // ": &input #" // str(i) // " '" // s%name // &
+              "': missing required value levels (design = 'grid' needs levels >= 1 or a list of values)")
+            return
+          else
+            n_grid = n_grid*s%levels
+          end if
+          n_grid = min(n_grid, int(max_cases, i8) + 1)   ! no overflow in the next product
+        end associate
+      end do
+      if (n_grid > max_cases) then
+        call fatal_error(error, where // "design = 'grid' is not allowed with these levels (the grid has " // &
+          "more than " // str(max_cases) // " points, the most a sweep may have)")
+        return
+      end if
+      if (n_cases == unset_int) n_cases = int(n_grid)
+      if (n_cases /= n_grid) then
+        call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (the grid has " // &
+          str(int(n_grid)) // " points: the product of the levels)")
+        return
+      end if
+      if (seed == unset_int) seed = 0
+    else
+      if (n_cases == unset_int) then
+        call fatal_error(error, where // "missing required value n_cases")
+        return
+      end if
+      if (seed == unset_int) then
+        call fatal_error(error, where // "missing required value seed")
+        return
+      end if
+    end if
+    if (n_cases < 1) then
+      call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (must be >= 1: zero cases)")
+      return
+    end if
+    if (n_cases > max_cases) then
+      call fatal_error(error, where // "n_cases = " // str(n_cases) // " is not allowed (at most " // &
+        str(max_cases) // ")")
+      return
+    end if
+    if (seed < 0) then
+      call fatal_error(error, where // "seed = " // str(seed) // " is not allowed (must be in [0, 2147483647])")
+      return
+    end if
+  end subroutine resolve_case_count
 
   !> The &input groups, in the order of the file.
   subroutine read_inputs(f, def, n_input, error)
