@@ -39,6 +39,19 @@ def _padded(v, frac=0.03):
     return lo - pad, hi + pad
 
 
+def layout_below_title(fig, title):
+    """tight_layout with every panel (its title and tick labels included) below
+    the figure's title `title` (the Text of fig.suptitle).  tight_layout alone
+    leaves the suptitle a top margin that does not grow with the figure's
+    height: on a tall figure (a pass/fail map of 5 or more inputs, 10 or more
+    panels) the first row's titles ran into it."""
+    renderer = fig.canvas.get_renderer()   # the title stands where it is, whatever the panels' layout
+    gap = 6.0 * fig.dpi / 72.0   # 6 points between the title and the panels
+    top = (title.get_window_extent(renderer).y0 - gap) / fig.bbox.height
+    title.set_in_layout(False)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, top))
+
+
 def clear_boundary(prob, contrast=0.15):
     """A boundary is drawn only where the map goes from clearly failing to
     clearly passing (P below 0.5 - contrast and above 0.5 + contrast): a map
@@ -113,8 +126,8 @@ def _draw_passfail(fig, axes, env, pairs, criterion, ok, passed):
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
     name = envelope_name(str(env.attrs.get("scene", "airlaunch")))
-    fig.suptitle(f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
-    fig.tight_layout()
+    title = fig.suptitle(f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
+    layout_below_title(fig, title)
 
 
 def margins(env, path):
@@ -139,9 +152,9 @@ def margins(env, path):
                 if i == len(crit) - 1:
                     ax.set_xlabel(_label(env, name), fontsize=8)
                 ax.tick_params(labelsize=7)
-        fig.suptitle("margins against each input (>= 0 passes; cases not computed, or whose metric is NaN, "
-                     "have no margin and are not drawn)")
-        fig.tight_layout()
+        title = fig.suptitle("margins against each input (>= 0 passes; cases not computed, or whose metric is NaN, "
+                             "have no margin and are not drawn)")
+        layout_below_title(fig, title)
         fig.savefig(path, dpi=110, format="png")
     finally:
         plt.close(fig)   # also when drawing or writing fails
@@ -202,10 +215,10 @@ def sensitivity(env, path):
         for ax in axes.ravel()[len(crit):]:
             ax.axis("off")
         n = int(env["sensitivity_cases"].values[0])
-        fig.suptitle("drivers: standardised rank regression coefficient of each margin on each input "
-                     f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
-                     "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
-        fig.tight_layout()
+        title = fig.suptitle("drivers: standardised rank regression coefficient of each margin on each input "
+                             f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
+                             "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
+        layout_below_title(fig, title)
         fig.savefig(path, dpi=110, format="png")
     finally:
         plt.close(fig)   # also when drawing or writing fails
