@@ -237,10 +237,16 @@ def worst_table(env, path_png, path_md, k=10, text=None):
     try:
         ax.axis("off")
         if body:
-            table = ax.table(cellText=body, colLabels=head, loc="center", cellLoc="center")
+            # a margin's heading on two lines ("aircraft_pitch" / "margin [degree]"): on one it
+            # ran over its neighbours' (the columns share the figure's width equally)
+            labels = [h.replace(" margin [", "\nmargin [") for h in head]
+            table = ax.table(cellText=body, colLabels=labels, loc="center", cellLoc="center")
             table.auto_set_font_size(False)
             table.set_fontsize(7)
             table.scale(1, 1.3)
+            for col in range(len(labels)):
+                cell = table[0, col]
+                cell.set_height(2 * cell.get_height())
         ax.set_title(f"the {len(body)} worst cases (smallest relative margin first)", fontsize=9)
         fig.tight_layout()
         fig.savefig(path_png, dpi=110, format="png")

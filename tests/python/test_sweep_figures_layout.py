@@ -80,3 +80,25 @@ def test_tall_figures_keep_their_title_clear(name, monkeypatch):
     env = five_input_envelope()
     gap = captured(getattr(figures, name), env, monkeypatch)
     assert gap > 0.0, f"{name}: the first row of panels reaches {-gap:.1f} px into the figure's title"
+
+
+def test_worst_case_table_headings_fit_their_columns(monkeypatch):
+    """Each heading of worst_cases.png lies within its cell: the columns share
+    the figure's width equally, and a margin's heading on one line
+    ("aircraft_pitch margin [degree]") ran over its neighbours' by ~9 px."""
+    env = five_input_envelope()
+    over = {}
+
+    def keep(self, *args, **kwargs):
+        self.canvas.draw()
+        renderer = self.canvas.get_renderer()
+        (table,) = self.axes[0].tables
+        for (row, col), cell in table.get_celld().items():
+            box = cell.get_window_extent(renderer)
+            text = cell.get_text().get_window_extent(renderer)
+            if text.width > box.width or text.height > box.height:
+                over[cell.get_text().get_text()] = (text.width - box.width, text.height - box.height)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
+    figures.worst_table(env, "unused.png", None)
+    assert over == {}, f"text wider or taller than its cell (excess in px): {over}"
