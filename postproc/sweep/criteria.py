@@ -217,6 +217,9 @@ def parse_criteria(text, path="<criteria>"):
     if "firing_pitch_min_deg" in v or "firing_pitch_max_deg" in v:
         lo = v.get("firing_pitch_min_deg", -90.0)
         hi = v.get("firing_pitch_max_deg", 90.0)
+        if not lo < 90:   # named before the window: with the default max, "reversed" blamed a value not set
+            raise DefinitionError(f"{where}firing_pitch_min_deg = {lo:g} is not allowed (must be < 90 degrees: the "
+                                  "rocket's Euler pitch never exceeds 90, so no case could reach it)")
         if not hi > lo:
             raise DefinitionError(f"{where}firing_pitch_max_deg = {hi:g} is not allowed (must be > "
                                   f"firing_pitch_min_deg = {lo:g}: reversed window)")

@@ -193,6 +193,8 @@ def test_cases_not_computed_never_pass_and_come_first_among_the_worst():
 @pytest.mark.parametrize("text,match", [
     ("&criteria min_clearence_m = 1.0 /", "unknown criterion 'min_clearence_m' .*did you mean 'min_clearance_m'"),
     ("&criteria firing_pitch_min_deg = 80, firing_pitch_max_deg = 70 /", "reversed window"),
+    # the Euler pitch never exceeds 90 (output.md): a minimum of 95 is named itself, not the default maximum
+    ("&criteria firing_pitch_min_deg = 95 /", r"firing_pitch_min_deg = 95 is not allowed \(must be < 90"),
     ("&criteria line_safety_factor = 2 /", "needs line_strength_n"),
     ("&criteria /", "sets no criterion"),
     ("&limits min_clearance_m = 1.0 /", "unknown group &limits"),
