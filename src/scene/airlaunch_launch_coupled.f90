@@ -547,11 +547,13 @@ contains
 
   !> The gust has passed every point of the direct system (event
   !> launch_gust_root, or found at a resumption): no more watching, and
-  !> CVODE's step is free again.
+  !> CVODE's step is free again.  Its passing is a change of the scene, like
+  !> a break: stop_when_final watches 1 s past it.
   subroutine lift_gust_cap(r, err)
     type(coupled_run), intent(inout) :: r
     type(error_type), allocatable, intent(inout) :: err
     r%dsys%gust_watch = .false.
+    r%last_record_of_extremum = max(r%last_record_of_extremum, r%dsolver%t)
     r%dopts%max_step = 0.0_dp
     call r%dsolver%set_max_step(0.0_dp, err)
   end subroutine lift_gust_cap
@@ -923,7 +925,11 @@ contains
   !> waited for, but a line that can still part (a scheduled cut to come, or
   !> an intact segment with a strength: launch_system%may_still_part) keeps
   !> the run going, so that its break is recorded, and a break counts as a
-  !> change (part_line): the run goes on for 1 s after it.
+  !> change (part_line): the run goes on for 1 s after it.  So does a &gust
+  !> that some point of the scene has still to pass (launch_system%gust_watch,
+  !> lifted by the direct coupling's event launch_gust_root): a gust met after
+  !> the milestones looked final would otherwise never be flown into (a run
+  !> that the rigidized coupling ends keeps watching: it runs to t_end).
   logical function stop_now(r, run, res, phase, t)
     type(coupled_run), intent(in) :: r
     type(run_config), intent(in) :: run
@@ -934,6 +940,7 @@ contains
     if (.not. run%stop_when_final) return
     if (phase /= phase_free .or. res%pitch_max_time < 0.0_dp) return
     if (r%dsys%may_still_part()) return
+    if (r%dsys%gust_watch) return
     if (t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
     stop_now = t >= max(r%last_record_of_extremum, maxval(r%trk%t_best)) + 1.0_dp
   end function stop_now

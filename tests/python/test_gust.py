@@ -318,3 +318,35 @@ def test_the_step_cap_is_lifted_once_the_gust_has_passed(airlaunch_exe, tmp_path
     assert steps["gust"] < 12.0 / cap
     for k, v in marks["still"].items():
         assert abs(marks["gust"][k] - v) <= 1e-4 * abs(v), k
+
+
+@pytest.mark.parametrize("coupling", ["direct", "rigidized"])
+def test_stop_when_final_waits_for_a_gust_still_to_come(airlaunch_exe, tmp_path, coupling):
+    """&run stop_when_final ends a run once its milestones are final; a gust
+    the aircraft meets after that (here at 12.0 s, the paper run's first pitch
+    maximum at 10.47 s making the milestones look final by ~11.5 s) is still to
+    change them: a 15 m/s updraft moves the aircraft's load factor by ~1 g.  The
+    reference is the same run without stop_when_final (to 15 s): every
+    milestone equal to it, bit for bit (the runs take the same steps up to the
+    stop).  Found by a first-time user's sweep: the run stopped at 11.5 s and
+    reported the still-air excursion 0.27, passing a 0.5 limit the gust breaks
+    (0.97).  The rigidized coupling does not locate the gust's passing: it
+    runs to t_end."""
+    marks = {}
+    for stop in (".true.", ".false."):
+        nml = with_gust(tmp_path, f"stop{stop.strip('.')}", PAPER,
+                        ((r"^\s*output\s*=.*$", "  output = 'unused.nc'"),
+                         (r"^(  atol = .*)$", rf"\1\n  stop_when_final = {stop}"),),
+                        gust_block(vertical=15.0, hit_time=12.0))
+        if coupling != "direct":
+            nml.write_text(nml.read_text().replace("&line\n", f"&line\n  coupling = '{coupling}'\n", 1))
+        with run(airlaunch_exe, nml, tmp_path / f"{stop.strip('.')}.nc") as ds:
+            marks[stop] = {k: v for k, v in ds.attrs.items() if isinstance(v, (float, np.floating))
+                           and k not in ("max_quaternion_norm_error", "max_constraint_residual_m")}
+            marks[stop]["end"] = float(ds["time"].values[-1])
+    full, stopped = marks[".false."], marks[".true."]
+    assert full["max_load_factor_excursion"] > 0.8, "the gust moves the load factor (still air: 0.27)"
+    for k in full:
+        if k != "end":
+            assert stopped[k] == full[k], (k, stopped[k], full[k])
+    assert stopped["end"] >= 12.0
