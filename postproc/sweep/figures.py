@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import itertools
 import pathlib
+import textwrap
 
 import matplotlib
 
@@ -37,6 +38,21 @@ def _padded(v, frac=0.03):
     lo, hi = float(np.min(v)), float(np.max(v))
     pad = frac * (hi - lo) if hi > lo else 0.5
     return lo - pad, hi + pad
+
+
+def fitted_suptitle(fig, text, **kwargs):
+    """fig.suptitle(text), its lines broken at spaces where the figure is too
+    narrow for them (a margins figure of one or two inputs is 3.6 or 7.2 in
+    wide: its one-line title was cut off at both sides)."""
+    title = fig.suptitle(text, **kwargs)
+    renderer = fig.canvas.get_renderer()
+    room = 0.96 * fig.bbox.width
+    longest = max(len(line) for line in text.split("\n"))
+    chars = longest
+    while title.get_window_extent(renderer).width > room and chars > 12:
+        chars = int(0.9 * chars)
+        title.set_text("\n".join(textwrap.fill(line, chars) for line in text.split("\n")))
+    return title
 
 
 def layout_below_title(fig, title):
@@ -126,7 +142,7 @@ def _draw_passfail(fig, axes, env, pairs, criterion, ok, passed):
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
     name = envelope_name(str(env.attrs.get("scene", "airlaunch")))
-    title = fig.suptitle(f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
+    title = fitted_suptitle(fig, f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
     layout_below_title(fig, title)
 
 
@@ -152,8 +168,8 @@ def margins(env, path):
                 if i == len(crit) - 1:
                     ax.set_xlabel(_label(env, name), fontsize=8)
                 ax.tick_params(labelsize=7)
-        title = fig.suptitle("margins against each input (>= 0 passes; cases not computed, or whose metric is NaN, "
-                             "have no margin and are not drawn)")
+        title = fitted_suptitle(fig, "margins against each input (>= 0 passes; cases not computed, or whose metric "
+                                     "is NaN, have no margin and are not drawn)")
         layout_below_title(fig, title)
         fig.savefig(path, dpi=110, format="png")
     finally:
@@ -215,9 +231,9 @@ def sensitivity(env, path):
         for ax in axes.ravel()[len(crit):]:
             ax.axis("off")
         n = int(env["sensitivity_cases"].values[0])
-        title = fig.suptitle("drivers: standardised rank regression coefficient of each margin on each input "
-                             f"({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not significant "
-                             "(the partial rank correlation's 95 % interval holds 0)", fontsize=9)
+        title = fitted_suptitle(fig, "drivers: standardised rank regression coefficient of each margin on each "
+                                     f"input ({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not "
+                                     "significant (the partial rank correlation's 95 % interval holds 0)", fontsize=9)
         layout_below_title(fig, title)
         fig.savefig(path, dpi=110, format="png")
     finally:

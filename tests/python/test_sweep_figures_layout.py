@@ -102,3 +102,24 @@ def test_worst_case_table_headings_fit_their_columns(monkeypatch):
     monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
     figures.worst_table(env, "unused.png", None)
     assert over == {}, f"text wider or taller than its cell (excess in px): {over}"
+
+
+@pytest.mark.parametrize("n_inputs", [1, 2])
+def test_narrow_margins_figure_keeps_its_title_inside(n_inputs, monkeypatch):
+    """margins.png is 3.6 in wide per input: its one-line title (~10 in at
+    the default size) was cut off at both sides for one or two inputs.  The
+    title now breaks into lines: it lies within the figure's width, and
+    still clear of the panels."""
+    env = five_input_envelope()
+    env.attrs["inputs"] = " ".join(INPUTS[:n_inputs])
+    seen = {}
+
+    def keep(self, *args, **kwargs):
+        seen["gap"] = clearance_below_title(self)
+        box = self._suptitle.get_window_extent(self.canvas.get_renderer())
+        seen["left"], seen["right"] = box.x0, self.bbox.width - box.x1
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
+    figures.margins(env, "unused.png")
+    assert seen["left"] >= 0.0 and seen["right"] >= 0.0, f"the title runs {seen} px past the figure's sides"
+    assert seen["gap"] > 0.0
