@@ -311,5 +311,6 @@ def verification_table(ds: xr.Dataset) -> str:
 
 
 def _fmt(v, units):
+    """A margin with its units; a dimensionless one ("1") bare."""
     v = float(v)
-    return "n/a" if math.isnan(v) else f"{v:.6g} {units}"
+    return "n/a" if math.isnan(v) else f"{v:.6g}" + ("" if units == "1" else f" {units}")

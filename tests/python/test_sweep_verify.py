@@ -216,3 +216,20 @@ def test_verify_keeps_its_own_reruns_and_a_new_sweep_drops_it(paper_sweep):
     res = run_sweep(definition, tmp, None, "--restart")
     assert res.returncode == 0, res.stdout + res.stderr
     assert not (tmp / "out" / "verify.nc").exists()
+
+
+def test_the_printed_table_gives_each_margin_its_criterion_units():
+    """The verification's printed table writes a margin with its criterion's
+    units, and a dimensionless one (the load factor's, units "1") bare: it
+    read "0.0213 1" (a new user's walkthrough, thirty-third session)."""
+    from postproc.sweep.verify import verification_table
+    ds = xr.Dataset({"margin_sweep": (("criterion", "case"), [[0.5], [0.0213]]),
+                     "margin_refined": (("criterion", "case"), [[0.25], [np.nan]]),
+                     "difference": (("criterion", "case"), [[0.25], [np.nan]]),
+                     "flipped": (("criterion", "case"), [[0], [1]]),
+                     "refined_status": (("case",), ["ok"]),
+                     "criterion_units": (("criterion",), ["m", "1"])},
+                    coords={"case": [7], "criterion": ["clearance", "load_factor"]})
+    rows = verification_table(ds).splitlines()[2:]
+    assert rows == ["| 7 | ok | clearance | 0.5 m | 0.25 m | 0.25 m | no |",
+                    "| 7 | ok | load_factor | 0.0213 | n/a | n/a | **yes** |"]
