@@ -80,7 +80,9 @@ module airlaunch_scenario_config
     real(dp) :: height = 3.4_dp          !< [m]
     real(dp) :: friction = 0.005_dp      !< rail friction coefficient
     real(dp) :: release_time = 0.5_dp    !< t0 [s]: end of Case 0
-    real(dp) :: l0 = 10.0_dp             !< rocket CG ahead of the ramp edge at release [m]
+    real(dp) :: l0 = 10.0_dp             !< rocket CG ahead of the ramp edge at release [m] (resolved)
+    character(len=8) :: l0_from = "cg"   !< what &bay l0 places: "cg" (the CG) or "tail" (the rocket's tail)
+    real(dp) :: l0_given = 10.0_dp       !< &bay l0 as given (the tail's distance with l0_from = "tail") [m]
     character(len=16) :: edge_contact = "one_sided"  !< Case 2 contact: "one_sided" or "bilateral"
     real(dp) :: tail_x = -24.0_dp        !< empennage point (horizontal tail), aircraft axes [m]
     real(dp) :: tail_y = 6.0_dp
@@ -180,6 +182,9 @@ contains
     if (.not. allocated(error)) call read_aircraft(f, cfg%aircraft, echo, error)
     if (.not. allocated(error)) call read_bay(f, cfg%bay, echo, error)
     if (.not. allocated(error)) call read_rocket(f, cfg%rocket, echo, error)
+    ! &bay l0 from the rocket's tail: the CG's distance follows the rocket's CG
+    if (cfg%bay%l0_from == "tail") cfg%bay%l0 = cfg%bay%l0_given + cfg%rocket%aero%length - &
+      cfg%rocket%aero%cg_from_nose
     if (line_enabled_in(f)) then
       if (.not. allocated(error)) call read_parachute(f, cfg%chute, echo, error)
       if (.not. allocated(error)) call read_line(f, cfg%line, echo, error)
@@ -348,18 +353,21 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, tail_x, tail_y
     character(len=16) :: edge_contact
+    character(len=8) :: l0_from
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
     type(echo_buffer) :: buffer
-    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
-      tail_x, tail_y
-    type(nml_var), parameter :: vars(11) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
+    namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, l0_from, &
+      edge_contact, tail_x, tail_y
+    type(nml_var), parameter :: vars(12) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), &
+      nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
       nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
       nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real"), &
-      nml_var("edge_contact", "string", 16)]
+      nml_var("l0_from", "string", 8), nml_var("edge_contact", "string", 16)]
     ramp_edge_x = c%ramp_edge_x; floor_y = c%floor_y; length = c%length; width = c%width
-    height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0
+    height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0_given
+    l0_from = c%l0_from
     edge_contact = c%edge_contact; tail_x = c%tail_x; tail_y = c%tail_y
     call open_group(f, "bay", vars, u, present, error)
     if (allocated(error)) return
@@ -377,10 +385,12 @@ contains
     call require_range(f, "bay", "friction", friction, 0.0_dp, 1.0_dp, "", error)
     call require_nonnegative(f, "bay", "release_time", release_time, "s", error)
     call require_positive(f, "bay", "l0", l0, "m", error)
+    call require_choice(f, "bay", "l0_from", l0_from, [character(len=8) :: "cg", "tail"], error)
     call require_choice(f, "bay", "edge_contact", edge_contact, [character(len=16) :: "one_sided", "bilateral"], error)
     if (allocated(error)) return
-    c = bay_config(ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, edge_contact, &
-      tail_x, tail_y)
+    c = bay_config(ramp_edge_x=ramp_edge_x, floor_y=floor_y, length=length, width=width, height=height, &
+      friction=friction, release_time=release_time, l0=l0, l0_from=l0_from, l0_given=l0, &
+      edge_contact=edge_contact, tail_x=tail_x, tail_y=tail_y)
     do while (buffer%another_try())
       write(buffer%lines, nml=bay, iostat=buffer%ios)
     end do
@@ -1067,7 +1077,12 @@ contains
     associate(b => cfg%bay, r => cfg%rocket%aero)
       nose_ahead = b%l0 + r%cg_from_nose          ! nose ahead of the ramp edge at release
       tail_ahead = b%l0 - (r%length - r%cg_from_nose)
-      if (tail_ahead < 0.0_dp) then
+      if (b%l0_from == "tail" .and. nose_ahead > b%length) then
+        call fatal_error(error, f%path // ": &bay: l0 = " // str(b%l0_given) // " is not allowed with l0_from = " // &
+          "'tail' (the rocket does not fit the bay: its nose, " // str(r%length) // " m ahead of its tail, " // &
+          "would be " // str(nose_ahead) // " m ahead of the ramp edge, the bay is length = " // str(b%length) // &
+          " m: need l0 <= " // str(b%length - r%length) // " m, or a longer bay)")
+      else if (tail_ahead < 0.0_dp) then
         call fatal_error(error, f%path // ": &bay: l0 = " // str(b%l0) // " is not allowed (the rocket's tail, " // &
           str(r%length - r%cg_from_nose) // " m aft of its CG, would be outside the bay: need l0 >= " // &
           str(r%length - r%cg_from_nose) // " m)")
