@@ -100,6 +100,35 @@ def require_programs(exe_dir, names, purpose) -> list:
     return exes
 
 
+def hold_sweep_lock(defn):
+    """Take airlaunch-sweep's lock of the output directory, OUTPUT_DIR/journal/lock
+    (flock, exclusive, not waiting), for the table step: a descriptor to close
+    once the table is written, or None where no run has made the lock file (or
+    it cannot be opened: the table's own write then says why).  While a run of
+    the sweep holds it, the table it ran from is not replaced: a second
+    submission of the job (scripts/sweep, scripts/sweep.slurm: the table step
+    runs first) is refused here, in one line, before it removes the running
+    sweep's table; and no run starts while the table is being replaced."""
+    import fcntl
+
+    journal = pathlib.Path(defn.output_dir) / "journal"
+    try:   # read-write: on NFS an exclusive flock needs a descriptor open for writing
+        fd = os.open(journal / "lock", os.O_RDWR | os.O_CLOEXEC)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        raise DefinitionError(f"{journal}: another airlaunch-sweep is running this sweep (its lock file 'lock' is "
+                              f"held): its table {defn.table_path} is left as it is; wait for it to end, or give "
+                              "this definition another output_dir") from None
+    except OSError:
+        os.close(fd)
+        return None
+    return fd
+
+
 def cmd_table(args) -> int:
     """Draw the case table (or check an existing one against the definition);
     either way, refuse what airlaunch-sweep --check refuses, with its message."""
@@ -114,17 +143,22 @@ def cmd_table(args) -> int:
         print(f"table: {defn.table_path} is the table of {defn.path}")
         return 0
     table, path = make_table(defn), defn.table_path
+    lock = hold_sweep_lock(defn)
     try:
-        # the table this step replaces goes first: airlaunch-sweep --check then
-        # judges the definition alone, and one it refuses is left no table
-        path.unlink(missing_ok=True)
-    except OSError as exc:
-        raise output_dir_error(defn, path, exc) from None
-    check_with_sweep(defn, sweep_exe)
-    try:
-        write_atomic(table, path)
-    except (OSError, RuntimeError) as exc:   # netCDF4 reports some write errors as RuntimeError
-        raise output_dir_error(defn, path, exc) from None
+        try:
+            # the table this step replaces goes first: airlaunch-sweep --check then
+            # judges the definition alone, and one it refuses is left no table
+            path.unlink(missing_ok=True)
+        except OSError as exc:
+            raise output_dir_error(defn, path, exc) from None
+        check_with_sweep(defn, sweep_exe)
+        try:
+            write_atomic(table, path)
+        except (OSError, RuntimeError) as exc:   # netCDF4 reports some write errors as RuntimeError
+            raise output_dir_error(defn, path, exc) from None
+    finally:
+        if lock is not None:
+            os.close(lock)
     print(f"table: {path} ({defn.n_cases} cases, {len(defn.inputs)} inputs, design {defn.design}, "
           f"seed {defn.seed})")
     if defn.design == "sobol" and defn.n_cases & (defn.n_cases - 1):

@@ -370,6 +370,35 @@ def test_a_second_run_on_the_same_output_is_refused(tmp_path, exes):
     assert "2 cases: 2 ok" in res.stdout, res.stdout
 
 
+def test_the_table_of_a_running_sweep_is_not_replaced(tmp_path, exes):
+    """A second submission of a job (scripts/sweep, scripts/sweep.slurm) runs the
+    table step before its run is refused by the lock: the table step removed and
+    redrew OUTPUT_DIR/table.nc under the running sweep, whose envelope step then
+    refused its own summary ('the values of ... are not those that ... draws',
+    exit 2 after every case had run).  The table step now takes the run's lock:
+    while a run holds it (taken here with flock, as a running sweep holds it),
+    the table step is refused in one line (exit 2) and the table is left byte for
+    byte; released, the same command draws its table."""
+    import fcntl
+    running = small_definition(tmp_path / "running.nml", n_cases=2)
+    make_table(running, tmp_path)
+    table = tmp_path / "out" / "table.nc"
+    before = table.read_bytes()
+    other = small_definition(tmp_path / "other.nml", n_cases=3, seed=6)   # same output_dir
+    (tmp_path / "out" / "journal").mkdir(parents=True, exist_ok=True)
+    with open(tmp_path / "out" / "journal" / "lock", "w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        res = run_python(["table", other], tmp_path)
+        assert res.returncode == 2, res.stdout + res.stderr
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and "another airlaunch-sweep is running this sweep" in lines[0], res.stderr
+        assert "table.nc is left as it is" in lines[0], lines[0]
+        assert table.read_bytes() == before
+    res = run_python(["table", other], tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "3 cases" in res.stdout and table.read_bytes() != before
+
+
 def test_one_rank_in_a_multi_task_slurm_job_is_refused(tmp_path, exes):
     """srun without the MPI plug-in starts every task as its own one-rank job: with
     SLURM_NTASKS > 1 and an MPI world of one rank the run is refused with the fix
