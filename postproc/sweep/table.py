@@ -184,11 +184,14 @@ def free_space(path):
 def write_error_reason(target, exc) -> str:
     """The reason a write of `target` failed, in words: the OS's (strerror),
     else the first line of the message; a reason that does not say why
-    ("NetCDF: HDF error") gets the likely cause when the device is (nearly)
-    full."""
+    ("NetCDF: HDF error"; netCDF even says "Permission denied" when its file
+    does not fit at all) gets the likely cause when the device is (nearly)
+    full.  A read-only file system is its own reason: it gets none."""
     if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
         return os.strerror(errno.ENOSPC)
     why = getattr(exc, "strerror", None) or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+    if isinstance(exc, OSError) and exc.errno == errno.EROFS:
+        return why
     free = free_space(pathlib.Path(target).parent)
     if free is not None and free < LOW_SPACE_BYTES:
         why += f" (likely: no space left on the device, {free} bytes free)"

@@ -336,6 +336,27 @@ def test_envelope_on_a_full_disk_names_the_file_and_the_reason(tmp_path, exes):
         assert not list(out.rglob("*.part"))
 
 
+def test_an_os_reason_is_not_put_down_to_a_full_disk(tmp_path, monkeypatch):
+    """On a read-only file system with less than 1 MiB free the table step said
+    "cannot write OUT/table.nc: Read-only file system (likely: no space left on
+    the device, 180224 bytes free)": the guess is for what netCDF says when its
+    file does not fit ("NetCDF: HDF error", or "Permission denied" with almost
+    nothing free, measured on a tmpfs), not for a read-only file system."""
+    import errno
+
+    from postproc.sweep import table
+
+    monkeypatch.setattr(table, "free_space", lambda path: 4096)
+    target = tmp_path / "table.nc"
+    why = table.write_error_reason(target, OSError(errno.EROFS, os.strerror(errno.EROFS), str(target)))
+    assert why == os.strerror(errno.EROFS), why
+    hint = " (likely: no space left on the device, 4096 bytes free)"
+    assert table.write_error_reason(target, RuntimeError("NetCDF: HDF error")) == "NetCDF: HDF error" + hint
+    why = table.write_error_reason(target, PermissionError(errno.EACCES, "Permission denied", str(target)))
+    assert why == "Permission denied" + hint, why
+    assert table.write_error_reason(target, OSError(errno.ENOSPC, "x")) == os.strerror(errno.ENOSPC)
+
+
 def test_case_namelist_of_a_sweep_that_cannot_be_written(exes, tmp_path):
     """--case-namelist is a query: it reads the definition, the base and the
     table and prints one case's namelist, so it must work on a finished sweep
