@@ -128,20 +128,39 @@ def test_figure_writes_are_atomic_and_name_the_file(tmp_path):
 
 
 def _fake_srun(directory):
-    """srun for a machine without Slurm: mpirun with this machine's flags."""
+    """srun for a machine without Slurm: mpirun with this machine's flags, and
+    srun's signals as its manual gives them: SIGTERM goes on to the tasks; a
+    single SIGINT only reports the tasks' status and the step goes on (a second
+    within one second ends it), unless --quit-on-interrupt ("quit immediately
+    on single SIGINT")."""
     directory.mkdir(parents=True, exist_ok=True)
     flags = "--allow-run-as-root " if os.geteuid() == 0 else ""
     path = directory / "srun"
-    path.write_text(f'#!/bin/sh\nshift\nexec mpirun {flags}--oversubscribe -np 2 "$@"\n')   # drops --mpi=pmix
+    path.write_text(f"""#!/bin/bash
+quit=0
+while [[ "$1" == --* ]]; do [ "$1" = --quit-on-interrupt ] && quit=1; shift; done   # --mpi=pmix, ...
+mpirun {flags}--oversubscribe -np 2 "$@" &
+pid=$!
+trap 'kill -TERM $pid' TERM
+trap 'if [ $quit = 1 ]; then kill -TERM $pid; else echo "srun: interrupt (one more within 1 sec to abort)" >&2; fi' INT
+while :; do
+  wait $pid; rc=$?
+  kill -0 $pid 2>/dev/null || exit $rc
+done
+""")
     path.chmod(0o755)
 
 
-@pytest.mark.parametrize("script", ["sweep", "sweep.slurm"])
-def test_term_to_the_script_reaches_the_ranks(tmp_path, script):
+@pytest.mark.parametrize("script, sig", [("sweep", signal.SIGTERM), ("sweep.slurm", signal.SIGTERM),
+                                         ("sweep.slurm", signal.SIGINT)])
+def test_term_to_the_script_reaches_the_ranks(tmp_path, script, sig):
     """kill -TERM to scripts/sweep (or the batch script) alone ended the script
     and left mpirun and its ranks running to the end of the sweep (Slurm's
     time-limit SIGTERM did not stop the ranks). Now the signal is passed on:
-    the ranks end at once, the script exits with 143 and a rerun resumes."""
+    the ranks end at once, the script exits with 143 and a rerun resumes.
+    SIGINT to the batch script reached srun, which takes a single SIGINT as a
+    request for the tasks' status and goes on: the script waited for every
+    case. It now runs srun --quit-on-interrupt, and ends with 130 at once."""
     if not SWEEP_EXE.exists():
         pytest.fail(f"{SWEEP_EXE} is missing: run scripts/setup release first")
     out = tmp_path / "out"
@@ -162,16 +181,19 @@ def test_term_to_the_script_reaches_the_ranks(tmp_path, script):
 
     _wait_for(lambda: rows() >= 20 or proc.poll() is not None, 120, "the first rows")
     assert proc.poll() is None, proc.communicate()
-    proc.send_signal(signal.SIGTERM)
+    proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=60)
-    assert proc.returncode == 143, stdout + stderr
-    assert "stopped by SIGTERM" in stderr.splitlines()[-1], stderr
+    assert rows() < 1000, f"after {sig.name} the ranks went on to the end of the sweep"
+    assert proc.returncode == 128 + sig, stdout + stderr
+    assert f"stopped by {sig.name}" in stderr.splitlines()[-1], stderr
     ranks = subprocess.run(["pgrep", "-f", f"airlaunch-sweep {definition}"], capture_output=True, text=True)
     assert ranks.stdout == "", f"ranks still running: {ranks.stdout}"
     n = rows()
     assert 0 < n < 1000 and not (out / "summary.nc").exists()
     time.sleep(1.0)
     assert rows() == n, "the ranks went on after the script ended"
+    if sig == signal.SIGINT:
+        return   # the resume is the SIGTERM cases' (the journal is the same)
     res = run_sweep(definition, tmp_path, 2)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "resuming:" in res.stdout and "1000 cases: 1000 ok" in res.stdout, res.stdout
