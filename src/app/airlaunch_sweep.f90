@@ -21,7 +21,7 @@ program airlaunch_sweep
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str, fixed, escaped
-  use airlaunch_version, only: code_version, sundials_build
+  use airlaunch_version, only: code_version, code_digest, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
   use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular, command_argument
@@ -386,6 +386,7 @@ contains
       case ("-V", "--version")
         if (rank == 0) call say("airlaunch-sweep " // code_version)
         if (rank == 0) call say("SUNDIALS: " // sundials_build)
+        if (rank == 0) call say("code digest (sources and build settings): " // code_digest)
         call finish(exit_ok)
       case ("--check")
         check_only = .true.

@@ -5,7 +5,7 @@ module airlaunch_sweep_plan
   use airlaunch_kinds, only: dp
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
-  use airlaunch_version, only: code_version
+  use airlaunch_version, only: code_digest
   use airlaunch_sweep_definition, only: sweep_definition, read_sweep_definition, worst_by_names
   use airlaunch_sweep_table, only: case_table, read_case_table
   use airlaunch_sweep_case, only: base_scenario, load_base_scenario, check_varied_inputs, check_common_settings
@@ -72,7 +72,9 @@ contains
     flat = reshape(setup%table%values, [size(setup%table%values)])
     allocate(character(len=8*max(1, size(flat))) :: bytes)
     bytes = transfer(flat, bytes)
-    s = "code_version = " // code_version // nl // &
+    ! the code by the digest of its sources and build settings, not by its git
+    ! description: an edited input or document ("-dirty") would refuse the resume
+    s = "code_digest = " // code_digest // nl // &
       "base = " // setup%def%base // nl // &
       "base_text_fnv1a = " // fnv1a(setup%base%text) // nl // &
       "t_end = " // str(setup%def%t_end) // nl // &

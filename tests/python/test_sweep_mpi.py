@@ -7,6 +7,7 @@ scripts/sweep."""
 import hashlib
 import os
 import re
+import shutil
 import signal
 import subprocess
 import time
@@ -112,6 +113,61 @@ def test_killed_sweep_resumes_to_the_same_summary(small, reference, tmp_path):
     with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
         assert list(s["case"].values) == list(range(N_CASES))
     assert_same_summary(reference, tmp_path / "out" / "summary.nc")
+
+
+def _version_module(tree, out):
+    """(code_version, code_digest) that cmake/airlaunch_version.cmake writes for
+    the source tree `tree` (as every build does)."""
+    res = subprocess.run(["cmake", f"-DSOURCE_DIR={tree}", f"-DINPUT={tree}/src/base/airlaunch_version.f90.in",
+                          f"-DOUTPUT={out}", "-DPROJECT_VERSION=0.2.0", "-DBUILD_SETTINGS=Release | GNU",
+                          "-DAIRLAUNCH_SUNDIALS=static", "-P", f"{tree}/cmake/airlaunch_version.cmake"],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
+    text = out.read_text()
+    found = [re.search(rf'{name} = "([^"]*)"', text) for name in ("code_version", "code_digest")]
+    assert all(found), text
+    return tuple(m.group(1) for m in found)
+
+
+def test_an_edit_outside_the_code_does_not_refuse_the_resume(tmp_path, exes):
+    """The journal's fingerprint named the code by its git description: one
+    comment added to input/criteria_paper.nml made it '...-dirty' (scripts/sweep
+    rebuilds first), and the rerun of an interrupted sweep was refused, the
+    documented way out, --restart, discarding every finished case. The code is
+    now named by the digest of its sources and build settings (cmake/
+    airlaunch_version.cmake): an edit of an input leaves it, as does committing
+    the same code; an edit of src/ changes it. Shown on a copy of the tree
+    under git; the journal of a run holds that digest, not the description."""
+    tree = tmp_path / "tree"
+    for name in ("src", "cmake"):
+        shutil.copytree(ROOT / name, tree / name)
+    shutil.copy(ROOT / "CMakeLists.txt", tree)
+    (tree / "input").mkdir()
+    shutil.copy(ROOT / "input" / "criteria_paper.nml", tree / "input")
+    git = ["git", "-C", str(tree), "-c", "user.name=t", "-c", "user.email=t@t"]
+    for args in (["init", "-q"], ["add", "-A"], ["commit", "-qm", "a"]):
+        subprocess.run(git + args, check=True, capture_output=True)
+    version, digest = _version_module(tree, tmp_path / "v.f90")
+    with open(tree / "input" / "criteria_paper.nml", "a") as f:
+        f.write("! a comment of the user's\n")
+    edited = _version_module(tree, tmp_path / "v.f90")
+    assert edited[0] == version.replace(")", "-dirty)") and edited[1] == digest, (version, edited)
+    subprocess.run(git + ["commit", "-qam", "b"], check=True, capture_output=True)
+    committed = _version_module(tree, tmp_path / "v.f90")
+    assert committed[0] != version and committed[1] == digest, (version, committed)
+    with open(tree / "src" / "sweep" / "airlaunch_sweep_plan.f90", "a") as f:
+        f.write("! a change of the code\n")
+    assert _version_module(tree, tmp_path / "v.f90")[1] != digest
+
+    definition = small_definition(tmp_path / "d.nml", n_cases=2)
+    make_table(definition, tmp_path)
+    assert run_sweep(definition, tmp_path, None).returncode == 0
+    shown = subprocess.run([str(SWEEP_EXE), "--version"], capture_output=True, text=True, env=ENV, timeout=60)
+    own = re.search(r"code digest \(sources and build settings\): (\w+)", shown.stdout).group(1)
+    fingerprint = (tmp_path / "out" / "journal" / "fingerprint.txt").read_text().splitlines()
+    assert fingerprint[0] == f"code_digest = {own}", fingerprint
+    described = re.search(r"\((.*)\)", shown.stdout.splitlines()[0]).group(1)
+    assert not [line for line in fingerprint if described in line], fingerprint
 
 
 FAILING_INPUTS = """
