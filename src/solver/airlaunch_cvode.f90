@@ -549,6 +549,14 @@ contains
       end if
       target = tout
       if (self%fresh .and. self%t_final > tout) target = self%t_final
+      if (self%fresh .and. target - self%t < 2.0_dp * epsilon(1.0_dp) * max(abs(self%t), abs(target))) then
+        ! a (re)start within two rounding units of the target (an event or a
+        ! stop time 1 ulp before t_end): CVODE refuses to start there
+        ! (CV_TOO_CLOSE) and t cannot resolve a step; the state at tout is the
+        ! restart's to round-off in time
+        self%t = tout
+        return
+      end if
       ierr = FCVode(self%mem, target, self%nv_y, tret, CV_ONE_STEP)
       self%fresh = .false.
       self%after_root = ierr == CV_ROOT_RETURN
