@@ -444,6 +444,10 @@ contains
     call require_positive(f, "rocket", "length", length, "m", error)
     call require_positive(f, "rocket", "diameter", diameter, "m", error)
     call require_range(f, "rocket", "cg_from_nose", cg_from_nose, 0.0_dp, length, "m (inside the rocket)", error)
+    ! the separation's event (the nose passes the ramp edge after the CG did)
+    ! needs the nose ahead of the CG: at 0 the set-up failed with exit 3
+    if (.not. allocated(error) .and. cg_from_nose == 0.0_dp) call fatal_error(error, f%path // &
+      ": &rocket: cg_from_nose = 0.0 is not allowed (must be > 0 m: the nose must lie ahead of the CG)")
     call require_range(f, "rocket", "tie_down_from_nose", tie_down_from_nose, 0.0_dp, length, &
       "m (inside the rocket)", error)
     call require_range(f, "rocket", "cp_pot_from_nose", cp_pot_from_nose, 0.0_dp, length, "m", error)

@@ -185,3 +185,17 @@ def test_drop_to_the_atmosphere_floor(airlaunch_exe, tmp_path):
     sol = solve_ivp(rhs, (0.0, 100.0), [0.0, 1000.0, 0.0, 0.65 * air(1000.0)[1], 0.0, 0.0], method="DOP853",
                     rtol=1e-12, atol=1e-10, events=floor)
     assert abs(t_fall - sol.t_events[0][0]) < 1e-6
+
+
+def test_a_rocket_without_a_nose_ahead_of_its_cg_is_bad_input(airlaunch_exe, tmp_path):
+    """`cg_from_nose = 0` (the CG at the nose tip; the range was [0, length]):
+    Case 2 would end where it begins (the nose passes the edge with the CG).
+    The set-up refused it only at run time, exit 3 after the trim ("inconsistent
+    geometry", also under --check); now bad input, exit 2, one line, no file."""
+    from conftest import assert_input_error
+    out = tmp_path / "cg0.nc"
+    nml = nml_variant(tmp_path, "cg0", edits=[(r"^  cg_from_nose = .*$", "  cg_from_nose = 0.0"),
+                                               (r"^  l0 = .*$", "  l0 = 19.0")])
+    for args in ([], ["--check"]):
+        assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out, *args),
+                           "&rocket: cg_from_nose = 0.0 is not allowed", out)
