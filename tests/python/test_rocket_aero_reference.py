@@ -58,24 +58,44 @@ def _fins():
     return X_CG - x_from_nose, cna, cn90
 
 
-def _loads(v, theta, wz, y, fins):
-    """Body-axis force (x, y) and pitching moment about the CG."""
+def _fin_exposure(x_edge):
+    """Share of the fins' planform aft of the edge (body x from the CG) and the
+    exposed part's centre of pressure (each exposed strip's quarter chord),
+    by quadrature over the span (trapezoidal rule on 2 001 points: 1e-6)."""
+    e = np.linspace(0.0, 1.0, 2001)
+    front = np.maximum(16.5 + 1.0 * e, X_CG - x_edge)      # leading edge at 16.5 + sweep e from the nose
+    chord = np.clip(18.5 - front, 0.0, None)               # trailing edge square to the axis at 18.5 m
+    if chord.max() <= 0.0:
+        return 0.0, 0.0
+    x_from_nose = np.trapezoid(chord * (front + chord / 4), e) / np.trapezoid(chord, e)
+    return np.trapezoid(chord, e) / 1.5, X_CG - x_from_nose
+
+
+def _loads(v, theta, wz, y, fins, x_edge=math.inf):
+    """Body-axis force (x, y) and pitching moment about the CG; the part of the
+    rocket ahead of x_edge (body x from the CG) is in the bay."""
     rho = _density(y)
     c1, c2 = np.array([math.cos(theta), math.sin(theta)]), np.array([-math.sin(theta), math.cos(theta)])
     u, w = v @ c1, v @ c2
     alpha = math.atan2(abs(w), u)
-    fx = -0.5 * rho * abs(u) * u * S_REF * C_A
-    fp = -0.5 * rho * (u * u + w * w) * S_REF * math.sin(2 * alpha) * math.cos(alpha / 2) * math.copysign(1.0, w)
-    xs = X_CG - (np.arange(N_STRIPS) + 0.5) * L / N_STRIPS
+    exposed = min(1.0, max(0.0, (x_edge - (X_CG - L)) / L))
+    fx = -0.5 * rho * abs(u) * u * S_REF * C_A * exposed
+    fp = (-0.5 * rho * (u * u + w * w) * S_REF * math.sin(2 * alpha) * math.cos(alpha / 2) * math.copysign(1.0, w)
+          * exposed)
+    lo = X_CG - L + np.arange(N_STRIPS) * L / N_STRIPS
+    hi = np.minimum(lo + L / N_STRIPS, x_edge)
+    out = hi > lo
+    xs = np.where(out, (lo + hi) / 2, 0.0)
     up = w + wz * xs
-    fs = -0.5 * rho * ETA * C_DN * D * (L / N_STRIPS) * np.abs(up) * up
+    fs = np.where(out, -0.5 * rho * ETA * C_DN * D * (hi - lo) * np.abs(up) * up, 0.0)
     fy, mz = fp + fs.sum(), (X_CG - X_CP) * fp + (xs * fs).sum()
     if fins:
-        xf, cna, cn90 = _fins()
+        _, cna, cn90 = _fins()
+        share, xf = _fin_exposure(x_edge)
         uf = w + wz * xf
         af = math.atan2(abs(uf), u)
         ff = -0.5 * rho * (u * u + uf * uf) * S_REF * (cna * math.sin(af) * abs(math.cos(af))
-                                                        + cn90 * math.sin(af) ** 2) * math.copysign(1.0, uf)
+                                                        + cn90 * math.sin(af) ** 2) * math.copysign(1.0, uf) * share
         fy, mz = fy + ff, mz + xf * ff
     return fx * c1 + fy * c2, mz
 
@@ -109,3 +129,35 @@ def test_free_rocket_obeys_the_documented_loads(airlaunch_exe, tmp_path, fins):
         fmax, mmax = max(fmax, np.abs(f).max()), max(mmax, abs(mz))
     assert max(df) < 1e-4 * fmax, (max(df), fmax)
     assert max(dm) < 1e-4 * mmax, (max(dm), mmax)
+    if fins:
+        _on_the_rail_and_the_edge(ds, v, y, nose, wz)
+
+
+def _on_the_rail_and_the_edge(ds, v, y, nose, wz):
+    """Cases 1 and 2: the same with the fins, hull and nose partly in the bay
+    (the edge from the recorded aircraft pose) and the recorded joint wrench
+    (`constraint_force`, earth axes; `constraint_moment`, about the CG) added;
+    tolerance 1e-4 of the largest joint force and moment (measured 7.8e-6 and
+    3.4e-5; with the exposed fins' force at the whole fins' centre of pressure
+    4.8e-3, with their whole force once any of them is out 0.15, with the
+    potential term at the exposed part's front instead of its own centre 1.8e-2)."""
+    t, phase = ds.time.values, ds.phase.values
+    th_a = np.radians(ds.aircraft_euler_deg.values[:, 1])
+    edge = (ds.aircraft_position.values[:, :2] - 13.0 * np.stack([np.cos(th_a), np.sin(th_a)], 1)
+            - 2.0 * np.stack([-np.sin(th_a), np.cos(th_a)], 1))
+    cf, cm = ds.constraint_force.values[:, :2], ds.constraint_moment.values[:, 2]
+    r = ds.rocket_position.values[:, :2]
+    keep = [i for i in range(1, len(t) - 1) if phase[i - 1] == phase[i + 1] in (1, 2)]
+    shares = set()
+    df, dm = [], []
+    for i in keep:
+        th = math.radians(nose[i])
+        x_edge = (edge[i] - r[i]) @ [math.cos(th), math.sin(th)]
+        shares.add(round(_fin_exposure(x_edge)[0], 1))
+        f, mz = _loads(v[i], th, wz[i], y[i], True, x_edge)
+        h = t[i + 1] - t[i - 1]
+        df.append(np.abs(M * (v[i + 1] - v[i - 1]) / h - f - cf[i] - [0.0, -M * G0]).max())
+        dm.append(abs(IZZ * (wz[i + 1] - wz[i - 1]) / h - mz - cm[i]))
+    assert {0.0, 0.5, 1.0} <= shares and len(keep) > 1000
+    assert max(df) < 1e-4 * np.abs(cf).max(), (max(df), np.abs(cf).max())
+    assert max(dm) < 1e-4 * np.abs(cm).max(), (max(dm), np.abs(cm).max())
