@@ -1141,12 +1141,15 @@ contains
     end do
   end function join
 
-  !> " (did you mean 'x'?)" for the nearest known name by edit distance <= 2.
+  !> " (did you mean 'x'?)" for the nearest known name by edit distance <= 2,
+  !> else for the known names that `name` begins as a word ('cg' for
+  !> 'cg_from_nose'; up to four: 'fin' for each fin_* name).
   function closest(name, vars) result(s)
     character(len=*), intent(in) :: name
     type(nml_var), intent(in) :: vars(:)
     character(len=:), allocatable :: s
-    integer :: j, d, best, jbest
+    character(len=:), allocatable :: known, words
+    integer :: j, d, best, jbest, n_words
     s = ""
     best = 3
     jbest = 0
@@ -1157,7 +1160,22 @@ contains
         jbest = j
       end if
     end do
-    if (jbest > 0) s = " (did you mean '" // lower(trim(vars(jbest)%name)) // "'?)"
+    if (jbest > 0) then
+      s = " (did you mean '" // lower(trim(vars(jbest)%name)) // "'?)"
+      return
+    end if
+    words = ""
+    n_words = 0
+    do j = 1, size(vars)
+      known = lower(trim(vars(j)%name))
+      if (len(name) == 0 .or. len(known) <= len(name) + 1) cycle
+      if (known(1:len(name) + 1) /= name // "_") cycle
+      n_words = n_words + 1
+      if (n_words > 1) words = words // "', '"
+      words = words // known
+    end do
+    if (n_words == 1) s = " (did you mean '" // words // "'?)"
+    if (n_words > 1 .and. n_words <= 4) s = " (did you mean one of '" // words // "'?)"
   end function closest
 
   !> Levenshtein distance between two names (for "did you mean" suggestions).

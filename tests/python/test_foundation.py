@@ -86,6 +86,9 @@ def test_drag_reaches_terminal_velocity(airlaunch_exe, tmp_path):
 
 @pytest.mark.parametrize("store,fragment", [
     ("mas = 28000.0", "unknown variable 'mas' = 28000.0 (did you mean 'mass'?)"),
+    # a name's first word ('cg' for &rocket cg_from_nose: no suggestion before the
+    # thirty-third session, its edit distance being 10)
+    ("mass = 28000.0, drag = 10.0", "unknown variable 'drag' = 10.0 (did you mean 'drag_area'?)"),
     ("mass = -5.0", "mass = -5.0 is not allowed (must be > 0 kg)"),
     ("mass = 'heavy'", "variable 'mass' = 'heavy' is not a real number"),
     ("drag_area = 1.0", "missing required value mass (kg)"),
@@ -970,3 +973,15 @@ def test_a_line_break_in_a_name_keeps_messages_and_the_check_print_whole(airlaun
     assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
     assert "holds a line break" in res.stderr and "a\\nb.nc" in res.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["drop\nfile.nml", "printed.nml", "bad\nscene.nml"])
+
+
+@pytest.mark.parametrize("old, new, hint", [
+    ("cg_from_nose = 9.25", "cg = 9.25", "(did you mean 'cg_from_nose'?)"),
+    ("fin_root_chord = ", "fin_root = ", "(did you mean one of 'fin_root_chord', 'fin_root_le_from_nose'?)"),
+])
+def test_a_name_cut_short_is_suggested_whole(airlaunch_exe, tmp_path, old, new, hint):
+    """An unknown name that is the first word(s) of known ones suggests them
+    (up to four): 'cg' for cg_from_nose had no suggestion, its edit distance
+    being 10 (a new user's CG sweep, thirty-third session)."""
+    nml = nml_variant(tmp_path, edits=[(r"^  " + re.escape(old), "  " + new)])
+    assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "x.nc"), hint, tmp_path / "x.nc")
