@@ -121,8 +121,18 @@ def plot_line(ds, fig):
     ten = ds["line_end_tension"]
     for k in range(ten.shape[-1]):
         ax2.plot(ds["time"], ten.isel({ten.dims[-1]: k}), label=f"end {'ab'[k] if k < 2 else k}")
+    if "line_tension" in ds:
+        # a snatch's largest load is often inside the line, not at an end
+        seg = ds["line_tension"]
+        ax2.plot(ds["time"], seg.max(seg.dims[-1]), ":", color="0.3", lw=0.8, label="largest segment")
+    t_peak = float(ds.attrs.get("peak_tension_time_s", -1.0))
+    if t_peak >= 0 and "peak_tension_N" in ds.attrs:
+        # the peak over every step: between two records it can be far above them
+        peak = float(ds.attrs["peak_tension_N"])
+        ax2.plot([t_peak], [peak], "kv", ms=6, label=f"peak (every step) {peak:.4g} N at {t_peak:.4g} s")
     ax2.set_xlabel("time [s]")
-    ax2.set_ylabel("end tension [N]")
+    ax2.set_ylabel("tension [N]")
+    ax2.set_title("end tensions (records) and the peak")
     ax2.grid(True)
     ax2.legend(fontsize=7)
     if not speeds:
