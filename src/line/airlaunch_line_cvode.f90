@@ -121,6 +121,8 @@ module airlaunch_line_cvode
   type, extends(maxima_observer) :: tension_observer
     type(line_system), pointer :: sys => null()
     real(dp), allocatable :: tension(:)
+    real(dp) :: seen = -huge(1.0_dp)   !< the largest tension evaluated [N]
+    integer :: segment = 0             !< its segment (0: none yet)
   contains
     procedure :: values => tension_values
   end type tension_observer
@@ -571,6 +573,7 @@ contains
     real(dp), intent(out) :: t_peak            !< its time [s]
     real(dp) :: tmax
     if (associated(self%observer%trk)) call self%observer%finish()
+    call self%note_peak_segment(self%observer%seen, self%observer%segment)
     tmax = scheme_peak_tension(self, t_peak)
   end function cvode_peak_tension
 
@@ -580,11 +583,17 @@ contains
     real(dp), intent(in) :: t
     real(dp), intent(out) :: q(:)
     logical, intent(out) :: ok
-    integer :: st
+    integer :: st, k
     call self%sys%unpack(t, self%y)
     call self%sys%model%tensions(self%sys%x, self%sys%v, self%tension, st)
     ok = st == 0
-    if (ok) q(1) = maxval(self%tension)
+    if (.not. ok) return
+    k = maxloc(self%tension, 1)
+    q(1) = self%tension(k)
+    if (k >= 1 .and. q(1) > self%seen) then
+      self%seen = q(1)
+      self%segment = k
+    end if
   end subroutine tension_values
 
   !> Node state at the current time.

@@ -209,7 +209,7 @@ contains
     class(line_marching), intent(inout) :: self            !< scheme
     real(dp), intent(in) :: h                              !< step [s]
     type(error_type), allocatable, intent(inout) :: error  !< set on failure
-    integer :: k, st, it, fe, ne
+    integer :: k, st, it, fe, ne, k_peak
     real(dp) :: t1, vm_near(3), v_exact(3), force(3), e(3), jac(3, 3), rhs(3, 1), e_floor
     real(dp) :: x_far(3), v_far(3), d_far(3), dummy(3)
 
@@ -241,7 +241,11 @@ contains
       return
     end if
     ! the peak tension over the steps (the scheme's resolution: no interpolant)
-    if (associated(self%peak)) call self%peak(1)%offer(self%tn, maxval(self%tension))
+    if (associated(self%peak)) then
+      k_peak = maxloc(self%tension, 1)
+      call self%peak(1)%offer(self%tn, self%tension(k_peak))
+      call self%note_peak_segment(self%tension(k_peak), k_peak)
+    end if
     if (self%ends(ne)%kind == end_point_mass) self%f(:, self%near) = self%f(:, self%near) + &
       point_load(self, ne, self%tn, self%x(:, self%near), self%v(:, self%near))
 

@@ -66,6 +66,11 @@ module airlaunch_line_scheme
     !> (1): the largest segment tension over every step of the scheme (on the
     !> heap: an observer of the integrator points to it)
     type(peak_tracker), pointer :: peak(:) => null()
+    !> the largest segment tension evaluated so far [N] (every value the peak
+    !> tracker is offered is one of these) and the segment carrying it, 1..N
+    !> (0: none yet): the place of `peak`'s value
+    real(dp) :: peak_seen = -huge(1.0_dp)
+    integer :: peak_segment = 0
     !> the last advance stopped where a segment's tension reached its strength
     !> (set_strength): the owner parts it (part) and goes on
     logical :: strength_reached = .false.
@@ -78,6 +83,7 @@ module airlaunch_line_scheme
     procedure :: set_ground => scheme_set_ground
     procedure :: part => scheme_part
     procedure :: start_peak => scheme_start_peak
+    procedure :: note_peak_segment => scheme_note_peak_segment
     procedure :: release_peak => scheme_release_peak
     procedure(advance_interface), deferred :: advance
     procedure(state_interface), deferred :: get_state
@@ -211,7 +217,22 @@ contains
     call self%release_peak()
     allocate(self%peak(1))
     self%peak(1)%band = band
+    self%peak_seen = -huge(1.0_dp)
+    self%peak_segment = 0
   end subroutine scheme_start_peak
+
+  !> A segment tension `value` evaluated at segment k: the segment of the
+  !> largest one so far is the peak's place (the first of equal values).
+  subroutine scheme_note_peak_segment(self, value, k)
+    class(line_scheme), intent(inout) :: self   !< scheme
+    real(dp), intent(in) :: value               !< the tension [N]
+    integer, intent(in) :: k                    !< its segment, 1..N (0: none)
+    if (k < 1) return
+    if (value > self%peak_seen) then
+      self%peak_seen = value
+      self%peak_segment = k
+    end if
+  end subroutine scheme_note_peak_segment
 
   !> Free the tracker.
   subroutine scheme_release_peak(self)

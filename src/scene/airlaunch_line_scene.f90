@@ -115,6 +115,7 @@ module airlaunch_line_scene
     real(dp) :: t_reached = 0.0_dp                   !< time the integration reached (a failure's time) [s]
     real(dp) :: peak_tension = 0.0_dp                !< largest segment tension over every step [N]
     real(dp) :: peak_tension_time = -1.0_dp          !< its time [s]
+    integer :: peak_tension_segment = 0              !< the segment carrying it, 1..N (0: none)
     logical :: ready = .false.                       !< init succeeded
     !> largest segment strain of the initial shape (negative: all slack)
     real(dp) :: initial_strain = 0.0_dp
@@ -564,6 +565,7 @@ contains
     self%completed = .not. allocated(error)
     self%t_reached = self%scheme%t
     self%peak_tension = self%scheme%peak_tension(self%peak_tension_time)
+    self%peak_tension_segment = self%scheme%peak_segment
     self%stats = self%scheme%stats()
     call system_clock(c1)
     self%wall_time = real(c1 - c0, dp)/real(rate, dp)
@@ -592,7 +594,11 @@ contains
     ! the peak tension is never below a record (the schemes take it over their
     ! steps); a record's time depends on the output cadence: not a candidate
     ! for the peak's first time
-    if (associated(self%scheme%peak)) call self%scheme%peak(1)%offer(t, maxval(self%tension), candidate=.false.)
+    if (associated(self%scheme%peak)) then
+      i = maxloc(self%tension, 1)
+      call self%scheme%peak(1)%offer(t, self%tension(i), candidate=.false.)
+      call self%scheme%note_peak_segment(self%tension(i), i)
+    end if
     m = self%n_out + 1
     self%time(m) = t
     self%tip(:, m) = self%x(:, n)
@@ -1085,7 +1091,8 @@ contains
     character(len=:), allocatable :: text
     text = ""
     if (scene%peak_tension_time >= 0.0_dp) text = "; peak segment tension " // str(scene%peak_tension) // &
-      " N, first reached at t = " // str(scene%peak_tension_time) // " s (over every step)"
+      " N in segment " // str(scene%peak_tension_segment) // ", first reached at t = " // &
+      str(scene%peak_tension_time) // " s (over every step)"
   end function peak_note
 
   !> The summary's line on the line's break ('' for a line that cannot part).
@@ -1262,6 +1269,7 @@ contains
     if (scene%peak_tension_time >= 0.0_dp) then
       call w%add_real_att("/", "peak_tension_N", scene%peak_tension, error)
       call w%add_real_att("/", "peak_tension_time_s", scene%peak_tension_time, error)
+      call w%add_int_att("/", "peak_tension_segment", [scene%peak_tension_segment], error)
     end if
     call w%add_real_att("/", "line_break_time_s", scene%line_break_time, error)
     call w%add_int_att("/", "line_break_segment", [scene%line_break_segment], error)
