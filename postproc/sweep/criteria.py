@@ -223,8 +223,9 @@ def parse_criteria(text, path="<criteria>"):
         if not hi > lo:
             raise DefinitionError(f"{where}firing_pitch_max_deg = {hi:g} is not allowed (must be > "
                                   f"firing_pitch_min_deg = {lo:g}: reversed window)")
+        # the scale: half the window the Euler pitch can reach (it never exceeds 90)
         out.append(Criterion("firing_attitude", "rocket Euler pitch at its first maximum (the firing moment) "
-                             "inside [min, max]", "degree", (hi - lo) / 2, ("pitch_max_deg",),
+                             "inside [min, max]", "degree", (min(hi, 90.0) - lo) / 2, ("pitch_max_deg",),
                              {"firing_pitch_min_deg": lo, "firing_pitch_max_deg": hi}))
     if "firing_time_max_s" in v:
         lim = v["firing_time_max_s"]

@@ -77,6 +77,20 @@ def test_margins_are_their_formulas():
     assert list(passed) == list((a >= 0.5) & (pitch >= 75.0))
 
 
+def test_the_firing_window_scale_is_the_part_the_pitch_can_reach():
+    """The firing-attitude scale (relative_margin = margin / scale, which ranks
+    the worst criterion) is half the window up to 90 degrees: a window
+    [75, 180] has the margins of [75, 90], and took the scale 52.5 of its whole
+    width instead of 7.5 (a new user's walkthrough, thirty-third session)."""
+    pitch = np.array([80.0, 90.0])
+    a = np.array([0.2, 0.8])
+    for hi in (90.0, 180.0):
+        text = f"&criteria\n  firing_pitch_min_deg = 75.0, firing_pitch_max_deg = {hi}\n/\n"
+        env = evaluate(synthetic_summary(a, a, a + 2.0, pitch=pitch), parse_criteria(text))
+        assert float(env["criterion_scale"].sel(criterion="firing_attitude")) == 7.5
+        np.testing.assert_array_equal(env["relative_margin"].sel(criterion="firing_attitude"), (pitch - 75.0) / 7.5)
+
+
 def test_every_envelope_variable_is_described():
     """envelope.nc describes each variable it makes, as the run outputs and
     verify.nc do (docs/output.md: every variable and coordinate has a long_name;
