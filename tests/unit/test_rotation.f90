@@ -65,6 +65,20 @@ program test_rotation
   end do
   call check(abs(nose_elevation(quat_from_euler([0.0_dp, 120*deg2rad, 0.0_dp])) - 120*deg2rad) < 1e-13_dp, &
     "nose elevation passes 90 deg continuously")
+  ! quat_to_dcm's documented contract: any non-zero multiple of a quaternion is
+  ! the same rotation (the integrators' quaternions drift off unit norm between
+  ! projections), an orthogonal matrix of determinant 1 (a mutation audit found
+  ! no test of it: un-normalised, C(2q) is 4 C(q) off the diagonal)
+  block
+    real(dp) :: qa(4), ca(3, 3)
+    qa = [0.3_dp, -0.5_dp, 0.7_dp, 0.2_dp]
+    ca = quat_to_dcm(qa)
+    call check(maxval(abs(quat_to_dcm(2.5_dp*qa) - ca)) < 1e-15_dp, "C(k q) = C(q) for k = 2.5")
+    call check(maxval(abs(quat_to_dcm(-1.0e-3_dp*qa) - ca)) < 1e-15_dp, "C(k q) = C(q) for k = -1e-3")
+    call check(maxval(abs(matmul(transpose(ca), ca) - eye())) < 1e-15_dp, "C(q) orthogonal for a non-unit q")
+    call check(abs(ca(1, 1)*(ca(2, 2)*ca(3, 3) - ca(2, 3)*ca(3, 2)) - ca(1, 2)*(ca(2, 1)*ca(3, 3) - &
+      ca(2, 3)*ca(3, 1)) + ca(1, 3)*(ca(2, 1)*ca(3, 2) - ca(2, 2)*ca(3, 1)) - 1.0_dp) < 1e-15_dp, "det C(q) = 1")
+  end block
   call finish()
 
 contains
