@@ -1045,8 +1045,9 @@ contains
       " force evaluations, " // scheme_work(cfg%integration%scheme, scene%stats) // "wall " // &
       str(scene%wall_time) // " s" // nl // &
       "largest end tension " // str(scene%end_tension(i_max(1), i_max(2))) // " N at end " // &
-      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records)" // &
-      peak_note(scene) // nl // break_note(scene) // ground_note(scene) // &
+      merge("a", "b", i_max(1) == 1) // ", t = " // str(scene%time(i_max(2))) // " s (records); at the end (t = " // &
+      str(scene%time(m)) // " s): a " // str(scene%end_tension(1, m)) // " N, b " // str(scene%end_tension(2, m)) // &
+      " N" // peak_note(scene) // nl // break_note(scene) // ground_note(scene) // &
       "equivalent rigid body at the end" // piece_note(scene%rigid(m), scene%model%n) // ": d_rigid " // &
       str(scene%rigid(m)%d_rigid) // " m, m_rigid " // &
       str(scene%rigid(m)%m_rigid) // " kg" // m_rigid_note(scene%rigid(m)) // ", theta " // str(scene%rigid(m)%theta*rad2deg) // " deg, phi " // &

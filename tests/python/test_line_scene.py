@@ -322,3 +322,22 @@ def test_printed_m_rigid_is_set_against_the_line_mass(airlaunch_exe, tmp_path, n
     assert bool(m.group(3)) == (ratio > 10.0), (ratio, m.group(0))
     if t_end:
         assert ratio > 1e3, m.group(0)
+
+
+def test_the_summary_gives_the_end_tensions_at_the_end(airlaunch_exe, tmp_path):
+    """The printed summary gives T_1 and T_N at the last record beside the
+    largest ones (on a settling run the largest is the start's transient: a
+    cable engineer's catenary read 894 N 'largest' and no settled value).  The
+    printed values are the file's last `line_end_tension` record (to the 13
+    significant digits printed), and the symmetric catenary's two ends carry
+    the same tension (to 1e-9: the settled shape's symmetry, integrated)."""
+    nml = nml_variant(tmp_path, "catenary", base=ROOT / "input" / "line_catenary.nml")
+    res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "out.nc")
+    assert res.returncode == 0, res.stderr
+    m = re.search(r"at the end \(t = ([0-9.eE+-]+) s\): a ([0-9.eE+-]+) N, b ([0-9.eE+-]+) N", res.stdout)
+    assert m, res.stdout
+    t, ta, tb = map(float, m.groups())
+    with xr.open_dataset(tmp_path / "out.nc") as ds:
+        assert t == float(ds["time"].values[-1]) == 60.0
+        np.testing.assert_allclose([ta, tb], ds["line_end_tension"].isel(time=-1).values, rtol=1e-12)
+    assert ta == pytest.approx(tb, rel=1e-9)
