@@ -76,6 +76,7 @@ module airlaunch_line_scene
   type :: line_result
     real(dp) :: peak_tension = -1.0_dp         !< largest segment tension over every step [N]
     real(dp) :: peak_tension_time = -1.0_dp    !< its first time [s]
+    integer :: peak_tension_segment = 0        !< the segment carrying it, 1..N (0: not tracked)
     real(dp) :: max_end_tension(2) = -1.0_dp   !< largest T_1 (end a) and T_N (end b) over the records [N]
     real(dp) :: line_break_time = -1.0_dp      !< the line first parted [s]
     integer :: line_break_segment = 0          !< there, this segment (0: whole)
@@ -1068,6 +1069,7 @@ contains
     if (scene%peak_tension_time >= 0.0_dp) then
       r%peak_tension = scene%peak_tension
       r%peak_tension_time = scene%peak_tension_time
+      r%peak_tension_segment = scene%peak_tension_segment
     end if
     if (m > 0) then
       r%max_end_tension = maxval(scene%end_tension(:, 1:m), dim=2)

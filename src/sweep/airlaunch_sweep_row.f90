@@ -68,17 +68,19 @@ module airlaunch_sweep_row
 
   !> Summary variables of the line scene (scene = 'line': docs/line.md §4;
   !> the names the airlaunch scene shares mean the same).
-  integer, parameter :: n_line_metrics = 18
+  integer, parameter :: n_line_metrics = 19
   character(len=40), parameter :: line_metric_names(n_line_metrics) = [character(len=40) :: &
-    "peak_line_tension_N", "peak_line_tension_time_s", "max_end_tension_a_N", "max_end_tension_b_N", &
+    "peak_line_tension_N", "peak_line_tension_time_s", "peak_line_tension_segment", "max_end_tension_a_N", &
+    "max_end_tension_b_N", &
     "line_break_time_s", "line_breaks", "line_break_segment", "line_recoil_speed_m_s", "canopy_deploy_air_speed_m_s", &
     "final_tip_speed_m_s", "ground_time_s", "ground_speed_m_s", "end_time_s", "steps", "rhs_evals", "jac_evals", &
     "completed", "wall_time_s"]
   character(len=12), parameter :: line_metric_units(n_line_metrics) = [character(len=12) :: &
-    "N", "s", "N", "N", "s", "1", "1", "m s-1", "m s-1", "m s-1", "s", "m s-1", "s", "1", "1", "1", "1", "s"]
+    "N", "s", "1", "N", "N", "s", "1", "1", "m s-1", "m s-1", "m s-1", "s", "m s-1", "s", "1", "1", "1", "1", "s"]
   character(len=120), parameter :: line_metric_long_names(n_line_metrics) = [character(len=120) :: &
     "largest segment tension over every step (NaN: &line_scene peak_tension = .false.)", &
     "time the peak segment tension was first reached (NaN: not tracked)", &
+    "the segment carrying the peak segment tension (1: at end a, n_seg: at end b; 0: not tracked)", &
     "largest tension of segment 1, at end a, over the records", &
     "largest tension of segment n_seg, at end b, over the records", &
     "the line first parted (&line breaking_strength or break_time; NaN: it did not)", &
@@ -92,7 +94,7 @@ module airlaunch_sweep_row
     "simulated time reached", "time steps", "force evaluations of the whole line", &
     "Jacobian evaluations (cvode)", "1 if the run completed (reached t_end, or the ground)", &
     "wall time of the case on its rank"]
-  logical, parameter :: line_metric_is_integer(n_line_metrics) = [.false., .false., .false., .false., &
+  logical, parameter :: line_metric_is_integer(n_line_metrics) = [.false., .false., .true., .false., .false., &
     .false., .true., .true., .false., .false., .false., .false., .false., .false., .true., .true., .true., .true., &
     .false.]
 
@@ -201,7 +203,8 @@ contains
     real(dp), intent(in) :: wall               !< wall time [s]
     type(sweep_row) :: row
     row = ran_row(id, failed, message)
-    row%metrics = [defined(res%peak_tension), defined(res%peak_tension_time), defined(res%max_end_tension(1)), &
+    row%metrics = [defined(res%peak_tension), defined(res%peak_tension_time), real(res%peak_tension_segment, dp), &
+      defined(res%max_end_tension(1)), &
       defined(res%max_end_tension(2)), defined(res%line_break_time), real(res%line_breaks, dp), &
       real(res%line_break_segment, dp), defined(res%recoil_speed), defined(res%deploy_speed), &
       defined(res%final_tip_speed), defined(res%ground_time), defined(res%ground_speed), res%end_time, &

@@ -126,6 +126,7 @@ def assert_line_row_is_the_run(row, ds, t_end):
     single run of its case namelist (`ds`, its output) reports."""
     assert row["peak_line_tension_N"] == ds.attrs["peak_tension_N"]
     assert row["peak_line_tension_time_s"] == ds.attrs["peak_tension_time_s"]
+    assert row["peak_line_tension_segment"] == ds.attrs["peak_tension_segment"]
     ends = ds["line_end_tension"].values
     assert row["max_end_tension_a_N"] == ends[:, 0].max()
     assert row["max_end_tension_b_N"] == ends[:, 1].max()
