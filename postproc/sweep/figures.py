@@ -55,12 +55,13 @@ def fitted_suptitle(fig, text, **kwargs):
     return title
 
 
-def layout_below_title(fig, title):
-    """tight_layout with every panel (its title and tick labels included) below
-    the figure's title `title` (the Text of fig.suptitle).  tight_layout alone
-    leaves the suptitle a top margin that does not grow with the figure's
-    height: on a tall figure (a pass/fail map of 5 or more inputs, 10 or more
-    panels) the first row's titles ran into it."""
+def title_over_panels(fig, text, **kwargs):
+    """The figure's title (fitted_suptitle) and a tight_layout with every panel
+    (its title and tick labels included) below it.  tight_layout alone leaves
+    the suptitle a top margin that does not grow with the figure's height: on a
+    tall figure (a pass/fail map of 5 or more inputs, 10 or more panels) the
+    first row's titles ran into it."""
+    title = fitted_suptitle(fig, text, **kwargs)
     renderer = fig.canvas.get_renderer()   # the title stands where it is, whatever the panels' layout
     gap = 6.0 * fig.dpi / 72.0   # 6 points between the title and the panels
     top = (title.get_window_extent(renderer).y0 - gap) / fig.bbox.height
@@ -142,8 +143,7 @@ def _draw_passfail(fig, axes, env, pairs, criterion, ok, passed):
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
     name = envelope_name(str(env.attrs.get("scene", "airlaunch")))
-    title = fitted_suptitle(fig, f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
-    layout_below_title(fig, title)
+    title_over_panels(fig, f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
 
 
 def margins(env, path):
@@ -168,9 +168,8 @@ def margins(env, path):
                 if i == len(crit) - 1:
                     ax.set_xlabel(_label(env, name), fontsize=8)
                 ax.tick_params(labelsize=7)
-        title = fitted_suptitle(fig, "margins against each input (>= 0 passes; cases not computed, or whose metric "
-                                     "is NaN, have no margin and are not drawn)")
-        layout_below_title(fig, title)
+        title_over_panels(fig, "margins against each input (>= 0 passes; cases not computed, or whose metric "
+                               "is NaN, have no margin and are not drawn)")
         fig.savefig(path, dpi=110, format="png")
     finally:
         plt.close(fig)   # also when drawing or writing fails
@@ -231,10 +230,9 @@ def sensitivity(env, path):
         for ax in axes.ravel()[len(crit):]:
             ax.axis("off")
         n = int(env["sensitivity_cases"].values[0])
-        title = fitted_suptitle(fig, "drivers: standardised rank regression coefficient of each margin on each "
-                                     f"input ({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not "
-                                     "significant (the partial rank correlation's 95 % interval holds 0)", fontsize=9)
-        layout_below_title(fig, title)
+        title_over_panels(fig, "drivers: standardised rank regression coefficient of each margin on each "
+                               f"input ({n} computed cases)\n> 0: a larger input gives a larger margin; pale: not "
+                               "significant (the partial rank correlation's 95 % interval holds 0)", fontsize=9)
         fig.savefig(path, dpi=110, format="png")
     finally:
         plt.close(fig)   # also when drawing or writing fails

@@ -590,7 +590,7 @@ contains
     if (.not. ok) return
     k = maxloc(self%tension, 1)
     q(1) = self%tension(k)
-    if (k >= 1 .and. q(1) > self%seen) then
+    if (q(1) > self%seen) then
       self%seen = q(1)
       self%segment = k
     end if

@@ -328,8 +328,8 @@ def test_the_summary_gives_the_end_tensions_at_the_end(airlaunch_exe, tmp_path):
     """The printed summary gives T_1 and T_N at the last record beside the
     largest ones (on a settling run the largest is the start's transient: a
     cable engineer's catenary read 894 N 'largest' and no settled value).  The
-    printed values are the file's last `line_end_tension` record (to the 13
-    significant digits printed), and the symmetric catenary's two ends carry
+    printed values are the file's last `line_end_tension` record (to the 9
+    decimals printed: 1e-12 of a tension above 500 N), and the symmetric catenary's two ends carry
     the same tension (to 1e-9: the settled shape's symmetry, integrated)."""
     nml = nml_variant(tmp_path, "catenary", base=ROOT / "input" / "line_catenary.nml")
     res = run_airlaunch(airlaunch_exe, nml, "--output", tmp_path / "out.nc")
