@@ -1143,7 +1143,8 @@ contains
 
   !> " (did you mean 'x'?)" for the nearest known name by edit distance <= 2,
   !> else for the known names that `name` begins as a word ('cg' for
-  !> 'cg_from_nose'; up to four: 'fin' for each fin_* name).
+  !> 'cg_from_nose'; up to four: 'fin_root' for fin_root_chord and
+  !> fin_root_le_from_nose, none for 'fin', which begins six).
   function closest(name, vars) result(s)
     character(len=*), intent(in) :: name
     type(nml_var), intent(in) :: vars(:)
