@@ -76,13 +76,15 @@ def plot_airlaunch(ds, fig):
             continue
         p = ds[f"{name}_position"]
         ax2.plot(p.sel(xyz=0), p.sel(xyz=2), p.sel(xyz=1), style, label=name)
-    ax2.set_xlabel("x [m]")
-    ax2.set_ylabel("z [m]")
-    ax2.set_zlabel("y [m]")
+    ax2.set_xlabel("x forward [m]")
+    ax2.set_ylabel("z right [m]")
+    ax2.set_zlabel("y up [m]")
     ax2.set_title("3-D track (Fig. 10)")
-    # equal-ish scaling of the lateral axis (the scenario is symmetric: z ~ 0)
+    # equal-ish scaling of the lateral axis (the scenario is symmetric: z ~ 0),
+    # reversed: the plot's axes (x, z, y) would otherwise draw the right-handed
+    # frame (x forward, y up, z right) mirrored, a drift to the right on the left
     zr = max(1.0, float(abs(ds["rocket_position"].sel(xyz=2)).max()))
-    ax2.set_ylim(-max(zr, 50.0), max(zr, 50.0))
+    ax2.set_ylim(max(zr, 50.0), -max(zr, 50.0))
     ax2.legend(fontsize=7)
     ax3 = fig.add_subplot(1, 3, 3)
     for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):
