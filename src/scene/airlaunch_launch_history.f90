@@ -14,6 +14,8 @@ module airlaunch_launch_history
   use airlaunch_strings, only: str
   use airlaunch_launch_loads, only: launch_loads
   use airlaunch_clearance, only: clearance_geometry, clearance, segment_distance
+  use airlaunch_atmosphere, only: isa, air_state
+  use airlaunch_gust, only: air_relative_velocity
   implicit none
   private
   public :: launch_result, launch_sample, launch_history, sample_launch, record_milestones, history_bytes
@@ -69,6 +71,15 @@ module airlaunch_launch_history
     real(dp) :: edge_clearance = 0.0_dp      !< rocket surface to the ramp edge after separation [m]
     real(dp) :: alpha = 0.0_dp               !< aircraft angle of attack [rad]
     real(dp) :: elevator = 0.0_dp            !< [rad]
+    !> telemetry: what the bodies' inertial sensors and air-data systems would
+    !> read (body axes x nose, y up, z right; docs/output.md)
+    real(dp) :: aircraft_specific_force(3) = 0.0_dp  !< (a - g) in aircraft axes [m/s^2]
+    real(dp) :: rocket_specific_force(3) = 0.0_dp    !< (a - g) at the rocket CG, rocket axes [m/s^2]
+    real(dp) :: rocket_wdot(3) = 0.0_dp              !< rocket angular acceleration, rocket axes [rad/s^2]
+    real(dp) :: aircraft_beta = 0.0_dp               !< [rad]
+    real(dp) :: aircraft_mach = 0.0_dp, aircraft_qbar = 0.0_dp   !< [1], [Pa]
+    real(dp) :: rocket_alpha = 0.0_dp, rocket_beta = 0.0_dp      !< at the rocket CG [rad]
+    real(dp) :: rocket_mach = 0.0_dp, rocket_qbar = 0.0_dp       !< [1], [Pa]
   end type launch_sample
 
   !> The sampled history of the output contract.
@@ -78,11 +89,13 @@ module airlaunch_launch_history
     real(dp), allocatable :: time(:), phase(:), ac_pos(:, :), ac_eul(:, :), ac_alpha(:), ac_q(:), elev(:), &
       load_factor(:), rk_pos(:, :), rk_vel(:, :), rk_eul(:, :), rk_rate(:), rk_elev(:), pc_pos(:, :), &
       t_rocket(:), t_chute(:), nodes(:, :, :), cforce(:, :), normal(:), friction(:), lock(:), clearance(:), residual(:), &
-      edge_clearance(:)
+      edge_clearance(:), ac_vel(:, :), ac_w(:, :), ac_sf(:, :), rk_w(:, :), rk_wdot(:, :), rk_sf(:, :), &
+      ac_air(:, :), rk_air(:, :)
   contains
     procedure :: init => history_init
     procedure :: append => history_append
     procedure :: write_contract => history_write_contract
+    procedure :: write_telemetry => history_write_telemetry
   end type launch_history
 
 contains
@@ -101,7 +114,8 @@ contains
       self%ac_q(nmax), self%elev(nmax), self%load_factor(nmax), self%rk_pos(3, nmax), self%rk_vel(3, nmax), &
       self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%cforce(6, nmax), self%normal(nmax), &
       self%friction(nmax), self%lock(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax), &
-      stat=stat)
+      self%ac_vel(3, nmax), self%ac_w(3, nmax), self%ac_sf(3, nmax), self%rk_w(3, nmax), self%rk_wdot(3, nmax), &
+      self%rk_sf(3, nmax), self%ac_air(3, nmax), self%rk_air(4, nmax), stat=stat)
     if (stat /= 0 .or. .not. self%has_line) return
     allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), self%nodes(3, 0:n, nmax), stat=stat)
   end subroutine history_init
@@ -111,7 +125,7 @@ contains
   pure real(dp) function history_bytes(nmax, n, has_line) result(bytes)
     integer, intent(in) :: nmax, n
     logical, intent(in) :: has_line
-    bytes = 8.0_dp*real(nmax, dp)*(35.0_dp + merge(5.0_dp + 3.0_dp*(n + 1), 0.0_dp, has_line))
+    bytes = 8.0_dp*real(nmax, dp)*(60.0_dp + merge(5.0_dp + 3.0_dp*(n + 1), 0.0_dp, has_line))
   end function history_bytes
 
   !> The outputs of the rigid part of `sep` (evaluated at time t) and of the
@@ -121,13 +135,21 @@ contains
     type(separation_system), intent(in) :: sep
     integer, intent(in) :: iloads
     type(launch_sample) :: s
-    real(dp) :: nose(3), aft(3), edge(3)
+    real(dp) :: nose(3), aft(3), edge(3), v_air(3), speed
+    type(air_state) :: air
     associate(b0 => sep%bodies(0), b1 => sep%bodies(1))
       s%aircraft_euler = dcm_to_euler(b0%c)
       s%rocket_euler = dcm_to_euler(b1%c)
       s%pitch_rate = rocket_pitch_rate(sep)
       ! load factor along the aircraft's y axis: specific force / g
       s%load_factor = dot_product(b0%c(:, 2), sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
+      ! what accelerometers at the CGs measure: the acceleration less gravity,
+      ! in body axes (the chain's first generalized accelerations are the
+      ! rocket's CG acceleration, earth frame, and its angular acceleration,
+      ! rocket axes: airlaunch_kane_chain)
+      s%aircraft_specific_force = matmul(transpose(b0%c), sep%a0 + [0.0_dp, g0, 0.0_dp])
+      s%rocket_specific_force = matmul(transpose(b1%c), sep%udot(1:3) + [0.0_dp, g0, 0.0_dp])
+      s%rocket_wdot = sep%udot(4:6)
       ! clearances of the rocket's surface (its axis segment less the radius)
       ! from the aircraft's empennage point and from the ramp edge
       nose = b1%point_position([cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp])
@@ -141,6 +163,24 @@ contains
     type is (launch_loads)
       s%alpha = src%aircraft_out%alpha
       s%elevator = src%aircraft_out%delta_e
+      s%aircraft_beta = src%aircraft_out%beta
+      associate(b0 => sep%bodies(0), b1 => sep%bodies(1))
+        ! the air the aerodynamics read at the CGs (a gust's, lagged as the
+        ! aircraft's lift reads it with &gust kussner)
+        air = isa(b0%r(2))
+        v_air = air_relative_velocity(src%gust, b0%r, b0%v, src%kussner_chord)
+        speed = norm2(v_air)
+        s%aircraft_mach = speed/air%sound_speed
+        s%aircraft_qbar = 0.5_dp*air%density*speed**2
+        air = isa(b1%r(2))
+        v_air = matmul(transpose(b1%c), air_relative_velocity(src%gust, b1%r, b1%v))
+        speed = norm2(v_air)
+        s%rocket_mach = speed/air%sound_speed
+        s%rocket_qbar = 0.5_dp*air%density*speed**2
+        ! the aircraft's convention (airlaunch_aircraft_aero): alpha = atan2(-v_y, v_x), beta = asin(v_z/V)
+        s%rocket_alpha = atan2(-v_air(2), v_air(1))
+        if (speed > 0.0_dp) s%rocket_beta = asin(max(-1.0_dp, min(1.0_dp, v_air(3)/speed)))
+      end associate
     end select
   end function sample_launch
 
@@ -259,6 +299,14 @@ contains
       self%rk_eul(:, k) = s%rocket_euler*rad2deg
       self%rk_rate(k) = s%pitch_rate*rad2deg
       self%rk_elev(k) = nose_elevation(b1%q)*rad2deg
+      self%ac_vel(:, k) = b0%v
+      self%ac_w(:, k) = b0%w*rad2deg
+      self%ac_sf(:, k) = s%aircraft_specific_force
+      self%rk_w(:, k) = b1%w*rad2deg
+      self%rk_wdot(:, k) = s%rocket_wdot*rad2deg
+      self%rk_sf(:, k) = s%rocket_specific_force
+      self%ac_air(:, k) = [s%aircraft_beta*rad2deg, s%aircraft_mach, s%aircraft_qbar]
+      self%rk_air(:, k) = [s%rocket_alpha*rad2deg, s%rocket_beta*rad2deg, s%rocket_mach, s%rocket_qbar]
     end associate
     if (self%has_line .and. present(nodes) .and. present(tension) .and. present(chute)) then
       self%pc_pos(:, k) = chute
@@ -343,7 +391,49 @@ contains
         "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
       call w%add_var_1d("constraint_residual_m", ["time"], self%residual(1:nrec), "m", &
         "position residual of the cut-joint constraints", werr)
+      call self%write_telemetry(w, werr)
   end subroutine history_write_contract
+
+  !> What the bodies' inertial sensors and air-data systems would read
+  !> (docs/output.md, "Telemetry"): velocities, body rates, specific forces,
+  !> air data; vectors in body axes along the dimension `body_axis`.
+  subroutine history_write_telemetry(self, w, werr)
+    class(launch_history), intent(in) :: self
+    type(nc_writer), intent(inout) :: w
+    type(error_type), allocatable, intent(inout) :: werr
+    integer :: nrec
+    character(len=*), parameter :: rates = " (0 = x roll, 1 = y: positive nose left, 2 = z pitch: positive nose up)"
+    nrec = self%nrec
+    call w%add_dim("body_axis", [0.0_dp, 1.0_dp, 2.0_dp], "1", &
+      "component in the body's own axes: 0 = x nose, 1 = y up, 2 = z right", werr)
+    call w%add_var_2d("aircraft_velocity", ["xyz ", "time"], self%ac_vel(:, 1:nrec), "m s-1", &
+      "aircraft CG velocity, earth frame", werr)
+    call w%add_var_2d("aircraft_body_rates_deg_s", ["body_axis", "time     "], self%ac_w(:, 1:nrec), "degree s-1", &
+      "aircraft angular velocity, aircraft axes" // rates, werr)
+    call w%add_var_2d("aircraft_specific_force_m_s2", ["body_axis", "time     "], self%ac_sf(:, 1:nrec), "m s-2", &
+      "aircraft specific force (CG acceleration less gravity: what an accelerometer at the CG reads), aircraft axes", &
+      werr)
+    call w%add_var_1d("aircraft_beta_deg", ["time"], self%ac_air(1, 1:nrec), "degree", &
+      "aircraft sideslip asin(v_z/V) of the air-relative velocity at the CG, aircraft axes", werr)
+    call w%add_var_1d("aircraft_mach", ["time"], self%ac_air(2, 1:nrec), "1", &
+      "aircraft Mach number (air-relative speed at the CG)", werr)
+    call w%add_var_1d("aircraft_dynamic_pressure_Pa", ["time"], self%ac_air(3, 1:nrec), "Pa", &
+      "aircraft dynamic pressure (air-relative speed at the CG)", werr)
+    call w%add_var_2d("rocket_body_rates_deg_s", ["body_axis", "time     "], self%rk_w(:, 1:nrec), "degree s-1", &
+      "rocket angular velocity, rocket axes" // rates, werr)
+    call w%add_var_2d("rocket_angular_acceleration_deg_s2", ["body_axis", "time     "], self%rk_wdot(:, 1:nrec), &
+      "degree s-2", "rocket angular acceleration (derivative of rocket_body_rates_deg_s), rocket axes", werr)
+    call w%add_var_2d("rocket_specific_force_m_s2", ["body_axis", "time     "], self%rk_sf(:, 1:nrec), "m s-2", &
+      "rocket specific force (CG acceleration less gravity: what an accelerometer at the CG reads), rocket axes", werr)
+    call w%add_var_1d("rocket_alpha_deg", ["time"], self%rk_air(1, 1:nrec), "degree", &
+      "rocket angle of attack atan2(-v_y, v_x) of the air-relative velocity at its CG, rocket axes", werr)
+    call w%add_var_1d("rocket_beta_deg", ["time"], self%rk_air(2, 1:nrec), "degree", &
+      "rocket sideslip asin(v_z/V) of the air-relative velocity at its CG, rocket axes", werr)
+    call w%add_var_1d("rocket_mach", ["time"], self%rk_air(3, 1:nrec), "1", &
+      "rocket Mach number (air-relative speed at its CG)", werr)
+    call w%add_var_1d("rocket_dynamic_pressure_Pa", ["time"], self%rk_air(4, 1:nrec), "Pa", &
+      "rocket free-stream dynamic pressure at its CG (also while shielded in the bay)", werr)
+  end subroutine history_write_telemetry
 
   !> The milestones as global attributes.
   subroutine write_milestones(w, res, error)
