@@ -115,7 +115,7 @@ contains
       self%rk_eul(3, nmax), self%rk_rate(nmax), self%rk_elev(nmax), self%cforce(6, nmax), self%normal(nmax), &
       self%friction(nmax), self%lock(nmax), self%clearance(nmax), self%residual(nmax), self%edge_clearance(nmax), &
       self%ac_vel(3, nmax), self%ac_w(3, nmax), self%ac_sf(3, nmax), self%rk_w(3, nmax), self%rk_wdot(3, nmax), &
-      self%rk_sf(3, nmax), self%ac_air(3, nmax), self%rk_air(4, nmax), stat=stat)
+      self%rk_sf(3, nmax), self%ac_air(nmax, 3), self%rk_air(nmax, 4), stat=stat)
     if (stat /= 0 .or. .not. self%has_line) return
     allocate(self%pc_pos(3, nmax), self%t_rocket(nmax), self%t_chute(nmax), self%nodes(3, 0:n, nmax), stat=stat)
   end subroutine history_init
@@ -305,8 +305,9 @@ contains
       self%rk_w(:, k) = b1%w*rad2deg
       self%rk_wdot(:, k) = s%rocket_wdot*rad2deg
       self%rk_sf(:, k) = s%rocket_specific_force
-      self%ac_air(:, k) = [s%aircraft_beta*rad2deg, s%aircraft_mach, s%aircraft_qbar]
-      self%rk_air(:, k) = [s%rocket_alpha*rad2deg, s%rocket_beta*rad2deg, s%rocket_mach, s%rocket_qbar]
+      ! (time first: each column is written whole, without a temporary)
+      self%ac_air(k, :) = [s%aircraft_beta*rad2deg, s%aircraft_mach, s%aircraft_qbar]
+      self%rk_air(k, :) = [s%rocket_alpha*rad2deg, s%rocket_beta*rad2deg, s%rocket_mach, s%rocket_qbar]
     end associate
     if (self%has_line .and. present(nodes) .and. present(tension) .and. present(chute)) then
       self%pc_pos(:, k) = chute
@@ -413,11 +414,11 @@ contains
     call w%add_var_2d("aircraft_specific_force_m_s2", ["body_axis", "time     "], self%ac_sf(:, 1:nrec), "m s-2", &
       "aircraft specific force (CG acceleration less gravity: what an accelerometer at the CG reads), aircraft axes", &
       werr)
-    call w%add_var_1d("aircraft_beta_deg", ["time"], self%ac_air(1, 1:nrec), "degree", &
+    call w%add_var_1d("aircraft_beta_deg", ["time"], self%ac_air(1:nrec, 1), "degree", &
       "aircraft sideslip asin(v_z/V) of the air-relative velocity at the CG, aircraft axes", werr)
-    call w%add_var_1d("aircraft_mach", ["time"], self%ac_air(2, 1:nrec), "1", &
+    call w%add_var_1d("aircraft_mach", ["time"], self%ac_air(1:nrec, 2), "1", &
       "aircraft Mach number (air-relative speed at the CG)", werr)
-    call w%add_var_1d("aircraft_dynamic_pressure_Pa", ["time"], self%ac_air(3, 1:nrec), "Pa", &
+    call w%add_var_1d("aircraft_dynamic_pressure_Pa", ["time"], self%ac_air(1:nrec, 3), "Pa", &
       "aircraft dynamic pressure (air-relative speed at the CG)", werr)
     call w%add_var_2d("rocket_body_rates_deg_s", ["body_axis", "time     "], self%rk_w(:, 1:nrec), "degree s-1", &
       "rocket angular velocity, rocket axes" // rates, werr)
@@ -425,13 +426,13 @@ contains
       "degree s-2", "rocket angular acceleration (derivative of rocket_body_rates_deg_s), rocket axes", werr)
     call w%add_var_2d("rocket_specific_force_m_s2", ["body_axis", "time     "], self%rk_sf(:, 1:nrec), "m s-2", &
       "rocket specific force (CG acceleration less gravity: what an accelerometer at the CG reads), rocket axes", werr)
-    call w%add_var_1d("rocket_alpha_deg", ["time"], self%rk_air(1, 1:nrec), "degree", &
+    call w%add_var_1d("rocket_alpha_deg", ["time"], self%rk_air(1:nrec, 1), "degree", &
       "rocket angle of attack atan2(-v_y, v_x) of the air-relative velocity at its CG, rocket axes", werr)
-    call w%add_var_1d("rocket_beta_deg", ["time"], self%rk_air(2, 1:nrec), "degree", &
+    call w%add_var_1d("rocket_beta_deg", ["time"], self%rk_air(1:nrec, 2), "degree", &
       "rocket sideslip asin(v_z/V) of the air-relative velocity at its CG, rocket axes", werr)
-    call w%add_var_1d("rocket_mach", ["time"], self%rk_air(3, 1:nrec), "1", &
+    call w%add_var_1d("rocket_mach", ["time"], self%rk_air(1:nrec, 3), "1", &
       "rocket Mach number (air-relative speed at its CG)", werr)
-    call w%add_var_1d("rocket_dynamic_pressure_Pa", ["time"], self%rk_air(4, 1:nrec), "Pa", &
+    call w%add_var_1d("rocket_dynamic_pressure_Pa", ["time"], self%rk_air(1:nrec, 4), "Pa", &
       "rocket free-stream dynamic pressure at its CG (also while shielded in the bay)", werr)
   end subroutine history_write_telemetry
 
