@@ -27,7 +27,7 @@ program airlaunch_sweep
   use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular, command_argument
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
-  use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, remove_journal
+  use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, check_ran_settings, remove_journal
   use airlaunch_sweep_summary, only: write_summary
   use airlaunch_sweep_scheduler, only: sweep_scheduler
   use airlaunch_sweep_plan, only: sweep_setup, load_sweep, fingerprint_text, trajectory_ids, make_output_dir
@@ -47,6 +47,7 @@ program airlaunch_sweep
   type(error_type), allocatable :: error
   type(error_type), allocatable :: stdout_error   !< the first line that did not reach stdout
   character(len=:), allocatable :: path, scratch, check_file
+  character(len=:), allocatable :: ran_digest   !< --case-namelist: the code digest the sweep ran, if another
   integer :: rank, nranks, status, case_id, n_resumed, k, n_written
   logical :: check_only, restart, summary_kept
   integer, allocatable :: pending(:), keep(:)
@@ -84,6 +85,11 @@ program airlaunch_sweep
         call fatal_error(error, path // ": --case-namelist " // str(case_id) // " is not a case id (0 .. " // &
           str(s%table%n_cases - 1) // ")")
         status = exit_input
+      end if
+      ! the namelist is the case the sweep ran only if its settings are unchanged
+      if (status == exit_ok) then
+        call check_ran_settings(s%def%journal_dir(), fingerprint_text(s), error, ran_digest)
+        if (allocated(error)) status = exit_input
       end if
     end if
     if (status == exit_ok .and. .not. check_only .and. case_id < 0) call prepare_run()
@@ -345,6 +351,9 @@ contains
     integer :: j
     if (case_id >= 0) then
       call say(case_namelist(s%def, s%base, case_id, s%table%values(:, case_id + 1)), newline=.false.)
+      if (len(ran_digest) > 0) write(error_unit, '(a)') "airlaunch-sweep: note: the sweep ran code digest " // &
+        ran_digest // ", this build is " // code_digest // ": a run of this namelist may differ from the " // &
+        "case's summary row in the last bits"
       return
     end if
     call say("airlaunch-sweep: " // path // ": ok: design " // s%def%design // ", " // &

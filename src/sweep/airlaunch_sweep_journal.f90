@@ -18,7 +18,7 @@ module airlaunch_sweep_journal
   use airlaunch_sweep_row, only: sweep_row, format_row, parse_row
   implicit none
   private
-  public :: journal_writer, journal_file, read_journals, check_fingerprint, remove_journal, fnv1a
+  public :: journal_writer, journal_file, read_journals, check_fingerprint, check_ran_settings, remove_journal, fnv1a
 
   !> Largest number of rank files looked for.
   integer, parameter :: max_rank_files = 100000
@@ -199,6 +199,65 @@ contains
       call replace_text_file(path, text, error)
     end if
   end subroutine check_fingerprint
+
+  !> A query of a sweep that ran (--case-namelist): the settings its journal's
+  !> fingerprint records (the base's text, t_end, the inputs, the fixed values,
+  !> the table's values) must be those of `text`, this sweep's fingerprint now,
+  !> or the case's namelist now would not be the case the sweep ran (an edited
+  !> base or definition).  The base's path and the code may differ: the text
+  !> decides, and `ran_digest` returns the code digest the rows were computed
+  !> with ('' if the same as `text`'s, or if the sweep never ran: no
+  !> fingerprint, nothing to compare).  Nothing is written.
+  subroutine check_ran_settings(dir, text, error, ran_digest)
+    character(len=*), intent(in) :: dir                   !< journal directory
+    character(len=*), intent(in) :: text                  !< this sweep's fingerprint
+    type(error_type), allocatable, intent(inout) :: error !< set if the settings differ, or on a read error
+    character(len=:), allocatable, intent(out) :: ran_digest !< the journal's code digest, if another
+    character(len=:), allocatable :: path, have
+    ran_digest = ""
+    path = dir // "/fingerprint.txt"
+    if (.not. file_exists(path)) return
+    call read_text_file(path, have, error)
+    if (allocated(error)) return
+    if (settings_of(have) /= settings_of(text)) then
+      call fatal_error(error, dir // ": the sweep ran other settings than its definition gives now (" // &
+        first_difference(settings_of(have), settings_of(text)) // "): the case's namelist would not be " // &
+        "the case the sweep ran (restore the base scenario and the definition as they were)")
+      return
+    end if
+    if (line_of(have, "code_digest = ") /= line_of(text, "code_digest = ")) &
+      ran_digest = line_of(have, "code_digest = ")
+  end subroutine check_ran_settings
+
+  !> A fingerprint's lines but the code's digest and the base's path.
+  function settings_of(text) result(s)
+    character(len=*), intent(in) :: text
+    character(len=:), allocatable :: s, line
+    integer :: p, q
+    s = ""
+    p = 1
+    do while (p <= len(text))
+      q = index(text(p:), new_line("a"))
+      if (q == 0) q = len(text) - p + 2
+      line = text(p:p+q-2)
+      if (index(line, "code_digest = ") /= 1 .and. index(line, "base = ") /= 1) s = s // line // new_line("a")
+      p = p + q
+    end do
+  end function settings_of
+
+  !> The rest of the first line of `text` that starts with `key` ('' if none).
+  function line_of(text, key) result(s)
+    character(len=*), intent(in) :: text, key
+    character(len=:), allocatable :: s
+    integer :: p, q
+    s = ""
+    p = index(new_line("a") // text, new_line("a") // key)
+    if (p == 0) return
+    p = p + len(key)
+    q = index(text(p:), new_line("a"))
+    if (q == 0) q = len(text) - p + 2
+    s = text(p:p+q-2)
+  end function line_of
 
   !> Delete the journal files and the fingerprint (--restart).
   subroutine remove_journal(dir)
