@@ -23,7 +23,7 @@
 program airlaunch
   use, intrinsic :: iso_fortran_env, only: error_unit
   use airlaunch_error, only: error_type, output_failure_note
-  use airlaunch_version, only: code_version, sundials_build
+  use airlaunch_version, only: code_version, code_digest, sundials_build
   use airlaunch_namelist, only: nml_file
   use airlaunch_run_config, only: run_config, read_run_config, run_echo, require_output_directory
   use airlaunch_drop_scene, only: drop_config, read_drop_config, run_drop
@@ -81,6 +81,7 @@ program airlaunch
     case ("-V", "--version")
       call say("airlaunch " // code_version)
       call say("SUNDIALS: " // sundials_build)
+      call say("code digest (sources and build settings): " // code_digest)
       call check_stdout("the version is incomplete")
       stop
     case ("--check")

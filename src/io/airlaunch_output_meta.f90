@@ -1,9 +1,9 @@
-!> Global attributes every airlaunch output file carries: the code version,
-!> the scene and the fully resolved input (defaults included).
+!> Global attributes every airlaunch output file carries: the code version and
+!> digest, the scene and the fully resolved input (defaults included).
 module airlaunch_output_meta
   use airlaunch_error, only: error_type
   use airlaunch_ncwrite, only: nc_writer
-  use airlaunch_version, only: code_version
+  use airlaunch_version, only: code_version, code_digest
   implicit none
   private
   public :: write_run_metadata, creation_time
@@ -20,6 +20,9 @@ contains
     call w%add_text_att("/", "title", title, error)
     call w%add_text_att("/", "scene", scene, error)
     call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
+    ! the build the numbers are the bits of (sources and build settings; the
+    ! git description does not name the compiler flags nor an uncommitted edit)
+    call w%add_text_att("/", "code_digest", code_digest, error)
     call w%add_text_att("/", "created", creation_time(), error)
     call w%add_text_att("/", "input_namelist", echo, error)
     call w%add_text_att("/", "frames", "earth: x forward, y up, z right; body: x nose, y up, z right; " // &

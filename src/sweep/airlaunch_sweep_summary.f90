@@ -10,7 +10,7 @@ module airlaunch_sweep_summary
   use airlaunch_error, only: error_type, fatal_error
   use airlaunch_strings, only: str
   use airlaunch_ncwrite, only: nc_writer
-  use airlaunch_version, only: code_version
+  use airlaunch_version, only: code_version, code_digest
   use airlaunch_output_meta, only: creation_time
   use airlaunch_sweep_definition, only: sweep_definition
   use airlaunch_sweep_table, only: case_table
@@ -107,6 +107,7 @@ contains
     call w%add_text_att("/", "table", def%table_path(), error)
     call w%add_text_att("/", "criteria", def%criteria, error)
     call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
+    call w%add_text_att("/", "code_digest", code_digest, error)
     call w%add_text_att("/", "created", creation_time(), error)
     call w%add_text_att("/", "comment", "one row per case, sorted by case id; NaN: event not reached or " // &
       "value not defined; metrics of failed cases are those up to the failure; invalid_input: the scenario " // &

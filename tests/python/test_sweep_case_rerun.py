@@ -76,3 +76,18 @@ def test_another_build_is_a_note_and_the_same_namelist(ran):
     assert len(lines) == 1 and lines[0].startswith(
         "airlaunch-sweep: note: the sweep ran code digest 0123456789abcdef, this build is "), res.stderr
     assert "may differ from the case's summary row in the last bits" in lines[0]
+
+
+def test_the_summary_names_the_build_of_its_rows(ran):
+    """summary.nc carries the code digest its rows were computed with: the
+    journal fingerprint's (which a resume and this query compare), which
+    `airlaunch-sweep --version` prints."""
+    import xarray as xr
+
+    cwd, _, _, _ = ran
+    journal = re.findall(r"^code_digest = (\w+)$", (cwd / "out" / "journal" / "fingerprint.txt").read_text(),
+                         flags=re.M)
+    version = run_sweep("--version", cwd, None)
+    printed = re.findall(r"^code digest \(sources and build settings\): (\w+)$", version.stdout, flags=re.M)
+    with xr.open_dataset(cwd / "out" / "summary.nc") as s:
+        assert [s.attrs["code_digest"]] == journal == printed
