@@ -83,7 +83,7 @@ def _session_pids(sid):
 def test_killed_sweep_resumes_to_the_same_summary(small, reference, tmp_path):
     """SIGKILL to mpirun and every rank mid-way; the rerun of the same command
     skips the journaled cases, runs the rest once, and the summary equals the
-    uninterrupted one."""
+    uninterrupted one (on one rank), and so does the envelope drawn from it."""
     make_table(small, tmp_path)
     journal = tmp_path / "out" / "journal"
     proc = subprocess.Popen(mpirun(2) + [str(SWEEP_EXE), str(small)], cwd=tmp_path, env=ENV,
@@ -113,6 +113,15 @@ def test_killed_sweep_resumes_to_the_same_summary(small, reference, tmp_path):
     with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
         assert list(s["case"].values) == list(range(N_CASES))
     assert_same_summary(reference, tmp_path / "out" / "summary.nc")
+    # and so is the envelope drawn from it: every variable, row order and attribute
+    # (the envelope step reads neither wall_time_s nor created)
+    envelopes = []
+    for cwd in (reference.parents[1], tmp_path):
+        res = run_python(["envelope", small, "--criteria", ROOT / "input" / "criteria_paper.nml", "--no-figures"],
+                         cwd)
+        assert res.returncode == 0, res.stdout + res.stderr
+        envelopes.append(cwd / "out" / "envelope.nc")
+    assert_same_summary(*envelopes, ignore_vars=(), ignore_attrs=())
 
 
 def _version_module(tree, out):
