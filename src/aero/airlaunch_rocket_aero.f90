@@ -13,7 +13,9 @@
 !> angle and the pitch/yaw damping of a rotating body.  Strips ahead of
 !> `x_shield` (body x) are shielded (inside the cargo bay) and feel no air; the
 !> potential and axial terms are scaled by the exposed fraction of the length
-!> (a simple shielding model for a rocket that leaves the bay tail first).
+!> (a simple shielding model for a rocket that leaves the bay tail first),
+!> the potential term acting at the exposed part's front (the ramp edge)
+!> while its own centre is still in the bay.
 !> Axial force: -1/2 rho |u| u S_ref C_A.  Optional fins (a documented
 !> configuration choice) add, at their centre of pressure x_fin and with the
 !> local velocity there (so they damp rotation too),
@@ -116,15 +118,19 @@ contains
       moment = moment + [0.0_dp, -x*f(3), x*f(2)]    ! (x,0,0) x f
     end do
     ! potential (slender-body) normal force near the nose, opposite to the
-    ! cross-flow velocity of the body; scaled by the exposed fraction.  It
-    ! takes no part of the rotation (vpn > 0 implies v > 0); the fins below
-    ! use their local velocity and act on a pitching body too.  Penetrating a
-    ! gust, it reads the air at its centre, or at the exposed part's front
-    ! while its centre is still in the bay.
-    x = x_nose - p%cp_pot_from_nose
+    ! cross-flow velocity of the body; scaled by the exposed fraction.  While
+    ! its centre cp_pot is still in the bay it acts at the exposed part's
+    ! front, the ramp edge: slender-body theory puts the force where the
+    ! cross-section enters the stream (dS/dx), which for the hull emerging
+    ! tail first is the edge, not a nose still shielded in the bay (before the
+    ! thirty-fourth session it acted at cp_pot inside the bay).  It takes no
+    ! part of the rotation (vpn > 0 implies v > 0); the fins below use their
+    ! local velocity and act on a pitching body too.  Penetrating a gust, it
+    ! reads the air where it acts.
+    x = min(x_nose - p%cp_pot_from_nose, x_shield)
     v_loc = v_b
     if (penetrating) then
-      v_loc = v_loc - gust_change(min(x, x_shield))
+      v_loc = v_loc - gust_change(x)
       v = norm2(v_loc)
     end if
     vp = [0.0_dp, v_loc(2), v_loc(3)]

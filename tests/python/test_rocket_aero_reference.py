@@ -7,7 +7,8 @@ separation (Case 3: no joint load), in the pitch plane. The recorded velocity,
 nose elevation, pitch rate and altitude give the documented loads:
 
 - potential (slender-body) normal force q S_ref sin 2a cos(a/2) against the
-  cross-flow, at `cp_pot_from_nose`; a = atan2(|v_perp|, v_x) at the CG;
+  cross-flow, at `cp_pot_from_nose` (at the ramp edge while that point is in
+  the bay, times the exposed share of the length); a = atan2(|v_perp|, v_x) at the CG;
 - viscous cross-flow over `n_strips` strips, each -1/2 rho eta C_dn d dx |u| u
   with its own cross-flow u = v_perp + omega x (strip centre);
 - axial force -1/2 rho |u_x| u_x S_ref C_A;
@@ -19,8 +20,8 @@ nose elevation, pitch rate and altitude give the documented loads:
 
 m dv/dt and I_zz dw/dt are central differences of the records (2 ms apart at
 rtol 1e-10): their error h^2/6 times the third derivative is the tolerance's
-scale, 1e-4 of the largest aerodynamic force and moment (measured: force 8.8e-7
-and 7.8e-7, moment 4.9e-6 and 1.4e-6, finless and with fins). A 1 % change of
+scale, 1e-4 of the largest aerodynamic force and moment (measured: force 8.2e-7
+and 7.7e-7, moment 1.3e-6 and 1.0e-6, finless and with fins; thirty-fourth session). A 1 % change of
 C_A, C_dn, the fin slope or the potential term's position (2 cm) moves the
 worst residual to 2.9e-4 ... 9.9e-3, 3 to 100 times the tolerance.
 """
@@ -88,7 +89,8 @@ def _loads(v, theta, wz, y, fins, x_edge=math.inf):
     xs = np.where(out, (lo + hi) / 2, 0.0)
     up = w + wz * xs
     fs = np.where(out, -0.5 * rho * ETA * C_DN * D * (hi - lo) * np.abs(up) * up, 0.0)
-    fy, mz = fp + fs.sum(), (X_CG - X_CP) * fp + (xs * fs).sum()
+    # the potential term at its centre, or at the ramp edge while that centre is in the bay
+    fy, mz = fp + fs.sum(), min(X_CG - X_CP, x_edge) * fp + (xs * fs).sum()
     if fins:
         _, cna, cn90 = _fins()
         share, xf = _fin_exposure(x_edge)
@@ -138,9 +140,10 @@ def _on_the_rail_and_the_edge(ds, v, y, nose, wz):
     (the edge from the recorded aircraft pose) and the recorded joint wrench
     (`constraint_force`, earth axes; `constraint_moment`, about the CG) added;
     tolerance 1e-4 of the largest joint force and moment (measured 7.8e-6 and
-    3.4e-5; with the exposed fins' force at the whole fins' centre of pressure
-    4.8e-3, with their whole force once any of them is out 0.15, with the
-    potential term at the exposed part's front instead of its own centre 1.8e-2)."""
+    4.0e-5; with the exposed fins' force at the whole fins' centre of pressure
+    4.8e-3, with their whole force once any of them is out 0.15; with the
+    potential term at its own centre inside the bay instead of the exposed
+    part's front, the model before the thirty-fourth session, 1.9e-2)."""
     t, phase = ds.time.values, ds.phase.values
     th_a = np.radians(ds.aircraft_euler_deg.values[:, 1])
     edge = (ds.aircraft_position.values[:, :2] - 13.0 * np.stack([np.cos(th_a), np.sin(th_a)], 1)
