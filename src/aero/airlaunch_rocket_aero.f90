@@ -41,13 +41,27 @@
 !> strips and the fins the local air of a pitch or yaw rate of the body in
 !> uniform air (Etkin's equivalence; tests/unit/test_gust.f90 checks it).
 !>
+!> Optional Mach dependence (default off: the paper's constant coefficients,
+!> bit for bit).  With a table of n_c_dn points the cross-flow drag
+!> coefficient of each strip is C_dn(M_c), M_c = |v_c|/a, piecewise linear in
+!> the strip's own cross-flow Mach number (|v_c| its local cross-flow speed,
+!> rotation and gust included; a the local speed of sound the caller passes
+!> with rho) and held constant beyond the table's ends; the scalar c_dn is then
+!> not used.  Likewise C_A(M), M = |v_b|/a the CG's free-stream Mach number,
+!> from a table of n_c_axial points.  Jorgensen (NASA TR R-474, 1977) shows
+!> C_dn of a circular cylinder rising above its subcritical 1.2 as M_c nears
+!> 1: the tables let a user give such a curve (docs/model.md).
+!>
 !> Body frame: x along the axis towards the nose, origin at the CG.
 module airlaunch_rocket_aero
   use airlaunch_kinds, only: dp, pi
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
   private
-  public :: rocket_aero, rocket_aero_eval, fin_exposed_fraction, fin_exposure
+  public :: rocket_aero, rocket_aero_eval, fin_exposed_fraction, fin_exposure, mach_table_value
+
+  !> Most points of a Mach table (c_dn_mach/c_dn_table, c_axial_mach/c_axial_table).
+  integer, parameter, public :: max_mach_points = 16
 
   !> Geometry and coefficients of the rocket.
   type :: rocket_aero
@@ -69,6 +83,14 @@ module airlaunch_rocket_aero
     real(dp) :: fin_tip_chord = 0.0_dp    !< [m]
     real(dp) :: fin_sweep = 0.0_dp        !< leading-edge offset root to tip [m]
     integer :: n_strips = 16              !< strips of the cross-flow integral
+    ! optional Mach tables (0 points: the constant c_dn, c_axial above);
+    ! piecewise linear, constant beyond the ends, Mach points strictly increasing
+    integer :: n_c_dn = 0                 !< points of the C_dn(M_c) table
+    real(dp) :: c_dn_mach(max_mach_points) = 0.0_dp   !< cross-flow Mach numbers M_c
+    real(dp) :: c_dn_table(max_mach_points) = 0.0_dp  !< C_dn at them
+    integer :: n_c_axial = 0              !< points of the C_A(M) table
+    real(dp) :: c_axial_mach(max_mach_points) = 0.0_dp   !< free-stream Mach numbers M
+    real(dp) :: c_axial_table(max_mach_points) = 0.0_dp  !< C_A at them
   end type rocket_aero
 
 contains
@@ -76,18 +98,20 @@ contains
   !> Force (body frame) and moment about the CG (body frame) for air-relative
   !> CG velocity v_b and body rates w_b.  Strips with body x > x_shield are
   !> shielded (x measured from the CG, towards the nose); pass a large value
-  !> for a fully exposed rocket.
+  !> for a fully exposed rocket.  `sound_speed` (the local speed of sound, from
+  !> the atmosphere model with rho) sets the Mach numbers of the optional
+  !> tables; it is not used without them.
   !> With `gust`, `r_cg` and `c` present the stations read the gust where they
   !> are (module header); v_b is the CG's air-relative velocity either way.
-  pure subroutine rocket_aero_eval(p, rho, v_b, w_b, x_shield, force, moment, gust, r_cg, c)
+  pure subroutine rocket_aero_eval(p, rho, sound_speed, v_b, w_b, x_shield, force, moment, gust, r_cg, c)
     type(rocket_aero), intent(in) :: p
-    real(dp), intent(in) :: rho, v_b(3), w_b(3), x_shield
+    real(dp), intent(in) :: rho, sound_speed, v_b(3), w_b(3), x_shield
     real(dp), intent(out) :: force(3), moment(3)
     type(gust_field), intent(in), optional :: gust   !< the gust, read at each station
     real(dp), intent(in), optional :: r_cg(3)        !< the CG, earth frame [m] (with gust)
     real(dp), intent(in), optional :: c(3, 3)        !< body-to-earth rotation (with gust)
     real(dp) :: s_ref, dx, x, v_loc(3), vp(3), vpn, f(3), v, alpha, exposed, x_nose, x_tail
-    real(dp) :: x_lo, x_hi, w_cg(3), fin_share
+    real(dp) :: x_lo, x_hi, w_cg(3), fin_share, c_a, c_dn
     logical :: penetrating
     integer :: i
     force = 0; moment = 0
@@ -101,7 +125,9 @@ contains
     if (penetrating) w_cg = gust_velocity(gust, r_cg)
     v = norm2(v_b)
     ! axial force, scaled by the exposed fraction
-    force(1) = -0.5_dp*rho*abs(v_b(1))*v_b(1)*s_ref*p%c_axial*exposed
+    c_a = p%c_axial
+    if (p%n_c_axial > 0) c_a = mach_table_value(p%n_c_axial, p%c_axial_mach, p%c_axial_table, v/sound_speed)
+    force(1) = -0.5_dp*rho*abs(v_b(1))*v_b(1)*s_ref*c_a*exposed
     ! viscous cross-flow, strip by strip with the local velocity
     dx = p%length/p%n_strips
     do i = 1, p%n_strips
@@ -113,7 +139,9 @@ contains
       if (penetrating) v_loc = v_loc - gust_change(x)
       vp = [0.0_dp, v_loc(2), v_loc(3)]
       vpn = norm2(vp)
-      f = -0.5_dp*rho*p%eta*p%c_dn*p%diameter*(x_hi - x_lo)*vpn*vp
+      c_dn = p%c_dn
+      if (p%n_c_dn > 0) c_dn = mach_table_value(p%n_c_dn, p%c_dn_mach, p%c_dn_table, vpn/sound_speed)
+      f = -0.5_dp*rho*p%eta*c_dn*p%diameter*(x_hi - x_lo)*vpn*vp
       force = force + f
       moment = moment + [0.0_dp, -x*f(3), x*f(2)]    ! (x,0,0) x f
     end do
@@ -171,6 +199,28 @@ contains
       end do
     end function gust_change
   end subroutine rocket_aero_eval
+
+  !> The value of a Mach table of n points (xs strictly increasing) at
+  !> Mach number x: piecewise linear between the points, the end value beyond
+  !> either end (a table of one point is a constant).  At a point it returns
+  !> that point's value exactly.
+  pure real(dp) function mach_table_value(n, xs, ys, x) result(y)
+    integer, intent(in) :: n             !< points (1 to size(xs))
+    real(dp), intent(in) :: xs(:), ys(:) !< Mach numbers and values
+    real(dp), intent(in) :: x            !< Mach number
+    integer :: i
+    if (x <= xs(1)) then
+      y = ys(1)
+      return
+    end if
+    do i = 2, n
+      if (x < xs(i)) then
+        y = ys(i-1) + (ys(i) - ys(i-1))*((x - xs(i-1))/(xs(i) - xs(i-1)))
+        return
+      end if
+    end do
+    y = ys(n)
+  end function mach_table_value
 
   !> Share of the fins' planform outside the bay, body x <= x_shield (the
   !> rocket leaves tail first): fin_exposure's share.

@@ -95,10 +95,10 @@ contains
       v_air = air_relative_velocity(self%gust, b1%r, b1%v)
       v_body = matmul(transpose(b1%c), v_air)
       if (self%penetration) then
-        call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m, &
+        call rocket_aero_eval(self%rocket, air%density, air%sound_speed, v_body, b1%w, x_shield, f, m, &
           gust=self%gust, r_cg=b1%r, c=b1%c)
       else
-        call rocket_aero_eval(self%rocket, air%density, v_body, b1%w, x_shield, f, m)
+        call rocket_aero_eval(self%rocket, air%density, air%sound_speed, v_body, b1%w, x_shield, f, m)
       end if
       force(:, 1) = force(:, 1) + matmul(b1%c, f)
       moment(:, 1) = moment(:, 1) + m

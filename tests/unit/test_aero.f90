@@ -73,7 +73,7 @@ program test_aero
 
   call section("rocket: cross-flow force at 90 deg in closed form")
   rho = 0.41351_dp; v = 50.0_dp
-  call rocket_aero_eval(rk, rho, [0.0_dp, -v, 0.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+  call rocket_aero_eval(rk, rho, 300.0_dp, [0.0_dp, -v, 0.0_dp], [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
   expected = 0.5_dp*rho*v*v*rk%eta*rk%c_dn*rk%diameter*rk%length
   ! at alpha = 90 deg the potential term sin(2 alpha) vanishes; the strip sum of a uniform load is exact
   call check_close(f(2), expected, "F_y = 1/2 rho V^2 eta Cdn d L", rel=1e-12_dp)
@@ -82,7 +82,7 @@ program test_aero
   call section("rocket: pitch damping of a pure rotation")
   rk%n_strips = 400
   w = 0.8_dp
-  call rocket_aero_eval(rk, rho, [0.0_dp, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
+  call rocket_aero_eval(rk, rho, 300.0_dp, [0.0_dp, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
   ! M = -1/2 rho eta Cdn d w|w| int |x| x^2 dx over [-L/2, L/2] (CG at mid-length);
   ! midpoint rule with 400 strips: relative error ~ (dx/L)^2 ~ 1e-5
   l = rk%length/2
@@ -94,13 +94,13 @@ program test_aero
   call section("rocket: static stability")
   alpha = 2*deg2rad; v = 194.7_dp
   vb = v*[cos(alpha), -sin(alpha), 0.0_dp]
-  call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+  call rocket_aero_eval(rk, rho, 300.0_dp, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
   call check(m(3) > 0.0_dp .and. f(2) > 0.0_dp, "without fins the centre of pressure is ahead of the CG (unstable)")
   rk%cn_alpha_fin = 20.0_dp
-  call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+  call rocket_aero_eval(rk, rho, 300.0_dp, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
   call check(m(3) < 0.0_dp, "large fins move it aft of the CG (stable)")
   rk%cn_alpha_fin = 0.0_dp
-  call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], rk%cg_from_nose - rk%length - 0.1_dp, f, m)
+  call rocket_aero_eval(rk, rho, 300.0_dp, vb, [0.0_dp, 0.0_dp, 0.0_dp], rk%cg_from_nose - rk%length - 0.1_dp, f, m)
   call check(all(f == 0.0_dp) .and. all(m == 0.0_dp), "fully shielded inside the bay: no load")
 
   call section("rocket: slender-body slope C_N -> 2 alpha at small angles")
@@ -113,7 +113,7 @@ program test_aero
   do k = 1, size(small_alphas)
     alpha = small_alphas(k)
     vb = v*[cos(alpha), -sin(alpha), 0.0_dp]
-    call rocket_aero_eval(rk, rho, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
+    call rocket_aero_eval(rk, rho, 300.0_dp, vb, [0.0_dp, 0.0_dp, 0.0_dp], 1.0e9_dp, f, m)
     cn = f(2)/(0.5_dp*rho*v*v*pi*rk%diameter**2/4)
     tol = 1.0e-12_dp + alpha**2
     call check_close(cn/(2*alpha), 1.0_dp, "C_N/(2 alpha) at alpha = " // str(alpha) // " rad", abs=tol)
@@ -131,7 +131,7 @@ program test_aero
   v = 194.7_dp; w = 0.5_dp
   x = rk%cg_from_nose - rk%x_fin_from_nose
   expected = -0.5_dp*rho*pi*rk%diameter**2/4*(rk%cn_alpha_fin*v + rk%cn_fin_90*abs(w*x))*w*x
-  call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
+  call rocket_aero_eval(rk, rho, 300.0_dp, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
   call check_close(f(2), expected, "fin normal force of a pure pitch rate", rel=1e-12_dp)
   call check_close(m(3), x*expected, "fin damping moment of a pure pitch rate", rel=1e-12_dp)
   call check(m(3) < 0.0_dp, "the fins damp a nose-up rate")
@@ -139,9 +139,9 @@ program test_aero
   ! is ~ rho V S_ref (1 + CN_alpha/2) ~ 7e2 N per m/s, so a step of 1e-9 m/s
   ! changes them by < 1e-6 N, ~ 5e-10 of |F_y|; allowed: 1e-8 relative.
   rk%c_dn = 1.2_dp
-  call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f0, m0)
+  call rocket_aero_eval(rk, rho, 300.0_dp, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f0, m0)
   do sgn = -1, 1, 2
-    call rocket_aero_eval(rk, rho, [v, sgn*1.0e-9_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
+    call rocket_aero_eval(rk, rho, 300.0_dp, [v, sgn*1.0e-9_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
     call check_close(f(2), f0(2), "F_y continuous at v_y = 0 (" // str(sgn*1.0e-9_dp) // ")", &
       abs=1e-8_dp*abs(f0(2)))
     call check_close(m(3), m0(3), "M_z continuous at v_y = 0 (" // str(sgn*1.0e-9_dp) // ")", &
@@ -193,7 +193,7 @@ program test_aero
         hi = x_shield
       end if
     end do
-    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
+    call rocket_aero_eval(rk, rho, 300.0_dp, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
     ! in the open: the same fins as a point at the exposed part's centre (it
     ! sets the local velocity of the pitching rocket and the moment's arm)
     block
@@ -203,11 +203,11 @@ program test_aero
       point_fin = rk
       point_fin%fin_root_chord = 0.0_dp
       point_fin%x_fin_from_nose = rk%cg_from_nose - x_cp
-      call rocket_aero_eval(point_fin, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, fopen, mopen)
+      call rocket_aero_eval(point_fin, rho, 300.0_dp, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, fopen, mopen)
     end block
     call check_close(f(2), 0.5_dp*fopen(2), "half the planform out: half the fin force", rel=1e-12_dp)
     call check_close(m(3), 0.5_dp*mopen(3), "half the planform out: half the fin moment", rel=1e-12_dp)
-    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], &
+    call rocket_aero_eval(rk, rho, 300.0_dp, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], &
       rk%cg_from_nose - rk%length, f, m)
     call check(f(2) == 0.0_dp .and. m(3) == 0.0_dp, "fins with their trailing edge at the edge: no fin force")
   end block
@@ -298,7 +298,7 @@ program test_aero
     x_shield = rk%cg_from_nose - rk%fin_root_le_from_nose - 1.5_dp
     call fin_exposure(rk, x_shield, share, x_cp)
     rk%c_dn = 0.0_dp
-    call rocket_aero_eval(rk, rho, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
+    call rocket_aero_eval(rk, rho, 300.0_dp, [v, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], x_shield, f, m)
     call check_close(m(3)/f(2), x_cp, "the fin force acts at the exposed part's centre", rel=1e-12_dp)
     call check_close(rk%cg_from_nose - x_cp, 16.5_dp + 1.5_dp + 0.5_dp/4, &
       "a quarter of the root chord out: its centre at the strip's quarter chord", rel=1e-14_dp)

@@ -181,17 +181,17 @@ program test_gust
     k_b = matmul(transpose(c), ul)*pi/(2*hl)
     ! a station at x reads v - k_b x; the rotation w x (x, 0, 0) = (0, w3 x, -w2 x)
     w_eq = w0 + [0.0_dp, k_b(3), -k_b(2)]
-    call rocket_aero_eval(rk, 0.9_dp, vb, w0, huge(1.0_dp), f_g, m_g, gust=gl, r_cg=r_cg, c=c)
-    call rocket_aero_eval(rk, 0.9_dp, vb, w_eq, huge(1.0_dp), f_r, m_r)
-    call rocket_aero_eval(rk, 0.9_dp, vb, w0, huge(1.0_dp), f_0, m_0)
+    call rocket_aero_eval(rk, 0.9_dp, 300.0_dp, vb, w0, huge(1.0_dp), f_g, m_g, gust=gl, r_cg=r_cg, c=c)
+    call rocket_aero_eval(rk, 0.9_dp, 300.0_dp, vb, w_eq, huge(1.0_dp), f_r, m_r)
+    call rocket_aero_eval(rk, 0.9_dp, 300.0_dp, vb, w0, huge(1.0_dp), f_0, m_0)
     call check(norm2(m_r - m_0) > 1.0e-3_dp*norm2(m_0), "the gust's change along the rocket matters (moment)")
     call check_close(norm2(f_g - f_r), 0.0_dp, "force: gust gradient = body rate", abs=1.0e-5_dp*norm2(f_r - f_0))
     call check_close(norm2(m_g - m_r), 0.0_dp, "moment: gust gradient = body rate", abs=1.0e-5_dp*norm2(m_r - m_0))
     ! inside the bay nothing reads the gust (the shielded strips, the potential
     ! and axial terms scaled by the exposed part): half out, the same identity
-    call rocket_aero_eval(rk, 0.9_dp, vb, w0, 0.0_dp, f_g, m_g, gust=gl, r_cg=r_cg, c=c)
-    call rocket_aero_eval(rk, 0.9_dp, vb, w_eq, 0.0_dp, f_r, m_r)
-    call rocket_aero_eval(rk, 0.9_dp, vb, w0, 0.0_dp, f_0, m_0)
+    call rocket_aero_eval(rk, 0.9_dp, 300.0_dp, vb, w0, 0.0_dp, f_g, m_g, gust=gl, r_cg=r_cg, c=c)
+    call rocket_aero_eval(rk, 0.9_dp, 300.0_dp, vb, w_eq, 0.0_dp, f_r, m_r)
+    call rocket_aero_eval(rk, 0.9_dp, 300.0_dp, vb, w0, 0.0_dp, f_0, m_0)
     call check_close(norm2(m_g - m_r), 0.0_dp, "half in the bay: gust gradient = body rate", &
       abs=1.0e-5_dp*norm2(m_r - m_0))
   end block
