@@ -10,7 +10,7 @@ module airlaunch_scenario_config
   use airlaunch_run_config, only: echo_buffer
   use airlaunch_atmosphere, only: isa_max_altitude, isa_min_altitude
   use airlaunch_aircraft_aero, only: aircraft_aero
-  use airlaunch_rocket_aero, only: rocket_aero
+  use airlaunch_rocket_aero, only: rocket_aero, max_mach_points
   use airlaunch_parachute, only: parachute
   use airlaunch_line, only: marching_stable_step
   use airlaunch_trim, only: trim_alpha_min_deg, trim_alpha_max_deg
@@ -48,6 +48,10 @@ module airlaunch_scenario_config
   character(len=16), parameter :: single_couplings(2) = [character(len=16) :: "direct", "rigidized"]
   character(len=16), parameter :: coupling_modes(4) = [character(len=16) :: "direct", "rigidized", &
     "per_phase", "auto"]
+
+  !> Most values read for one &rocket Mach table (a list's limit): more than
+  !> max_mach_points is an input error naming the count, not a read failure.
+  integer, parameter :: max_table_read = max_list_items
 
   !> The ground's margin to the atmosphere model's floor [m].
   real(dp), parameter :: ground_margin_below = 1000.0_dp
@@ -405,25 +409,36 @@ contains
     real(dp) :: mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose
     real(dp) :: cp_pot_from_nose, c_axial, c_dn, eta
     real(dp) :: fin_semi_span, fin_root_chord, fin_tip_chord, fin_sweep, fin_root_le_from_nose
-    integer :: n_strips, fin_count, u, ios
+    ! the optional Mach tables, read into arrays longer than a table may be
+    ! (unset_real past the values given) so that too many points are named
+    ! in one line, not a runtime read error
+    real(dp), allocatable :: c_dn_mach(:), c_dn_table(:), c_axial_mach(:), c_axial_table(:)
+    integer :: n_strips, fin_count, u, ios, n_dn, n_axial
     logical :: present
     character(len=256) :: msg
+    character(len=:), allocatable :: group_text
     type(echo_buffer) :: buffer
     namelist /rocket/ mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose, &
       cp_pot_from_nose, c_axial, c_dn, eta, n_strips, fin_count, fin_semi_span, fin_root_chord, &
-      fin_tip_chord, fin_sweep, fin_root_le_from_nose
-    type(nml_var), parameter :: vars(19) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
+      fin_tip_chord, fin_sweep, fin_root_le_from_nose, c_dn_mach, c_dn_table, c_axial_mach, c_axial_table
+    type(nml_var), parameter :: vars(23) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
       nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("length", "real"), &
       nml_var("diameter", "real"), nml_var("cg_from_nose", "real"), nml_var("tie_down_from_nose", "real"), &
       nml_var("cp_pot_from_nose", "real"), nml_var("c_axial", "real"), nml_var("c_dn", "real"), &
       nml_var("eta", "real"), nml_var("n_strips", "integer"), nml_var("fin_count", "integer"), &
       nml_var("fin_semi_span", "real"), nml_var("fin_root_chord", "real"), nml_var("fin_tip_chord", "real"), &
-      nml_var("fin_sweep", "real"), nml_var("fin_root_le_from_nose", "real")]
+      nml_var("fin_sweep", "real"), nml_var("fin_root_le_from_nose", "real"), nml_var("c_dn_mach", "real"), &
+      nml_var("c_dn_table", "real"), nml_var("c_axial_mach", "real"), nml_var("c_axial_table", "real")]
+    allocate(c_dn_mach(max_table_read), c_dn_table(max_table_read), c_axial_mach(max_table_read), &
+      c_axial_table(max_table_read), source=unset_real)
     associate(a => c%aero)
       mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
       length = a%length; diameter = a%diameter; cg_from_nose = a%cg_from_nose
       tie_down_from_nose = c%tie_down_from_nose; cp_pot_from_nose = a%cp_pot_from_nose
       c_axial = a%c_axial; c_dn = a%c_dn; eta = a%eta; n_strips = a%n_strips
+      c_dn_mach(:a%n_c_dn) = a%c_dn_mach(:a%n_c_dn); c_dn_table(:a%n_c_dn) = a%c_dn_table(:a%n_c_dn)
+      c_axial_mach(:a%n_c_axial) = a%c_axial_mach(:a%n_c_axial)
+      c_axial_table(:a%n_c_axial) = a%c_axial_table(:a%n_c_axial)
     end associate
     fin_count = c%fin_count; fin_semi_span = c%fin_semi_span; fin_root_chord = c%fin_root_chord
     fin_tip_chord = c%fin_tip_chord; fin_sweep = c%fin_sweep; fin_root_le_from_nose = c%fin_root_le_from_nose
@@ -453,6 +468,9 @@ contains
     call require_range(f, "rocket", "cp_pot_from_nose", cp_pot_from_nose, 0.0_dp, length, "m", error)
     call require_nonnegative(f, "rocket", "c_axial", c_axial, "", error)
     call require_nonnegative(f, "rocket", "c_dn", c_dn, "", error)
+    call check_mach_table(f, "c_dn_mach", "c_dn_table", "cross-flow Mach numbers", c_dn_mach, c_dn_table, n_dn, error)
+    call check_mach_table(f, "c_axial_mach", "c_axial_table", "free-stream Mach numbers", c_axial_mach, &
+      c_axial_table, n_axial, error)
     call require_range(f, "rocket", "eta", eta, 0.0_dp, 1.0_dp, "", error)
     call require_int_range(f, "rocket", "n_strips", n_strips, 1, 1000, error)
     if (.not. allocated(error) .and. fin_count /= 0 .and. fin_count /= 3 .and. fin_count /= 4) &
@@ -475,12 +493,159 @@ contains
     c%fin_tip_chord = fin_tip_chord; c%fin_sweep = fin_sweep; c%fin_root_le_from_nose = fin_root_le_from_nose
     c%aero = rocket_aero(length=length, diameter=diameter, cg_from_nose=cg_from_nose, &
       cp_pot_from_nose=cp_pot_from_nose, c_axial=c_axial, c_dn=c_dn, eta=eta, n_strips=n_strips)
+    c%aero%n_c_dn = n_dn
+    c%aero%c_dn_mach(:n_dn) = c_dn_mach(:n_dn); c%aero%c_dn_table(:n_dn) = c_dn_table(:n_dn)
+    c%aero%n_c_axial = n_axial
+    c%aero%c_axial_mach(:n_axial) = c_axial_mach(:n_axial)
+    c%aero%c_axial_table(:n_axial) = c_axial_table(:n_axial)
     if (fin_count > 0) call barrowman_fins(c)
-    do while (buffer%another_try())
-      write(buffer%lines, nml=rocket, iostat=buffer%ios)
-    end do
-    call buffer%append_to(echo)
+    call write_group()
+    group_text = ""
+    call buffer%append_to(group_text)
+    ! the tables given, and only those: the group's echo without them is the
+    ! one before the tables existed (the paper's resolved input is unchanged)
+    if (n_dn > 0) call insert_before_end(group_text, table_echo("C_DN_MACH", c_dn_mach(:n_dn)) // &
+      table_echo("C_DN_TABLE", c_dn_table(:n_dn)))
+    if (n_axial > 0) call insert_before_end(group_text, table_echo("C_AXIAL_MACH", c_axial_mach(:n_axial)) // &
+      table_echo("C_AXIAL_TABLE", c_axial_table(:n_axial)))
+    if (.not. allocated(echo)) echo = ""
+    echo = echo // group_text
+  contains
+    !> The resolved group without the tables (a namelist writes whole arrays:
+    !> the read's long ones would be echoed with their unset tails).
+    subroutine write_group()
+      namelist /rocket/ mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose, &
+        cp_pot_from_nose, c_axial, c_dn, eta, n_strips, fin_count, fin_semi_span, fin_root_chord, &
+        fin_tip_chord, fin_sweep, fin_root_le_from_nose
+      do while (buffer%another_try())
+        write(buffer%lines, nml=rocket, iostat=buffer%ios)
+      end do
+    end subroutine write_group
   end subroutine read_rocket
+
+  !> A Mach table (Mach points `xname`, values `yname`) as read: both or
+  !> neither given, the same number of values without gaps, at most
+  !> max_mach_points, Mach points >= 0 and strictly increasing, values >= 0.
+  !> `n` receives its points (0: not given).
+  subroutine check_mach_table(f, xname, yname, what, xs, ys, n, error)
+    type(nml_file), intent(in) :: f
+    character(len=*), intent(in) :: xname, yname, what   !< the two variables; what the points are
+    real(dp), intent(in) :: xs(:), ys(:)                  !< as read (unset_real past the values)
+    integer, intent(out) :: n                             !< points of the table
+    type(error_type), allocatable, intent(inout) :: error
+    integer :: nx, ny, i
+    character(len=:), allocatable :: head
+    n = 0
+    if (allocated(error)) return
+    head = f%path // ": &rocket: "
+    nx = given(xs); ny = given(ys)
+    do i = 1, nx
+      if (xs(i) == unset_real) then
+        call fatal_error(error, head // xname // "(" // str(i) // ") is not set, but " // xname // "(" // &
+          str(nx) // ") is (give the points in order without gaps)")
+        return
+      end if
+    end do
+    do i = 1, ny
+      if (ys(i) == unset_real) then
+        call fatal_error(error, head // yname // "(" // str(i) // ") is not set, but " // yname // "(" // &
+          str(ny) // ") is (give the values in order without gaps)")
+        return
+      end if
+    end do
+    if (nx > max_mach_points) then
+      call fatal_error(error, head // xname // " = " // listed(xs(:nx)) // " is not allowed (" // str(nx) // &
+        " points; at most " // str(max_mach_points) // ")")
+    else if (ny > max_mach_points) then
+      call fatal_error(error, head // yname // " = " // listed(ys(:ny)) // " is not allowed (" // str(ny) // &
+        " values; at most " // str(max_mach_points) // ")")
+    else if (ny == 0 .and. nx > 0) then
+      call fatal_error(error, head // xname // " = " // listed(xs(:nx)) // " is not allowed without " // yname // &
+        " (give " // yname // ", one value per point, or neither)")
+    else if (nx == 0 .and. ny > 0) then
+      call fatal_error(error, head // yname // " = " // listed(ys(:ny)) // " is not allowed without " // xname // &
+        " (give " // xname // ", the " // what // " of the values, or neither)")
+    else if (nx /= ny) then
+      call fatal_error(error, head // yname // " = " // listed(ys(:ny)) // " is not allowed (" // str(ny) // &
+        merge(" value ", " values", ny == 1) // " for the " // str(nx) // " points of " // xname // " = " // &
+        listed(xs(:nx)) // ": one value per point)")
+    end if
+    if (allocated(error)) return
+    do i = 1, nx
+      if (.not. (xs(i) >= 0.0_dp)) then
+        call fatal_error(error, head // xname // "(" // str(i) // ") = " // str(xs(i)) // &
+          " is not allowed (must be >= 0: " // what // ")")
+        return
+      end if
+    end do
+    do i = 2, nx
+      if (.not. (xs(i) > xs(i-1))) then
+        call fatal_error(error, head // xname // " = " // listed(xs(:nx)) // " is not allowed (the " // what // &
+          " must increase strictly: " // xname // "(" // str(i) // ") = " // str(xs(i)) // " <= " // xname // &
+          "(" // str(i-1) // ") = " // str(xs(i-1)) // ")")
+        return
+      end if
+    end do
+    do i = 1, nx
+      if (.not. (ys(i) >= 0.0_dp)) then
+        call fatal_error(error, head // yname // "(" // str(i) // ") = " // str(ys(i)) // &
+          " is not allowed (must be >= 0)")
+        return
+      end if
+    end do
+    n = nx
+  contains
+    !> The index of the last value given (0: none).
+    pure integer function given(v)
+      real(dp), intent(in) :: v(:)
+      integer :: j
+      given = 0
+      do j = size(v), 1, -1
+        if (v(j) /= unset_real) then
+          given = j
+          return
+        end if
+      end do
+    end function given
+  end subroutine check_mach_table
+
+  !> Values as "a, b, c".
+  pure function listed(v) result(s)
+    real(dp), intent(in) :: v(:)
+    character(len=:), allocatable :: s
+    integer :: i
+    s = ""
+    do i = 1, size(v)
+      if (i > 1) s = s // ", "
+      s = s // str(v(i))
+    end do
+  end function listed
+
+  !> An echo record ` NAME= a, b, c,` with 17 significant digits (the values
+  !> read back bit for bit), ended by a newline.
+  pure function table_echo(name, v) result(s)
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: v(:)
+    character(len=:), allocatable :: s
+    character(len=32) :: b
+    integer :: i
+    s = " " // name // "="
+    do i = 1, size(v)
+      write(b, "(es24.16e3)") v(i)
+      s = s // " " // trim(adjustl(b)) // ","
+    end do
+    s = s // new_line("a")
+  end function table_echo
+
+  !> Insert `lines` (whole lines) before the closing "/" of an echoed group.
+  pure subroutine insert_before_end(text, lines)
+    character(len=:), allocatable, intent(inout) :: text
+    character(len=*), intent(in) :: lines
+    integer :: k
+    k = index(text, new_line("a") // " /", back=.true.)
+    if (k == 0) k = index(text, new_line("a") // "/", back=.true.)
+    text = text(:k) // lines // text(k+1:)
+  end subroutine insert_before_end
 
   !> Fin normal-force slope and centre of pressure by Barrowman's equations
   !> (J. S. Barrowman, The practical calculation of the aerodynamic

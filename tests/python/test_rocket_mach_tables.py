@@ -1,0 +1,124 @@
+"""The rocket's optional Mach tables end to end (&rocket c_dn_mach/c_dn_table,
+c_axial_mach/c_axial_table; docs/input.md, docs/model.md "Rocket"):
+
+- the paper scenario with tables that are constant at the scalar coefficients
+  (several points, so the interpolation runs) prints the paper's summary digit
+  for digit: the tables take the scalars' place without changing the forces;
+  a rising C_dn table changes the run (the tables reach the right-hand side);
+- the resolved input holds the tables as given and reads back to itself;
+- bad tables are one-line input errors naming file, group, variable, value and
+  what is allowed;
+- a sweep can vary one element of a table (`rocket%c_dn_table(2)`): the case's
+  namelist reads back with that element and the base's others.
+(Unit tests of the forces: tests/unit/test_rocket_mach.f90.)"""
+import re
+import subprocess
+
+import pytest
+
+from conftest import PAPER, assert_input_error, nml_variant, run_airlaunch
+from test_sweep_support import AIRLAUNCH_EXE, ENV, SWEEP_EXE, make_table
+
+CONSTANT = ["  c_dn_mach = 0.0, 0.45, 0.9", "  c_dn_table = 3*1.2",
+            "  c_axial_mach = 0.3, 0.9", "  c_axial_table = 0.35, 0.35"]
+
+
+def with_rocket(tmp_path, name, lines):
+    """The paper scenario with `lines` added to &rocket (after n_strips)."""
+    return nml_variant(tmp_path, name, edits=[(r"^(  n_strips = 16)$", "\\1\n" + "\n".join(lines))])
+
+
+def summary(res):
+    """The printed summary without the output file's name."""
+    assert res.returncode == 0, res.stderr
+    return [l for l in res.stdout.splitlines() if not l.startswith("output:")]
+
+
+def test_constant_tables_give_the_paper_summary(airlaunch_exe, tmp_path):
+    paper = summary(run_airlaunch(airlaunch_exe, PAPER, "--output", tmp_path / "paper.nc"))
+    const = summary(run_airlaunch(airlaunch_exe, with_rocket(tmp_path, "const", CONSTANT), "--output",
+                                  tmp_path / "const.nc"))
+    assert const == paper
+    # C_dn rising with M_c (near 90 deg M_c is about the flight Mach number, 0.65): a different run
+    rising = summary(run_airlaunch(airlaunch_exe, with_rocket(tmp_path, "rising", [
+        "  c_dn_mach = 0.0, 0.5, 1.0", "  c_dn_table = 1.2, 1.5, 2.0"]), "--output", tmp_path / "rising.nc"))
+    assert rising != paper
+
+
+def test_resolved_input_holds_the_tables_and_reads_back(airlaunch_exe, tmp_path):
+    nml = with_rocket(tmp_path, "t", ["  c_dn_mach = 0.0, 0.5, 1.0", "  c_dn_table = 1.2, 1.5, 2.0"])
+    res = run_airlaunch(airlaunch_exe, nml, "--check", "--output", tmp_path / "x.nc")
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert " C_DN_MACH= 0.0000000000000000E+000, 5.0000000000000000E-001, 1.0000000000000000E+000," in lines
+    assert " C_DN_TABLE= 1.2000000000000000E+000, 1.5000000000000000E+000, 2.0000000000000000E+000," in lines
+    assert not any("C_AXIAL_MACH" in l for l in lines)   # not given: not echoed
+    again = tmp_path / "again.nml"
+    again.write_text(res.stdout)
+    res2 = run_airlaunch(airlaunch_exe, again, "--check", "--output", tmp_path / "x.nc")
+    assert res2.returncode == 0, res2.stderr
+    assert res2.stdout.splitlines()[1:] == lines[1:]
+    # without tables the resolved &rocket has none of them (the paper's echo is unchanged)
+    res = run_airlaunch(airlaunch_exe, PAPER, "--check", "--output", tmp_path / "x.nc")
+    assert "C_DN_MACH" not in res.stdout and "C_AXIAL" in res.stdout
+
+
+@pytest.mark.parametrize("lines,fragment", [
+    (["  c_dn_mach = 0.0, 0.5, 0.5", "  c_dn_table = 1.2, 1.5, 2.0"],
+     "&rocket: c_dn_mach = 0.0, 0.5, 0.5 is not allowed (the cross-flow Mach numbers must increase strictly: "
+     "c_dn_mach(3) = 0.5 <= c_dn_mach(2) = 0.5)"),
+    (["  c_axial_mach = 0.9, 0.3", "  c_axial_table = 0.35, 0.4"],
+     "&rocket: c_axial_mach = 0.9, 0.3 is not allowed (the free-stream Mach numbers must increase strictly: "
+     "c_axial_mach(2) = 0.3 <= c_axial_mach(1) = 0.9)"),
+    (["  c_dn_mach = 0.0, 0.5", "  c_dn_table = 1.2, 1.5, 2.0"],
+     "&rocket: c_dn_table = 1.2, 1.5, 2.0 is not allowed (3 values for the 2 points of c_dn_mach = 0.0, 0.5: "
+     "one value per point)"),
+    (["  c_dn_mach = 0.0, 0.5"],
+     "&rocket: c_dn_mach = 0.0, 0.5 is not allowed without c_dn_table (give c_dn_table, one value per point, "
+     "or neither)"),
+    (["  c_dn_mach = 0.0, 0.5", "  c_dn_table = 1.2, -0.1"],
+     "&rocket: c_dn_table(2) = -0.1 is not allowed (must be >= 0)"),
+    (["  c_axial_mach = 0.3", "  c_axial_table = -0.35"],
+     "&rocket: c_axial_table(1) = -0.35 is not allowed (must be >= 0)"),
+    (["  c_dn_mach = -0.1, 0.5", "  c_dn_table = 1.2, 1.5"],
+     "&rocket: c_dn_mach(1) = -0.1 is not allowed (must be >= 0: cross-flow Mach numbers)"),
+    (["  c_dn_mach = 0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6",
+      "  c_dn_table = 17*1.2"],
+     "&rocket: c_dn_mach = 0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6 "
+     "is not allowed (17 points; at most 16)"),
+    (["  c_dn_mach(1) = 0.0, c_dn_mach(3) = 0.5", "  c_dn_table = 1.2, 1.5, 2.0"],
+     "&rocket: c_dn_mach(2) is not set, but c_dn_mach(3) is (give the points in order without gaps)"),
+])
+def test_bad_tables_are_one_line_errors(airlaunch_exe, tmp_path, lines, fragment):
+    nml = with_rocket(tmp_path, "bad", lines)
+    out = tmp_path / "bad.nc"
+    line = assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out), fragment, out)
+    assert line.startswith(f"airlaunch: error: {nml}: &rocket: ")
+
+
+def test_a_sweep_varies_one_element_of_a_table(tmp_path):
+    """Only the existing element machinery (docs/sweep.md): the case's namelist
+    assigns c_dn_table(2) and the base's c_dn_table(1), (3); read back, the
+    table is the base's with the drawn element."""
+    base = with_rocket(tmp_path, "base", ["  c_dn_mach = 0.0, 0.5, 1.0", "  c_dn_table = 1.2, 1.5, 2.0"])
+    definition = tmp_path / "cdn.nml"
+    definition.write_text(f"""&sweep
+  name = 'cdn'
+  base = '{base}'
+  output_dir = 'out'
+  design = 'grid'
+  t_end = 5.0
+/
+&input name = 'rocket%c_dn_table(2)', distribution = 'list', values = 1.3, 1.8 /
+""")
+    make_table(definition, tmp_path)
+    res = subprocess.run([str(SWEEP_EXE), str(definition), "--case-namelist", "1"], cwd=tmp_path,
+                         capture_output=True, text=True, env=ENV, timeout=60)
+    assert res.returncode == 0, res.stderr
+    assert re.search(r"^  c_dn_table\(2\) = 1\.8", res.stdout, flags=re.M), res.stdout
+    case = tmp_path / "case_1.nml"
+    case.write_text(res.stdout)
+    check = run_airlaunch(AIRLAUNCH_EXE, case, "--check", "--output", tmp_path / "x.nc")
+    assert check.returncode == 0, check.stderr
+    assert (" C_DN_TABLE= 1.2000000000000000E+000, 1.8000000000000000E+000, 2.0000000000000000E+000,"
+            in check.stdout.splitlines())
