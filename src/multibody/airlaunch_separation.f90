@@ -589,7 +589,7 @@ contains
   pure subroutine sep_rocket_lowest_point(self, cg_height, up, height, which_end, point)
     class(separation_system), intent(in) :: self   !< the scene
     real(dp), intent(in) :: cg_height              !< the rocket's CG, earth y [m]
-    real(dp), intent(in) :: up(3)                  !< the earth's unit vertical, rocket axes
+    real(dp), intent(in) :: up(:)                  !< the earth's unit vertical (3), rocket axes (assumed shape: a row of a DCM passes without a copy)
     real(dp), intent(out) :: height                !< the lowest point's earth y [m]
     integer, intent(out), optional :: which_end    !< ground_at_nose or ground_at_tail
     real(dp), intent(out), optional :: point(3)    !< the lowest point, rocket axes [m]

@@ -332,7 +332,7 @@ contains
     character(len=*), intent(in) :: chute_text   !< long name of parachute_position
     character(len=*), intent(in) :: line_text    !< qualifier of the line variables ("" or a note)
     type(error_type), allocatable, intent(inout) :: werr
-    real(dp), allocatable :: node_index(:)
+    real(dp), allocatable :: node_index(:), part(:, :)
     integer :: j, nrec, n
     nrec = self%nrec
       call w%add_dim("time", self%time(1:nrec), "s", "time since the start (trimmed flight)", werr)
@@ -376,9 +376,13 @@ contains
       end if
       ! the wrench R_H as two variables of one unit each (one "N or N m"
       ! variable parses in no unit library: UDUNITS-2, pint, CF checkers)
-      call w%add_var_2d("constraint_force", ["xyz ", "time"], self%cforce(1:3, 1:nrec), "N", &
+      ! (through a contiguous copy: a row section of cforce would be packed into
+      ! an array temporary for the writer, which the Checked build reports)
+      part = self%cforce(1:3, 1:nrec)
+      call w%add_var_2d("constraint_force", ["xyz ", "time"], part, "N", &
         "cut-joint constraint force of R_H on the rocket (CFA), earth frame", werr)
-      call w%add_var_2d("constraint_moment", ["xyz ", "time"], self%cforce(4:6, 1:nrec), "N m", &
+      part = self%cforce(4:6, 1:nrec)
+      call w%add_var_2d("constraint_moment", ["xyz ", "time"], part, "N m", &
         "cut-joint constraint moment of R_H on the rocket about its CG (CFA), rocket axes (0 = x, 1 = y, 2 = z)", werr)
       call w%add_var_1d("edge_normal_force_N", ["time"], self%normal(1:nrec), "N", &
         "contact normal force of the rail / ramp edge on the rocket", werr)
