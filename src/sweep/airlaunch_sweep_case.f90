@@ -159,6 +159,8 @@ contains
             closest(s%variable, base%known, s%group) // " (allowed: " // names(:len(names)-2) // ")")
           return
         end if
+        call check_not_replaced(where, s%group, s%variable, base, error)
+        if (allocated(error)) return
         kind = base%known(hit)%kind
         if (s%element > 0) then
           call check_element(where, s%name, s%group // "%" // s%variable, s%element, base%known(hit), kind, error)
@@ -201,6 +203,8 @@ contains
             closest(x%variable, base%known, x%group))
           return
         end if
+        call check_not_replaced(where, x%group, x%variable, base, error)
+        if (allocated(error)) return
         if (x%element > 0) then
           hit = findloc(base%known%group == x%group .and. base%known%name == x%variable, .true., dim=1)
           call check_element(where, x%name, x%group // "%" // x%variable, x%element, base%known(hit), kind, error)
@@ -217,6 +221,28 @@ contains
     end do
     call check_vectors_once(def, error)
   end subroutine check_varied_inputs
+
+  !> A scalar that a table of the base scenario replaces (&rocket c_dn by
+  !> c_dn_table, c_axial by c_axial_table: input.md) would change no case:
+  !> varied, its sensitivities would read "no effect".  Refused, naming the
+  !> table's values as what to vary instead.
+  subroutine check_not_replaced(where, group, variable, base, error)
+    character(len=*), intent(in) :: where                 !< the &input's or &fixed's place
+    character(len=*), intent(in) :: group, variable       !< the variable set
+    type(base_scenario), intent(in) :: base               !< the base scenario
+    type(error_type), allocatable, intent(inout) :: error !< set if a table replaces it
+    character(len=*), parameter :: scalars(2) = [character(len=7) :: "c_dn", "c_axial"]
+    integer :: i
+    if (group /= "rocket") return
+    do i = 1, size(scalars)
+      if (variable /= trim(scalars(i))) cycle
+      if (.not. any(base%known%group == "rocket" .and. base%known%name == trim(scalars(i)) // "_table")) return
+      call fatal_error(error, where // "rocket%" // variable // " has no effect: the base scenario gives " // &
+        trim(scalars(i)) // "_table, which replaces it (docs/input.md, &rocket); set the table's values " // &
+        "instead, rocket%" // trim(scalars(i)) // "_table(k)")
+      return
+    end do
+  end subroutine check_not_replaced
 
   !> A vector is set whole or by its elements, not both (the readers refuse
   !> an element that the whole vector also assigns): by the varied inputs and

@@ -122,3 +122,33 @@ def test_a_sweep_varies_one_element_of_a_table(tmp_path):
     assert check.returncode == 0, check.stderr
     assert (" C_DN_TABLE= 1.2000000000000000E+000, 1.8000000000000000E+000, 2.0000000000000000E+000,"
             in check.stdout.splitlines())
+
+
+def test_a_sweep_may_not_set_a_coefficient_its_table_replaces(tmp_path):
+    """Varying (or fixing) &rocket c_dn in a base that gives c_dn_table would
+    change no case - its sensitivities would read "no effect" - so the sweep
+    refuses it in one line naming the table to vary instead (c_axial alike).
+    Without the table, c_dn varies as any real variable."""
+    base = with_rocket(tmp_path, "base", ["  c_dn_mach = 0.0, 0.5, 1.0", "  c_dn_table = 1.2, 1.5, 2.0",
+                                          "  c_axial_mach = 0.3, 0.9", "  c_axial_table = 0.35, 0.4"])
+    plain = with_rocket(tmp_path, "plain", [])
+
+    def check(name, base_path, body):
+        definition = tmp_path / f"sweep_{name}.nml"
+        definition.write_text(f"&sweep\n  name = '{name}'\n  base = '{base_path}'\n  output_dir = 'out_{name}'\n"
+                              f"  design = 'grid'\n  t_end = 5.0\n/\n{body}")
+        return subprocess.run([str(SWEEP_EXE), str(definition), "--check"], cwd=tmp_path,
+                              capture_output=True, text=True, env=ENV, timeout=60), definition
+
+    res, d = check("vary", base, "&input name = 'rocket%c_dn', distribution = 'list', values = 1.0, 1.4 /\n")
+    assert res.returncode == 2, (res.returncode, res.stderr)
+    assert res.stderr.splitlines() == [
+        f"airlaunch-sweep: error: {d}:8: &input #1 'rocket%c_dn': rocket%c_dn has no effect: the base scenario "
+        "gives c_dn_table, which replaces it (docs/input.md, &rocket); set the table's values instead, "
+        "rocket%c_dn_table(k)"], res.stderr
+    res, d = check("fixed", base, "&input name = 'rocket%c_dn_table(2)', distribution = 'list', values = 1.3 /\n"
+                                  "&fixed name = 'rocket%c_axial', value = '0.5' /\n")
+    assert res.returncode == 2 and "&fixed #1 'rocket%c_axial': rocket%c_axial has no effect" in res.stderr, \
+        res.stderr
+    res, _ = check("plain", plain, "&input name = 'rocket%c_dn', distribution = 'list', values = 1.0, 1.4 /\n")
+    assert res.returncode == 0, res.stderr
