@@ -124,9 +124,9 @@ def test_line_clearance_is_the_minimum_over_every_step(cadences):
     maxima), never above the records' own minimum recomputed from the recorded
     pose and nodes (rounding: 1e-9 m), and within 1 mm of it at records every
     5 ms (the line passes the tail at a few m/s: the minimum moves ~1e-6 m
-    between 5 ms records; measured 2e-6 m at 0.02 s).  In the paper file the
+    between 5 ms records; measured 4.8e-7 m at 0.02 s).  In the paper file the
     line passes 6.59 m from the point at ~3.5 s, closer than the rocket's
-    8.80 m.  The rigidized coupling takes it over its line's sub-steps, the
+    8.79 m.  The rigidized coupling takes it over its line's sub-steps, the
     empennage point interpolated between the chain's samples at the outer
     steps' ends as the tie-down is (twenty-eighth session; it reported -1, not
     tracked, before): the same checks."""
