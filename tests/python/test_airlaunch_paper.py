@@ -84,7 +84,7 @@ def test_trim_and_phase_milestones(paper_run):
 def test_attitude_after_separation(paper_run):
     """docs/validation.md: with the documented X fins the rocket's Euler pitch
     reaches its first maximum, 90 deg (the nose passes the vertical), at
-    10.47 s; the paper reports ~90 deg at ~10.5 s (band 90 +- 5 at 10.5 +- 0.7)."""
+    10.48 s; the paper reports ~90 deg at ~10.5 s (band 90 +- 5 at 10.5 +- 0.7)."""
     ds, _ = paper_run
     assert ds.attrs["pitch_max_deg"] == pytest.approx(90.0, abs=5.0)
     assert ds.attrs["pitch_max_time_s"] == pytest.approx(10.5, abs=0.7)

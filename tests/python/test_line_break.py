@@ -301,16 +301,16 @@ def test_example_sweep_over_the_line_failure(airlaunch_exe, tmp_path):
     """input/sweep_line_break.nml cut to 2 x 2 cases (cut at 3.0 and 11.0 s,
     at the tie-down and at the parachute): the sweep varies the &line break of
     a base with a whole line, its definition checks, every case completes, and
-    a cut after the firing moment (10.46 s) changes nothing before it: the
+    a cut after the firing moment (10.48 s) changes nothing before it: the
     separation, the pitch maximum and the clearance are the base run's alone
     with the sweep's settings, to the integration error.  Not bit for bit:
     CVODE sizes its first step after a restart (the release) for the stop time
     when that comes before its output time (cvHin), so the stop at the cut
     changes the steps.  Bounds: 1e-6 relative on the separation time and the
-    clearance (0.1 rtol; measured 9e-9 and 1.6e-8), 1e-8 deg on the pitch
+    clearance (0.1 rtol; measured 3.5e-9 and 2.4e-8), 1e-8 deg on the pitch
     maximum (the rocket reaches the vertical: 90 deg to 6e-11 in both), 1e-3 s
     on its time (the pitch is flat at its maximum, so its time moves with the
-    steps: measured 3.2e-4 s).  A cut at 3.0 s, as the rocket reaches the ramp
+    steps: measured 3.1e-7 s).  A cut at 3.0 s, as the rocket reaches the ramp
     edge, loses the firing attitude (below 75 deg, the paper's criterion)."""
     from test_sweep_support import run_example_sweep
 
@@ -343,7 +343,7 @@ def test_example_sweep_over_the_line_failure(airlaunch_exe, tmp_path):
                          ids=["cut-after-the-milestones", "strength-never-reached"])
 def test_stop_when_final_waits_for_a_line_that_can_part(airlaunch_exe, tmp_path, line):
     """&run stop_when_final ends the paper run at ~11.5 s, once the pitch
-    maximum (10.47 s) and every extremum have stood for 1 s.  A line that can
+    maximum (10.48 s) and every extremum have stood for 1 s.  A line that can
     still part must keep the run going: a cut scheduled at 13 s is recorded at
     13 s and the run watches 1 s past it (before this rule the run stopped
     first and reported no break), and a strength the run never reaches
