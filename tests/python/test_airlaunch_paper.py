@@ -257,8 +257,8 @@ def test_output_cadence_changes_no_step(airlaunch_exe, tmp_path, paper_run):
 def test_minimum_clearance_is_exact(airlaunch_exe, tmp_path):
     """min_clearance_m is the clearance at the separation or at a local minimum
     located as an event (the rising zero of its rate), not the smallest record:
-    the same at output_dt 0.1 s and 0.5 ms (the records alone gave 8.874 and
-    8.799 m), below every record of Case 3, and within (largest clearance rate)
+    the same at output_dt 0.1 s and 0.5 ms (the records alone gave 8.866 and
+    8.791 m), below every record of Case 3, and within (largest clearance rate)
     x (record spacing) of the smallest record at 0.5 ms."""
     values, fine = {}, None
     for dt in ("0.1", "0.0005"):
