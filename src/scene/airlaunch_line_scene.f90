@@ -41,6 +41,9 @@ module airlaunch_line_scene
     real(dp) :: output_interval = 0.01_dp           !< output cadence [s]
     logical :: record_nodes = .true.                !< keep all node positions
     logical :: record_tensions = .false.            !< keep all segment tensions
+    !> the equivalent rigid body at every record (the output file's); false:
+    !> only the last record's, the summary's (docs/performance.md, thirty-fourth session)
+    logical :: record_rigid = .true.
     !> the line parts (docs/line.md, "A line that breaks"): segment j when its
     !> tension reaches its strength (breaking_strength, 0: never; the weak
     !> link's weak_link_strength at weak_link_segment, 0: none), and segment
@@ -110,6 +113,9 @@ module airlaunch_line_scene
     real(dp), allocatable :: end_force(:, :, :)      !< force of the line on node 0 / node N (3, 2, n_out) [N]
     real(dp), allocatable :: energy(:, :)            !< kinetic, elastic, potential (3, n_out) [J]
     type(rigid_equivalent), allocatable :: rigid(:)  !< equivalent rigid body (n_out)
+    !> without record_rigid: the latest record's state and piece, its rigid body taken at the run's end
+    real(dp), allocatable :: x_rec(:, :), v_rec(:, :)
+    integer :: first_rec = 0, last_rec = 0
     real(dp) :: wall_time = 0.0_dp                   !< wall-clock time of `run` [s]
     type(line_scheme_stats) :: stats                 !< integrator work
     logical :: completed = .false.                   !< reached t_end
@@ -211,6 +217,7 @@ contains
     end if
 
     allocate(self%x(3, 0:n), self%v(3, 0:n), self%f(3, 0:n), self%tension(n))
+    if (.not. cfg%record_rigid) allocate(self%x_rec(3, 0:n), self%v_rec(3, 0:n))
     select case (trim(cfg%initial_shape))
     case ("straight")
       call straight_shape(n, xa, xb, self%x)
@@ -564,6 +571,8 @@ contains
       if (self%ground_time >= 0.0_dp) exit   ! (the run ends at the ground)
     end do
     self%completed = .not. allocated(error)
+    if (.not. self%cfg%record_rigid .and. self%n_out > 0) self%rigid(self%n_out) = &
+      rigidize(self%model, self%x_rec, self%v_rec, self%first_rec, self%last_rec)
     self%t_reached = self%scheme%t
     self%peak_tension = self%scheme%peak_tension(self%peak_tension_time)
     self%peak_tension_segment = self%scheme%peak_segment
@@ -624,7 +633,16 @@ contains
     ! after a break, of the larger piece still holding an end (Eqs. (18)-(32)
     ! describe one connected line)
     call whole_piece(self%model, first, last)
-    self%rigid(m) = rigidize(self%model, self%x, self%v, first, last)
+    if (self%cfg%record_rigid) then
+      self%rigid(m) = rigidize(self%model, self%x, self%v, first, last)
+    else
+      ! kept for the last record's rigid body (scene_run): the summary reads no
+      ! other, and it was 7 % of the heavy airdrop's instructions at every record
+      self%x_rec = self%x
+      self%v_rec = self%v
+      self%first_rec = first
+      self%last_rec = last
+    end if
     if (allocated(self%nodes)) self%nodes(:, :, m) = self%x
     if (allocated(self%tensions)) self%tensions(:, m) = self%tension
     self%n_out = m
@@ -649,6 +667,7 @@ contains
     if (allocated(self%nodes)) deallocate(self%nodes)
     if (allocated(self%tensions)) deallocate(self%tensions)
     if (allocated(self%x)) deallocate(self%x, self%v, self%f, self%tension)
+    if (allocated(self%x_rec)) deallocate(self%x_rec, self%v_rec)
     if (allocated(self%strength)) deallocate(self%strength)
     self%break_pending = .false.
     self%fill_end = -1.0_dp
@@ -838,6 +857,7 @@ contains
     cfg%output_interval = run%output_dt
     cfg%record_nodes = run%trajectory
     cfg%record_tensions = record_tensions .and. run%trajectory
+    cfg%record_rigid = run%trajectory
     call check_scene_combinations(f, run, cfg, a_kind, b_kind, error)
     if (allocated(error)) return
     weak_link_segment = cfg%weak_link_segment   ! (resolved there: the echo gives it)
