@@ -40,7 +40,9 @@ module airlaunch_namelist
   !> Expected name and type of a variable, for diagnosis: kind is one of
   !> "real", "integer", "logical", "string", "real_list", "real3" (a vector of
   !> exactly three reals when assigned whole: `v = 1.0, 2.0, 3.0` or `v = 3*0.0`;
-  !> elements one by one, `v(2) = 1.0`, stay allowed).
+  !> elements one by one, `v(2) = 1.0`, stay allowed), "real_array" (an array
+  !> of reals whose length its reader checks, assigned whole or by elements
+  !> in any order: a list's values, not a scalar's, without a list's order rule).
   type :: nml_var
     character(len=32) :: name = ""
     character(len=16) :: kind = "real"
@@ -589,7 +591,7 @@ contains
         return
       end if
       select case (var%kind)
-      case ("real", "real_list", "real3")
+      case ("real", "real_list", "real3", "real_array")
         select case (value_class(v))
         case (not_finite)
           call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // v // &
@@ -605,7 +607,7 @@ contains
         end select
       end select
       select case (var%kind)
-      case ("real", "real_list", "real3", "integer", "integer_list")
+      case ("real", "real_list", "real3", "real_array", "integer", "integer_list")
         if (.not. all_numbers(v)) then
           call fatal_error(error, self%where(item) // "variable '" // item%name // "' = " // v // " is not " // &
             trim(merge("an integer   ", "a real number", index(var%kind, "integer") == 1)))
@@ -794,7 +796,7 @@ contains
             if (v(1:1) /= "'" .and. v(1:1) /= '"') ios = 1
           end if
           expected = "a quoted string"
-        case ("real_list", "real3")
+        case ("real_list", "real3", "real_array")
           rl = 0
           read(v, *, iostat=ios) rl(1:min(max(count_values(v), 1), size(rl)))
           expected = "a list of real numbers"

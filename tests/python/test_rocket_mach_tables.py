@@ -96,6 +96,20 @@ def test_bad_tables_are_one_line_errors(airlaunch_exe, tmp_path, lines, fragment
     assert line.startswith(f"airlaunch: error: {nml}: &rocket: ")
 
 
+def test_a_read_failure_after_a_table_names_its_own_variable(airlaunch_exe, tmp_path):
+    """A value the namelist read itself fails on (here an integer out of
+    range) is looked for among the group's assignments to name it; a table's
+    list of values is a valid array there, not "not a real number" (review of
+    the thirty-fourth session: the tables, diagnosed as scalars, were blamed
+    for an n_strips overflow after them: "variable 'c_dn_mach' = 0.0, 0.5 is
+    not a real number")."""
+    tables = "&rocket\n  c_dn_mach = 0.0, 0.5\n  c_dn_table = 1.2, 1.5"
+    nml = nml_variant(tmp_path, "bad", edits=[(r"^&rocket$", tables), (r"^(  n_strips = )16$", "\\g<1>99999999999")])
+    out = tmp_path / "bad.nc"
+    assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out),
+                       "&rocket: variable 'n_strips' = 99999999999 is not an integer in [-2147483647, 2147483647]", out)
+
+
 def test_a_sweep_varies_one_element_of_a_table(tmp_path):
     """Only the existing element machinery (docs/sweep.md): the case's namelist
     assigns c_dn_table(2) and the base's c_dn_table(1), (3); read back, the
