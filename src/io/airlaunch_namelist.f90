@@ -47,7 +47,9 @@ module airlaunch_namelist
     character(len=32) :: name = ""
     character(len=16) :: kind = "real"
     !> "string": the most characters the reader's variable holds (0: not
-    !> checked); longer values are an error, not cut off
+    !> checked); longer values are an error, not cut off.  "real_array": the
+    !> most elements an assignment by index may set (0: not checked; "real3":
+    !> 3 always)
     integer :: length = 0
   end type nml_var
 
@@ -577,7 +579,7 @@ contains
     subroutine check_form(item, var)
       type(nml_assignment), intent(in) :: item
       type(nml_var), intent(in) :: var
-      integer :: n
+      integer :: n, lo, hi
       character(len=:), allocatable :: v
       v = item%value
       if (len_trim(v) == 0) then
@@ -638,6 +640,27 @@ contains
         if (len(item%index) == 0 .and. n /= 3) call fatal_error(error, self%where(item) // "'" // item%name // &
           "' = " // v // " has " // str(n) // " values; a vector of 3 (x, y, z) is expected")
       end select
+      if (allocated(error)) return
+      ! an element the array does not have (`wind(4)`, `c_dn_table(0)`): the
+      ! read fails with the runtime's "Index 1 out of range", which names
+      ! neither the value nor the bounds
+      n = 0
+      if (var%kind == "real3") n = 3
+      if (var%kind == "real_array") n = var%length
+      if (n > 0 .and. len(item%index) > 0) then
+        ! one element takes one value (the read stops at the second with
+        ! "Cannot match namelist object name"); a section k:m takes several
+        if (index(item%index, ":") == 0 .and. count_values(item%value) > 1) then
+          call fatal_error(error, self%where(item) // "'" // item%name // item%index // "' = " // item%value // &
+            " is not allowed (one element takes one value: give " // item%name // "(k:m) = ... for several, " // &
+            "or the whole " // item%name // " = ...)")
+          return
+        end if
+        call element_span(item, lo, hi)
+        if (lo /= -1 .and. (lo < 1 .or. hi > n)) call fatal_error(error, self%where(item) // "'" // item%name // &
+          item%index // "' = " // item%value // " is not allowed (" // item%name // " holds at most " // str(n) // &
+          " values: indices 1 to " // str(n) // ")")
+      end if
     end subroutine check_form
 
     !> The longest quoted string of a value ('a', "b", 3*'c' ...: a list gives

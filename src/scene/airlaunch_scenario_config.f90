@@ -427,9 +427,9 @@ contains
       nml_var("cp_pot_from_nose", "real"), nml_var("c_axial", "real"), nml_var("c_dn", "real"), &
       nml_var("eta", "real"), nml_var("n_strips", "integer"), nml_var("fin_count", "integer"), &
       nml_var("fin_semi_span", "real"), nml_var("fin_root_chord", "real"), nml_var("fin_tip_chord", "real"), &
-      nml_var("fin_sweep", "real"), nml_var("fin_root_le_from_nose", "real"), nml_var("c_dn_mach", "real_array"), &
-      nml_var("c_dn_table", "real_array"), nml_var("c_axial_mach", "real_array"), &
-      nml_var("c_axial_table", "real_array")]
+      nml_var("fin_sweep", "real"), nml_var("fin_root_le_from_nose", "real"), nml_var("c_dn_mach", "real_array", max_mach_points), &
+      nml_var("c_dn_table", "real_array", max_mach_points), nml_var("c_axial_mach", "real_array", max_mach_points), &
+      nml_var("c_axial_table", "real_array", max_mach_points)]
     allocate(c_dn_mach(max_table_read), c_dn_table(max_table_read), c_axial_mach(max_table_read), &
       c_axial_table(max_table_read), source=unset_real)
     associate(a => c%aero)

@@ -16,7 +16,7 @@ import subprocess
 
 import pytest
 
-from conftest import PAPER, assert_input_error, nml_variant, run_airlaunch
+from conftest import PAPER, ROOT, assert_input_error, nml_variant, run_airlaunch
 from test_sweep_support import AIRLAUNCH_EXE, ENV, SWEEP_EXE, make_table
 
 CONSTANT = ["  c_dn_mach = 0.0, 0.45, 0.9", "  c_dn_table = 3*1.2",
@@ -108,6 +108,34 @@ def test_a_read_failure_after_a_table_names_its_own_variable(airlaunch_exe, tmp_
     out = tmp_path / "bad.nc"
     assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out),
                        "&rocket: variable 'n_strips' = 99999999999 is not an integer in [-2147483647, 2147483647]", out)
+
+
+@pytest.mark.parametrize("base,edit,fragment", [
+    (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_dn_mach = 0.0, 0.5\n  c_dn_table(0) = 1.2"),
+     "&rocket: 'c_dn_table(0)' = 1.2 is not allowed (c_dn_table holds at most 16 values: indices 1 to 16)"),
+    (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_dn_mach = 0.0, 0.5\n  c_dn_table(5000) = 1.2"),
+     "&rocket: 'c_dn_table(5000)' = 1.2 is not allowed (c_dn_table holds at most 16 values: indices 1 to 16)"),
+    (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_axial_mach(16:17) = 0.3, 0.9"),
+     "&rocket: 'c_axial_mach(16:17)' = 0.3, 0.9 is not allowed (c_axial_mach holds at most 16 values: "
+     "indices 1 to 16)"),
+    # an element given several values: the read stopped at the second ("Cannot match namelist object name 1.5")
+    (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_dn_mach = 0.0, 0.5\n  c_dn_table(1) = 1.2, 1.5"),
+     "&rocket: 'c_dn_table(1)' = 1.2, 1.5 is not allowed (one element takes one value: give c_dn_table(k:m) = "
+     "... for several, or the whole c_dn_table = ...)"),
+    # a 3-vector of another group alike
+    (ROOT / "input" / "line_pendulum.nml", (r"^&line$", "&line\n  wind(4) = 1.0"),
+     "&line: 'wind(4)' = 1.0 is not allowed (wind holds at most 3 values: indices 1 to 3)"),
+])
+def test_an_element_out_of_bounds_is_a_one_line_error(airlaunch_exe, tmp_path, base, edit, fragment):
+    """An element the array does not have, or an element given several
+    values, was the runtime's message ("cannot read the group: Index 1 out of
+    range for namelist variable c_dn_table", "Cannot match namelist object
+    name 1.5"), naming neither the value nor what is allowed (review of the
+    thirty-fourth session); now the one-line error of every bad input."""
+    nml = nml_variant(tmp_path, "bad", base=base, edits=[edit])
+    out = tmp_path / "bad.nc"
+    line = assert_input_error(run_airlaunch(airlaunch_exe, nml, "--output", out), fragment, out)
+    assert line.startswith(f"airlaunch: error: {nml}:")
 
 
 def test_a_sweep_varies_one_element_of_a_table(tmp_path):
