@@ -59,6 +59,8 @@ module airlaunch_namelist
   integer, parameter :: max_file_size = 16*1024*1024
   !> value_class: what the values of a real list read as
   integer, parameter :: normal_values = 0, subnormal = 1, not_finite = 2
+  !> element_span: an index it cannot read (not a number, not k:m)
+  integer, parameter :: unknown_element = -huge(1)
 
   !> A scanned namelist file.
   type :: nml_file
@@ -657,9 +659,9 @@ contains
           return
         end if
         call element_span(item, lo, hi)
-        if (lo /= -1 .and. (lo < 1 .or. hi > n)) call fatal_error(error, self%where(item) // "'" // item%name // &
-          item%index // "' = " // item%value // " is not allowed (" // item%name // " holds at most " // str(n) // &
-          " values: indices 1 to " // str(n) // ")")
+        if (lo /= unknown_element .and. (lo < 1 .or. hi > n)) call fatal_error(error, self%where(item) // "'" // &
+          item%name // item%index // "' = " // item%value // " is not allowed (" // item%name // " holds at most " // &
+          str(n) // " values: indices 1 to " // str(n) // ")")
       end if
     end subroutine check_form
 
@@ -1065,14 +1067,15 @@ contains
     spans_overlap = all(lo >= 1) .and. max(lo(1), lo(2)) <= min(hi(1), hi(2))
   end function spans_overlap
 
-  !> The elements [lo, hi] an assignment sets (lo = -1: an index of another form).
+  !> The elements [lo, hi] an assignment sets (lo = unknown_element: an index of
+  !> another form; a negative index is read as itself).
   subroutine element_span(item, lo, hi)
     type(nml_assignment), intent(in) :: item   !< an assignment (index normalised: no blanks)
     integer, intent(out) :: lo, hi
     integer :: colon, ios1, ios2, n
     character(len=:), allocatable :: inner
     n = max(1, count_values(item%value))
-    lo = -1
+    lo = unknown_element
     hi = -1
     if (len(item%index) == 0) then
       lo = 1
@@ -1085,12 +1088,12 @@ contains
     colon = index(inner, ":")
     if (colon == 0) then
       read(inner, *, iostat=ios1) lo
-      if (ios1 /= 0) lo = -1
+      if (ios1 /= 0) lo = unknown_element
       hi = lo + n - 1
     else if (colon > 1 .and. colon < len(inner)) then
       read(inner(1:colon-1), *, iostat=ios1) lo
       read(inner(colon+1:), *, iostat=ios2) hi
-      if (ios1 /= 0 .or. ios2 /= 0) lo = -1
+      if (ios1 /= 0 .or. ios2 /= 0) lo = unknown_element
     end if
   end subroutine element_span
 

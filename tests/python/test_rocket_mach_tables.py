@@ -113,6 +113,8 @@ def test_a_read_failure_after_a_table_names_its_own_variable(airlaunch_exe, tmp_
 @pytest.mark.parametrize("base,edit,fragment", [
     (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_dn_mach = 0.0, 0.5\n  c_dn_table(0) = 1.2"),
      "&rocket: 'c_dn_table(0)' = 1.2 is not allowed (c_dn_table holds at most 16 values: indices 1 to 16)"),
+    (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_dn_mach = 0.0, 0.5\n  c_dn_table(-1) = 1.2"),
+     "&rocket: 'c_dn_table(-1)' = 1.2 is not allowed (c_dn_table holds at most 16 values: indices 1 to 16)"),
     (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_dn_mach = 0.0, 0.5\n  c_dn_table(5000) = 1.2"),
      "&rocket: 'c_dn_table(5000)' = 1.2 is not allowed (c_dn_table holds at most 16 values: indices 1 to 16)"),
     (PAPER, (r"^(  n_strips = 16)$", "\\1\n  c_axial_mach(16:17) = 0.3, 0.9"),
