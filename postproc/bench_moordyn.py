@@ -236,7 +236,9 @@ END
     xyz = np.array(track)
     if not np.all(np.isfinite(xyz)) or np.max(np.abs(xyz)) > 10 * L:
         return None, wall
-    return np.stack([xyz[:, 0], xyz[:, 2], xyz[:, 1]], axis=1), wall   # (x, z_up, y) -> (x, y_up, z)
+    # MoorDyn's right-handed (x, y, z up) to ours (x, y up, z): a rotation about x,
+    # y_ours = z_md, z_ours = -y_md ((x, z, y) would mirror a sideways motion)
+    return np.stack([xyz[:, 0], xyz[:, 2], -xyz[:, 1]], axis=1), wall
 
 
 def err(track, ref):
