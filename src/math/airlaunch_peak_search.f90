@@ -83,6 +83,7 @@ module airlaunch_peak_search
     procedure :: first_time => tracker_first_time
     procedure :: push => tracker_push
     procedure :: close => tracker_close
+    procedure :: rises_into => tracker_rises_into
   end type peak_tracker
 
   !> golden-section fraction (3 - sqrt(5))/2
@@ -361,6 +362,17 @@ contains
     self%ts(2) = t; self%qs(2) = q; self%piece(2) = piece
     self%n = 2
   end function tracker_push
+
+  !> Whether the open sequence rises into its latest sample, the end of an
+  !> interval on `piece` (piece > 0): then the next sample (push) or the
+  !> sequence's close may bracket a maximum on that piece; otherwise no later
+  !> bracket reaches into it.
+  pure logical function tracker_rises_into(self, piece) result(rises)
+    class(peak_tracker), intent(in) :: self
+    integer, intent(in) :: piece
+    rises = .false.
+    if (self%n >= 2 .and. self%piece(2) == piece) rises = self%qs(2) >= self%qs(1)
+  end function tracker_rises_into
 
   !> The sequence ends (the function may jump after its last sample): true
   !> with `br` if its last interval rises to its end (a maximum at or just

@@ -78,14 +78,25 @@ module airlaunch_cvode
 
   !> CVODE's interpolant over one internal step, y(t) = sum_j c(:, j) (t - tn)^j
   !> (j = 0..order; CVodeGetDky's derivatives at the step's end tn over j!), so
-  !> that it can be evaluated after the solver has moved on.
+  !> that it can be evaluated after the solver has moved on.  The one shown to
+  !> a step_observer holds its value at tn only (`known` = 0): the observer
+  !> reads the other coefficients off CVODE (`fill`) while it is shown the
+  !> step (CVODE's next step overwrites them), if it needs them (each is a
+  !> CVodeGetDky).
   type :: step_polynomial
     real(dp) :: tn = 0.0_dp                    !< the step's end [s]
     integer :: order = 0                       !< its degree
     real(dp), allocatable :: c(:, :)           !< (n, 0:max order) Taylor coefficients at tn
+    !> c(:, 0:known) are set (known >= order: all); the others are CVODE's (`fill`)
+    integer :: known = huge(1)
+    type(c_ptr) :: mem = c_null_ptr                    !< the CVODE memory that has them
+    type(N_Vector), pointer :: nv_work => null()       !< CVodeGetDky's output vector ...
+    real(c_double), pointer :: work(:) => null()       !< ... and its data
   contains
     procedure :: eval => polynomial_eval
     procedure :: copy => polynomial_copy
+    procedure :: fill => polynomial_fill
+    procedure :: whole => polynomial_whole
   end type step_polynomial
 
   !> Sees the solution stretch by stretch: `advance` calls `observe` after
@@ -97,7 +108,9 @@ module airlaunch_cvode
   end type step_observer
 
   abstract interface
-    !> The solution on [t_start, t_end] is `poly`.  `restart`: the first
+    !> The solution on [t_start, t_end] is `poly` (CVODE's: its value at tn;
+    !> a copy reads the other coefficients off CVODE with fill(from=poly),
+    !> during this call only).  `restart`: the first
     !> stretch since a (re)start (the state at t_start may differ from the
     !> end of the stretch before).  `last`: the stretch ends at an event or a
     !> stop time (the caller may change the state or the system there) or at
@@ -622,9 +635,8 @@ contains
     logical, intent(in) :: last                    !< an event or a stop time ends the stretch
     real(c_double) :: tn(1)
     integer(c_int) :: q(1), ierr
-    real(dp) :: tb, fact
+    real(dp) :: tb
     logical :: ends
-    integer :: k
     tb = t_end
     ends = last
     if (self%t_final > 0.0_dp .and. tb >= self%t_final) then
@@ -635,25 +647,25 @@ contains
     if (tb <= self%t_seen .and. .not. (ends .or. self%seen_restart)) return
     ierr = FCVodeGetLastOrder(self%mem, q)
     ierr = FCVodeGetCurrentTime(self%mem, tn)
-    q(1) = min(q(1), ubound(self%poly%c, 2))
-    fact = 1.0_dp
-    self%poly%order = -1
-    do k = 0, q(1)
-      if (k == 0 .and. t_end == tn(1)) then
-        ! CVODE returned the step's end: y is its state (zn[0], as CVodeGetDky gives)
-        self%poly%c(:, 0) = self%y
-        self%poly%order = 0
-        cycle
-      end if
-      ierr = FCVodeGetDky(self%mem, tn(1), int(k, c_int), self%nv_work)
-      if (ierr /= 0) exit
-      if (k > 0) fact = fact*k
-      self%poly%c(:, k) = self%work/fact
-      self%poly%order = k
-    end do
-    if (self%poly%order < 0) return   ! (no step taken: nothing to show)
+    if (t_end == tn(1)) then
+      ! CVODE returned the step's end: y is its state (zn[0], as CVodeGetDky gives)
+      self%poly%c(:, 0) = self%y
+    else
+      ierr = FCVodeGetDky(self%mem, tn(1), 0_c_int, self%nv_work)
+      if (ierr /= 0) return   ! (no step taken: nothing to show)
+      self%poly%c(:, 0) = self%work
+    end if
+    ! the higher coefficients when the observer asks (poly%fill): CVODE's
+    ! order after a step is the step's (it changes it at the next step's
+    ! start), so CVodeGetDky gives each of them
+    self%poly%order = min(q(1), ubound(self%poly%c, 2))
+    self%poly%known = 0
+    self%poly%mem = self%mem
+    self%poly%nv_work => self%nv_work
+    self%poly%work => self%work
     self%poly%tn = tn(1)
     call observer%observe(self%poly, self%t_seen, max(tb, self%t_seen), self%seen_restart, ends)
+    self%poly%mem = c_null_ptr   ! (CVODE moves on: what is not read now is gone)
     self%t_seen = max(tb, self%t_seen)
     self%seen_restart = .false.
   end subroutine show_stretch
@@ -686,10 +698,13 @@ contains
     end do
   end subroutine polynomial_eval
 
-  !> self = a copy of `from` (storage allocated at the first copy only).
+  !> self = a copy of the coefficients `from` holds (storage allocated at the
+  !> first copy only); the copy of CVODE's step reads the others with
+  !> fill(from=...) while CVODE is at that step.
   subroutine polynomial_copy(self, from)
     class(step_polynomial), intent(inout) :: self  !< copy
     type(step_polynomial), intent(in) :: from      !< original
+    integer :: k
     if (.not. allocated(self%c)) then
       allocate(self%c, mold=from%c)
     else if (any(shape(self%c) /= shape(from%c))) then
@@ -698,8 +713,60 @@ contains
     end if
     self%tn = from%tn
     self%order = from%order
-    self%c(:, 0:from%order) = from%c(:, 0:from%order)
+    self%known = from%known
+    k = min(from%order, from%known)
+    self%c(:, 0:k) = from%c(:, 0:k)
   end subroutine polynomial_copy
+
+  !> The coefficients up to order `upto` (default: all), read off CVODE
+  !> (CVodeGetDky's derivatives at tn over k!) while the step is its latest:
+  !> `from`, the step a step_observer is shown (default: self), and self its
+  !> copy; an order CVODE cannot give ends the polynomial below it.
+  subroutine polynomial_fill(self, upto, from)
+    class(step_polynomial), intent(inout) :: self           !< interpolant
+    integer, intent(in), optional :: upto                   !< the highest order wanted
+    type(step_polynomial), intent(in), optional :: from     !< CVODE's step (self a copy of it)
+    integer :: k, last
+    integer(c_int) :: ierr
+    real(dp) :: fact
+    type(c_ptr) :: mem
+    type(N_Vector), pointer :: nv
+    real(c_double), pointer :: work(:)
+    last = self%order
+    if (present(upto)) last = min(upto, self%order)
+    if (self%known >= last) return
+    if (present(from)) then
+      if (from%tn /= self%tn) return   ! (not a copy of it)
+      mem = from%mem
+      nv => from%nv_work
+      work => from%work
+    else
+      mem = self%mem
+      nv => self%nv_work
+      work => self%work
+    end if
+    if (.not. c_associated(mem)) return   ! (not CVODE's latest step: nothing to read)
+    fact = 1.0_dp
+    do k = 1, self%known
+      fact = fact*k
+    end do
+    do k = self%known + 1, last
+      ierr = FCVodeGetDky(mem, real(self%tn, c_double), int(k, c_int), nv)
+      if (ierr /= 0) then
+        self%order = k - 1
+        exit
+      end if
+      fact = fact*k
+      self%c(:, k) = work/fact
+      self%known = k
+    end do
+  end subroutine polynomial_fill
+
+  !> Whether every coefficient is set (the polynomial can be evaluated anywhere).
+  pure logical function polynomial_whole(self) result(whole)
+    class(step_polynomial), intent(in) :: self  !< interpolant
+    whole = self%known >= self%order
+  end function polynomial_whole
 
   !> An event at self%t: `event` and `which` from CVodeGetRootInfo's `info`;
   !> the rest of its step is searched at the next `advance`.
@@ -861,7 +928,8 @@ contains
     if (associated(self%nv_y)) call FN_VDestroy(self%nv_y)
     if (associated(self%nv_atol)) call FN_VDestroy(self%nv_atol)
     if (associated(self%nv_work)) call FN_VDestroy(self%nv_work)
-    nullify(self%ls, self%nls, self%mat, self%nv_y, self%nv_atol, self%nv_work)
+    nullify(self%ls, self%nls, self%mat, self%nv_y, self%nv_atol, self%nv_work, self%poly%nv_work, self%poly%work)
+    self%poly%mem = c_null_ptr
     if (c_associated(self%ctx)) ierr = FSUNContext_Free(self%ctx)
     self%ctx = c_null_ptr
     if (associated(self%y)) deallocate(self%y)

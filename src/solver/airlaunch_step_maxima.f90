@@ -7,6 +7,12 @@
 !> a restart, the end of the run); its first and last step also get a sample
 !> at their middle (a sequence may be a single step with its maximum inside).
 !> A bracket over two steps is searched on each step's interpolant apart.
+!> A step's interpolant is read off CVODE whole (every CVodeGetDky) only if a
+!> bracket may use it: a sample inside the step, a bracket at its end, or a
+!> quantity rising into its end (the next sample or the sequence's close may
+!> then bracket a maximum on it; a falling one never does); the other steps
+!> are sampled at their end from its value (and rate) there alone - the same
+!> samples, brackets and maxima bit for bit (test_lazy_interpolant).
 !>
 !> An extension says which quantities its integrator carries (`watches`) and
 !> evaluates them at a time from the interpolated state self%y and its rate
@@ -38,6 +44,9 @@ module airlaunch_step_maxima
     !> whether it is a step-end sample (an `estimated` quantity may be estimated)
     integer :: only = 0
     logical :: step_end_sample = .false.
+    !> stretches whose whole interpolant was read off CVODE (a count: the others
+    !> were sampled at their end only)
+    integer :: whole_reads = 0
   contains
     procedure :: observe => maxima_observe
     procedure :: finish => maxima_finish
@@ -78,6 +87,12 @@ contains
 
   !> A stretch of the solution (airlaunch_cvode's step_observer): its end is
   !> the next sample of each quantity; a bracketed local maximum is refined.
+  !> The stretch's whole interpolant is read off CVODE (fill) only where it is
+  !> sampled inside, refined on, or may be later: a sample at its start or
+  !> middle or an end before the step's, a bracket now, or a sequence that
+  !> rises into its end (the next sample or the sequence's close may bracket
+  !> a maximum there, on this piece).  The samples at a step's end need its
+  !> value there (and its rate: the first derivative) only.
   subroutine maxima_observe(self, poly, t_start, t_end, restart, last)
     class(maxima_observer), intent(inout) :: self
     type(step_polynomial), intent(in) :: poly
@@ -90,12 +105,17 @@ contains
     nq = n_quantities(self)
     if (restart) call self%finish()   ! the state may jump at a (re)start
     self%cur = 3 - self%cur
-    call self%piece(self%cur)%copy(poly)
     if (.not. allocated(self%y)) allocate(self%y(size(poly%c, 1)), self%dy(size(poly%c, 1)))
     starts = .false.
     do m = 1, nq
       if (self%watches(m) .and. self%trk(m)%n == 0) starts = .true.
     end do
+    call self%piece(self%cur)%copy(poly)
+    if (starts .or. last .or. t_end /= poly%tn) then
+      call whole_piece(self, poly)
+    else if (self%needs_rate) then
+      call self%piece(self%cur)%fill(1, from=poly)
+    end if
     ! an `estimated` quantity is evaluated in full where the interpolant's
     ! derivative cannot bracket its maxima: a first-order stretch (a constant
     ! derivative) and the first stretch of a sequence, the first step after a
@@ -124,12 +144,31 @@ contains
       if (.not. ok) cycle
       do m = 1, nq
         if (.not. self%watches(m)) cycle
-        if (self%trk(m)%push(t, q(m), self%cur, br, value=.not. (est .and. self%estimated(m)))) &
+        if (self%trk(m)%push(t, q(m), self%cur, br, value=.not. (est .and. self%estimated(m)))) then
+          call whole_piece(self, poly)
           call refine(self, m, br)
+        end if
       end do
+    end do
+    do m = 1, nq
+      if (.not. self%watches(m)) cycle
+      if (self%trk(m)%rises_into(self%cur)) then
+        call whole_piece(self, poly)
+        exit
+      end if
     end do
     if (last) call self%finish()
   end subroutine maxima_observe
+
+  !> The current piece whole: the rest of its coefficients read off CVODE
+  !> (`poly`, the step shown).
+  subroutine whole_piece(self, poly)
+    class(maxima_observer), intent(inout) :: self
+    type(step_polynomial), intent(in) :: poly
+    if (self%piece(self%cur)%whole()) return
+    self%whole_reads = self%whole_reads + 1
+    call self%piece(self%cur)%fill(from=poly)
+  end subroutine whole_piece
 
   !> Close the observer's sequences (the quantities may jump after their end),
   !> refining a maximum at their end: at a (re)start, an event, a switch of
