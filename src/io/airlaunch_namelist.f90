@@ -158,7 +158,7 @@ contains
       if (ios /= 0 .or. pos >= nchar) exit
       lineno = lineno + 1
       ! a UTF-8 byte-order mark (some Windows editors write one) reads as blanks
-      if (lineno == 1 .and. buf(1:3) == achar(239) // achar(187) // achar(191)) buf(1:3) = "   "
+      if (lineno == 1 .and. buf(1:3) == char(239) // char(187) // char(191)) buf(1:3) = "   "
       lt = stripped_length(buf)
       ! tabs scan as blanks, other control characters as '?' (messages stay one line)
       do k = 1, lt
@@ -481,7 +481,7 @@ contains
     type(nml_var), intent(in) :: vars(:)                  !< its variables
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     integer :: i, j
-    logical :: known, is_list
+    logical :: known, is_list, twice
     character(len=:), allocatable :: first
     do i = 1, size(self%items)
       if (self%items(i)%group /= lower(group)) cycle
@@ -509,8 +509,11 @@ contains
       ! and `b_position(2) = 5`, in either order; lists: check_list_order).
       do j = 1, i - 1
         associate(a => self%items(j), b => self%items(i))
-          if (a%group_number == b%group_number .and. a%name == b%name .and. &
-            (a%index == b%index .or. (.not. is_list .and. spans_overlap(a, b)))) then
+          twice = a%group_number == b%group_number .and. a%name == b%name
+          if (twice) twice = a%index == b%index
+          if (.not. twice .and. a%group_number == b%group_number .and. a%name == b%name .and. .not. is_list) &
+            twice = spans_overlap(a, b)
+          if (twice) then
             if (a%index == b%index) then
               first = a%value
             else

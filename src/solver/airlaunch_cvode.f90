@@ -499,7 +499,7 @@ contains
     logical :: last
     integer(c_int) :: ierr
     real(c_double) :: tret(1), tn(1), target
-    integer(c_long) :: first, limit
+    integer(c_long) :: first, limit, taken
     if (present(event)) event = .false.
     if (.not. c_associated(self%mem)) then
       call fatal_error(error, "CVODE: advance called on a solver that is not initialised")
@@ -553,8 +553,8 @@ contains
             return
           end if
         end if
-        if (self%steps_taken() - first >= limit .or. &
-          (self%max_total > 0 .and. self%steps_taken() >= self%max_total)) then
+        taken = self%steps_taken()
+        if (taken - first >= limit .or. (self%max_total > 0 .and. taken >= self%max_total)) then
           self%t = tn(1)
           call fatal_error(error, failure_message(self, CV_TOO_MUCH_WORK))
           return
