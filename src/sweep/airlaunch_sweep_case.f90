@@ -232,14 +232,19 @@ contains
     type(base_scenario), intent(in) :: base               !< the base scenario
     type(error_type), allocatable, intent(inout) :: error !< set if a table replaces it
     character(len=*), parameter :: scalars(2) = [character(len=7) :: "c_dn", "c_axial"]
-    integer :: i
+    character(len=:), allocatable :: table, instead
+    integer :: i, hit
     if (group /= "rocket") return
     do i = 1, size(scalars)
       if (variable /= trim(scalars(i))) cycle
-      if (.not. any(base%known%group == "rocket" .and. base%known%name == trim(scalars(i)) // "_table")) return
+      table = trim(scalars(i)) // "_table"
+      hit = findloc(base%known%group == "rocket" .and. base%known%name == table, .true., dim=1)
+      if (hit == 0) return
+      ! a table of one point is echoed (and so set) as one value, not element by element
+      instead = "rocket%" // table
+      if (base%known(hit)%kind == "vector") instead = instead // "(k)"
       call fatal_error(error, where // "rocket%" // variable // " has no effect: the base scenario gives " // &
-        trim(scalars(i)) // "_table, which replaces it (docs/input.md, &rocket); set the table's values " // &
-        "instead, rocket%" // trim(scalars(i)) // "_table(k)")
+        table // ", which replaces it (docs/input.md, &rocket); set the table's values instead, " // instead)
       return
     end do
   end subroutine check_not_replaced

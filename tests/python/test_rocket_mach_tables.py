@@ -196,3 +196,10 @@ def test_a_sweep_may_not_set_a_coefficient_its_table_replaces(tmp_path):
         res.stderr
     res, _ = check("plain", plain, "&input name = 'rocket%c_dn', distribution = 'list', values = 1.0, 1.4 /\n")
     assert res.returncode == 0, res.stderr
+    # a one-point table is one value (echoed so): the refusal names the whole variable
+    single = with_rocket(tmp_path, "single", ["  c_dn_mach = 0.5", "  c_dn_table = 1.3"])
+    res, _ = check("single", single, "&input name = 'rocket%c_dn', distribution = 'list', values = 1.0, 1.4 /\n")
+    assert res.returncode == 2 and res.stderr.rstrip().endswith("set the table's values instead, rocket%c_dn_table"), \
+        res.stderr
+    res, _ = check("single_ok", single, "&input name = 'rocket%c_dn_table', distribution = 'list', values = 1.0, 1.4 /\n")
+    assert res.returncode == 0, res.stderr
