@@ -509,10 +509,11 @@ contains
       ! and `b_position(2) = 5`, in either order; lists: check_list_order).
       do j = 1, i - 1
         associate(a => self%items(j), b => self%items(i))
-          twice = a%group_number == b%group_number .and. a%name == b%name
-          if (twice) twice = a%index == b%index
-          if (.not. twice .and. a%group_number == b%group_number .and. a%name == b%name .and. .not. is_list) &
-            twice = spans_overlap(a, b)
+          twice = .false.
+          if (a%group_number == b%group_number .and. a%name == b%name) then
+            twice = a%index == b%index
+            if (.not. twice .and. .not. is_list) twice = spans_overlap(a, b)
+          end if
           if (twice) then
             if (a%index == b%index) then
               first = a%value

@@ -513,7 +513,9 @@ contains
     echo = echo // group_text
   contains
     !> The resolved group without the tables (a namelist writes whole arrays:
-    !> the read's long ones would be echoed with their unset tails).
+    !> the read's long ones would be echoed with their unset tails).  Its
+    !> namelist is the read's less the four tables: a variable added to one
+    !> goes into both (the resolved input must hold every value read).
     subroutine write_group()
       namelist /rocket/ mass, ixx, iyy, izz, length, diameter, cg_from_nose, tie_down_from_nose, &
         cp_pot_from_nose, c_axial, c_dn, eta, n_strips, fin_count, fin_semi_span, fin_root_chord, &
