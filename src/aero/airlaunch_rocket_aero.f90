@@ -54,6 +54,7 @@
 !>
 !> Body frame: x along the axis towards the nose, origin at the CG.
 module airlaunch_rocket_aero
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
   use airlaunch_kinds, only: dp, pi
   use airlaunch_gust, only: gust_field, gust_velocity
   implicit none
@@ -203,12 +204,19 @@ contains
   !> The value of a Mach table of n points (xs strictly increasing) at
   !> Mach number x: piecewise linear between the points, the end value beyond
   !> either end (a table of one point is a constant).  At a point it returns
-  !> that point's value exactly.
+  !> that point's value exactly.  A NaN Mach number gives NaN (a run gone
+  !> non-finite is named by its non-finite check, not carried on by an end
+  !> point's value; and the ordered comparisons below would raise the invalid
+  !> flag, a trap in the checked build).
   pure real(dp) function mach_table_value(n, xs, ys, x) result(y)
     integer, intent(in) :: n             !< points (1 to size(xs))
     real(dp), intent(in) :: xs(:), ys(:) !< Mach numbers and values
     real(dp), intent(in) :: x            !< Mach number
     integer :: i
+    if (ieee_is_nan(x)) then
+      y = x
+      return
+    end if
     if (x <= xs(1)) then
       y = ys(1)
       return

@@ -9,8 +9,10 @@
 !>    axial flow (C_A at M = v/a) is the formula's with the hand-interpolated
 !>    coefficient;
 !>  - a pitching rocket in still air: each strip reads C_dn at its own
-!>    cross-flow Mach number |w x|/a (two strips, hand computation).
+!>    cross-flow Mach number |w x|/a (two strips, hand computation);
+!>  - a NaN Mach number gives a NaN coefficient, not an end point's value.
 program test_rocket_mach
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
   use airlaunch_kinds, only: dp, pi
   use airlaunch_rocket_aero
   use testing
@@ -111,6 +113,18 @@ program test_rocket_mach
   call rocket_aero_eval(tab, rho, 2*a, [0.0_dp, 0.0_dp, 0.0_dp], [0.0_dp, 0.0_dp, w], 1.0e9_dp, f, m)
   call check_close(f(2), sum(fy), "the speed of sound passed sets M_c (a doubled: C_dn = 1 + |w x|/2a)", &
     rel=1e-13_dp)
+
+  call section("a NaN Mach number gives NaN, not an end point's value")
+  ! A NaN speed of sound or speed (a run gone non-finite) must reach the
+  ! force as NaN, so that the run's non-finite check names the quantity; the
+  ! search through the points took NaN for "beyond the last point" and held
+  ! the last value (2.2 here), a finite coefficient from a NaN input.
+  w = ieee_value(1.0_dp, ieee_quiet_nan)
+  call check(ieee_is_nan(mach_table_value(3, [0.2_dp, 0.6_dp, 1.0_dp], [1.2_dp, 1.6_dp, 2.2_dp], w)), &
+    "table of three points at M = NaN: NaN")
+  call check(ieee_is_nan(mach_table_value(1, [0.7_dp], [0.35_dp], w)), "table of one point at M = NaN: NaN")
+  call check(mach_table_value(3, [0.2_dp, 0.6_dp, 1.0_dp], [1.2_dp, 1.6_dp, 2.2_dp], huge(1.0_dp)) == 2.2_dp, &
+    "a finite Mach number beyond the last point still holds the last value (2.2)")
 
   call finish()
 contains
