@@ -39,6 +39,7 @@ program airlaunch
   use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal, command_argument
   use airlaunch_interrupt, only: catch_interrupts
   use airlaunch_sweep_files, only: write_bytes
+  use airlaunch_runtime_env, only: runtime_env, query_runtime_env
   implicit none
   type(nml_file) :: f
   type(run_config) :: run
@@ -51,6 +52,7 @@ program airlaunch
   logical :: options_done   !< "--" seen: the arguments after it are file names
   !> longest path the system takes (PATH_MAX less its NUL)
   integer, parameter :: path_max = 4095
+  type(runtime_env) :: env   !< --version: the BLAS, libm, libraries of this process
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   call ignore_file_size_signal()   ! a file past ulimit -f is a failed write (exit 4), not SIGXFSZ
@@ -79,9 +81,12 @@ program airlaunch
       call check_stdout("the usage is incomplete")
       stop
     case ("-V", "--version")
+      env = query_runtime_env()
       call say("airlaunch " // code_version)
       call say("SUNDIALS: " // sundials_build)
       call say("code digest (sources and build settings): " // code_digest)
+      call say("runtime numerical environment (the output files' attributes of these names):")
+      call say(env%report(), newline=.false.)
       call check_stdout("the version is incomplete")
       stop
     case ("--check")
@@ -212,10 +217,19 @@ contains
 
   !> One line (or lines) to the standard output, by write(2): gfortran's
   !> buffered unit 6 drops write errors (a full disk, a closed descriptor)
-  !> without a word; the first failure is kept for check_stdout.
-  subroutine say(text)
+  !> without a word; the first failure is kept for check_stdout.  With
+  !> newline = .false., `text` as it is (it ends its own lines).
+  subroutine say(text, newline)
     character(len=*), intent(in) :: text
-    call write_bytes(1, text // new_line("a"), stdout_error)
+    logical, intent(in), optional :: newline
+    logical :: nl
+    nl = .true.
+    if (present(newline)) nl = newline
+    if (nl) then
+      call write_bytes(1, text // new_line("a"), stdout_error)
+    else
+      call write_bytes(1, text, stdout_error)
+    end if
   end subroutine say
 
   !> A line that did not reach the standard output: one line on stderr saying
@@ -465,7 +479,8 @@ contains
     call say("  runs the scenario of the namelist file; see docs/input.md")
     call say("  -o, --output FILE: write the output there instead of &run output")
     call say("  --check: validate the input and print it resolved (defaults included), without running")
-    call say("  -V, --version: the code version and the SUNDIALS it was built with")
+    call say("  -V, --version: the code version, the SUNDIALS it was built with, and the libraries and")
+    call say("                 processor it computes with here (BLAS kernel, libm, versions)")
     call say("  --: the arguments after it are file names (a scenario named -x.nml: airlaunch -- -x.nml)")
   end subroutine usage
 

@@ -27,7 +27,9 @@ program airlaunch_sweep
   use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular, command_argument
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
-  use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, check_ran_settings, remove_journal
+  use airlaunch_sweep_journal, only: journal_writer, read_journals, check_fingerprint, check_ran_settings, remove_journal, &
+    record_environments, read_environments, environment_len, fnv1a
+  use airlaunch_runtime_env, only: runtime_env, query_runtime_env
   use airlaunch_sweep_summary, only: write_summary
   use airlaunch_sweep_scheduler, only: sweep_scheduler
   use airlaunch_sweep_plan, only: sweep_setup, load_sweep, fingerprint_text, trajectory_ids, make_output_dir
@@ -53,6 +55,7 @@ program airlaunch_sweep
   integer, allocatable :: pending(:), keep(:)
   type(sweep_row), allocatable :: rows(:)
   real(dp) :: t_start, t_run
+  character(len=16) :: env_tag   !< this rank's runtime environment, as its rows name it
 
   call use_one_blas_thread()   ! before any LAPACK call: small systems only
   call MPI_Init()
@@ -111,6 +114,7 @@ program airlaunch_sweep
   end if
   call broadcast_ids(pending)
   scratch = s%def%work_dir() // "/case_rank" // str(rank) // ".nml"
+  call record_rank_environments()
 
   ! --- the cases
   t_run = MPI_Wtime()
@@ -122,8 +126,7 @@ program airlaunch_sweep
     ! with a new `created`, which makes the figures drawn from it stale
     summary_kept = path_kind(s%def%summary_path()) == kind_regular .and. size(pending) == 0
     if (.not. summary_kept) then
-      call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, error)
-      if (allocated(error)) call die(error%message)
+      call write_summary_file()
     else
       call say("summary: " // s%def%summary_path() // " is already the journal's (no case ran): left as it is")
     end if
@@ -190,6 +193,7 @@ contains
         row%status = status_ok
       else
         call run_case(s%def, s%base, id, s%table%values(:, id + 1), scratch, "", row, file_error)
+        row%environment = env_tag
         if (.not. allocated(file_error)) call journal%append(row, file_error)
       end if
       if (allocated(file_error)) then
@@ -309,6 +313,26 @@ contains
       " cases have no row after the run (a journal write was lost)")
   end subroutine collect_rows
 
+  !> Every rank's runtime numerical environment (BLAS kernel, libm, libraries,
+  !> processor: ranks may run on different node types) to rank 0, which adds
+  !> the ones the journal does not name yet to journal/environments.txt before
+  !> any case runs; each row then carries its rank's tag (env_tag).  One line
+  !> per rank, once per run.
+  subroutine record_rank_environments()
+    character(len=environment_len) :: mine
+    character(len=environment_len), allocatable :: every(:)
+    type(runtime_env) :: env
+    env = query_runtime_env(with_mpi=.true.)
+    mine = env%line()
+    env_tag = fnv1a(trim(mine))
+    allocate(every(merge(nranks, 0, rank == 0)))
+    call MPI_Gather(mine, environment_len, MPI_CHARACTER, every, environment_len, MPI_CHARACTER, 0, MPI_COMM_WORLD)
+    if (rank == 0) then
+      call record_environments(s%def%journal_dir(), every, error)
+      if (allocated(error)) call die(error%message)
+    end if
+  end subroutine record_rank_environments
+
   !> Broadcast a list of case ids from rank 0.
   subroutine broadcast_ids(ids)
     integer, allocatable, intent(inout) :: ids(:)
@@ -322,6 +346,16 @@ contains
     end if
     if (n > 0) call MPI_Bcast(ids, n, MPI_INTEGER, 0, MPI_COMM_WORLD)
   end subroutine broadcast_ids
+
+  !> Rank 0: summary.nc from the rows, with the environments they were computed in.
+  subroutine write_summary_file()
+    character(len=16), allocatable :: env_tags(:)
+    character(len=environment_len), allocatable :: env_texts(:)
+    call read_environments(s%def%journal_dir(), env_tags, env_texts, error)
+    if (.not. allocated(error)) call write_summary(s%def%summary_path(), s%def, s%table, s%base, rows, env_tags, &
+      env_texts, error)
+    if (allocated(error)) call die(error%message)
+  end subroutine write_summary_file
 
   subroutine report_progress(done, failed, total, elapsed)
     integer, intent(in) :: done, failed, total
@@ -396,6 +430,7 @@ contains
         if (rank == 0) call say("airlaunch-sweep " // code_version)
         if (rank == 0) call say("SUNDIALS: " // sundials_build)
         if (rank == 0) call say("code digest (sources and build settings): " // code_digest)
+        if (rank == 0) call report_environment()
         call finish(exit_ok)
       case ("--check")
         check_only = .true.
@@ -434,6 +469,14 @@ contains
     if (len(path) > 0) call fail_input("more than one sweep definition given")
     path = arg
   end subroutine take_definition_path
+
+  !> --version: this process's runtime numerical environment.
+  subroutine report_environment()
+    type(runtime_env) :: env
+    env = query_runtime_env(with_mpi=.true.)
+    call say("runtime numerical environment (summary.nc's attributes of these names):")
+    call say(env%report(), newline=.false.)
+  end subroutine report_environment
 
   subroutine usage()
     call say("usage: mpirun -np K airlaunch-sweep [--restart] [--] SWEEP.nml")

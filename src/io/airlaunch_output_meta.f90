@@ -1,9 +1,11 @@
 !> Global attributes every airlaunch output file carries: the code version and
-!> digest, the scene and the fully resolved input (defaults included).
+!> digest, the runtime numerical environment (airlaunch_runtime_env), the scene
+!> and the fully resolved input (defaults included).
 module airlaunch_output_meta
   use airlaunch_error, only: error_type
   use airlaunch_ncwrite, only: nc_writer
   use airlaunch_version, only: code_version, code_digest
+  use airlaunch_runtime_env, only: query_runtime_env, write_runtime_env
   implicit none
   private
   public :: write_run_metadata, creation_time
@@ -23,6 +25,9 @@ contains
     ! the build the numbers are the bits of (sources and build settings; the
     ! git description does not name the compiler flags nor an uncommitted edit)
     call w%add_text_att("/", "code_digest", code_digest, error)
+    ! and what the build computed with on this machine (the BLAS kernel, libm's
+    ! variants, the libraries' versions): read now, once per file
+    call write_runtime_env(w, query_runtime_env(), error)
     call w%add_text_att("/", "created", creation_time(), error)
     call w%add_text_att("/", "input_namelist", echo, error)
     call w%add_text_att("/", "frames", "earth: x forward, y up, z right; body: x nose, y up, z right; " // &

@@ -9,6 +9,12 @@
 !> OUTPUT_DIR/journal/fingerprint.txt records what the rows were computed from
 !> (code version, base scenario text, table values, t_end); a rerun with a
 !> different fingerprint refuses to mix its rows with the old ones.
+!>
+!> OUTPUT_DIR/journal/environments.txt names the runtime numerical
+!> environments the rows were computed in (airlaunch_runtime_env: BLAS kernel,
+!> libm, libraries, processor), one line `<tag> <environment>` each, the tag
+!> (FNV-1a of the text) the one each row carries: ranks on different node
+!> types give the same case other bits, and the summary says which ran where.
 module airlaunch_sweep_journal
   use airlaunch_kinds, only: dp, i8
   use airlaunch_error, only: error_type, fatal_error
@@ -19,9 +25,13 @@ module airlaunch_sweep_journal
   implicit none
   private
   public :: journal_writer, journal_file, read_journals, check_fingerprint, check_ran_settings, remove_journal, fnv1a
+  public :: record_environments, read_environments, environment_len
 
   !> Largest number of rank files looked for.
   integer, parameter :: max_rank_files = 100000
+  !> Longest environment line kept (airlaunch_runtime_env's line: some 600
+  !> characters; a longer one is cut).
+  integer, parameter :: environment_len = 2048
 
   !> One rank's open journal.
   type :: journal_writer
@@ -259,7 +269,7 @@ contains
     s = text(p:p+q-2)
   end function line_of
 
-  !> Delete the journal files and the fingerprint (--restart).
+  !> Delete the journal files, the fingerprint and the environments (--restart).
   subroutine remove_journal(dir)
     character(len=*), intent(in) :: dir   !< journal directory
     integer :: r
@@ -268,7 +278,71 @@ contains
       call delete_file(journal_file(dir, r))
     end do
     call delete_file(dir // "/fingerprint.txt")
+    call delete_file(dir // "/environments.txt")
   end subroutine remove_journal
+
+  !> Add to DIR/environments.txt the environments of `texts` (one line each,
+  !> several ranks may share one) it does not hold yet, as `<fnv1a> <text>`
+  !> lines; the file is replaced whole (a full disk leaves the old one).
+  subroutine record_environments(dir, texts, error)
+    character(len=*), intent(in) :: dir                   !< journal directory
+    character(len=*), intent(in) :: texts(:)              !< environment lines (blank-padded)
+    type(error_type), allocatable, intent(inout) :: error !< set on a file error
+    character(len=16), allocatable :: tags(:)
+    character(len=environment_len), allocatable :: have_texts(:)
+    character(len=:), allocatable :: text
+    integer :: k
+    logical :: added
+    call read_environments(dir, tags, have_texts, error)
+    if (allocated(error)) return
+    text = ""
+    do k = 1, size(tags)
+      text = text // tags(k) // " " // trim(have_texts(k)) // new_line("a")
+    end do
+    added = .false.
+    do k = 1, size(texts)
+      if (any(tags == fnv1a(trim(texts(k))))) cycle
+      tags = [tags, fnv1a(trim(texts(k)))]
+      text = text // fnv1a(trim(texts(k))) // " " // trim(texts(k)) // new_line("a")
+      added = .true.
+    end do
+    if (added) call replace_text_file(dir // "/environments.txt", text, error)
+  end subroutine record_environments
+
+  !> The environments of DIR/environments.txt: tags(k) names texts(k) (none
+  !> without the file; a line that is not `<16 hex digits> <text>` is skipped).
+  subroutine read_environments(dir, tags, texts, error)
+    character(len=*), intent(in) :: dir                   !< journal directory
+    character(len=16), allocatable, intent(out) :: tags(:) !< the tags
+    character(len=environment_len), allocatable, intent(out) :: texts(:) !< their environments
+    type(error_type), allocatable, intent(inout) :: error !< set if the file is unreadable
+    character(len=:), allocatable :: path, text, line
+    integer :: p, q
+    allocate(tags(0), texts(0))
+    path = dir // "/environments.txt"
+    if (.not. file_exists(path)) return
+    call read_text_file(path, text, error)
+    if (allocated(error)) return
+    p = 1
+    do while (p <= len(text))
+      q = index(text(p:), new_line("a"))
+      if (q == 0) q = len(text) - p + 2
+      line = text(p:p+q-2)
+      p = p + q
+      if (.not. is_environment_line(line)) cycle
+      tags = [tags, line(1:16)]
+      texts = [character(len=environment_len) :: texts, line(18:)]
+    end do
+  end subroutine read_environments
+
+  !> `<16 hex digits> <text>`.
+  pure logical function is_environment_line(line)
+    character(len=*), intent(in) :: line
+    is_environment_line = .false.
+    if (len(line) < 18) return
+    if (line(17:17) /= " ") return
+    is_environment_line = verify(line(1:16), "0123456789abcdefABCDEF") == 0
+  end function is_environment_line
 
   !> 64-bit FNV-1a hash of a string, as 16 hex digits.
   function fnv1a(s) result(h)

@@ -4,10 +4,13 @@
 !> line_result: each scene its own set of summary variables, metric_set),
 !> with the row's text form in the journal.
 !>
-!> Journal line: `<adler32> <id> <status> <n> <m_1> ... <m_n> <message>`, the
-!> checksum (8 hex digits) covering everything after it, the reals written
-!> with 17 significant digits so that they read back bit for bit.  A line cut
-!> short by a kill fails the checksum and is ignored (its case runs again).
+!> Journal line: `<adler32> <id> <status> <environment> <n> <m_1> ... <m_n>
+!> <message>`, the checksum (8 hex digits) covering everything after it, the
+!> environment the tag (16 hex digits, `-` for none) of the runtime numerical
+!> environment of the rank that ran the case (journal/environments.txt), the
+!> reals written with 17 significant digits so that they read back bit for
+!> bit.  A line cut short by a kill fails the checksum and is ignored (its case
+!> runs again).
 module airlaunch_sweep_row
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
   use airlaunch_kinds, only: dp, i8
@@ -116,6 +119,9 @@ module airlaunch_sweep_row
     integer :: status = status_ok                    !< status_ok, status_failed, status_invalid
     real(dp), allocatable :: metrics(:)              !< values in the order of the scene's metric_set
     character(len=:), allocatable :: message         !< failure message ("" if ok)
+    !> tag of the runtime numerical environment that computed it (the FNV-1a
+    !> hash of its line in journal/environments.txt; "" for none)
+    character(len=16) :: environment = ""
   end type sweep_row
 
 contains
@@ -255,8 +261,15 @@ contains
     integer :: i, n
     n = 0
     if (allocated(row%metrics)) n = size(row%metrics)
-    write(buf, '(i0,1x,i0,1x,i0)') row%id, row%status, n
+    write(buf, '(i0,1x,i0)') row%id, row%status
     body = trim(buf)
+    if (len_trim(row%environment) > 0) then
+      body = body // " " // trim(row%environment)
+    else
+      body = body // " -"
+    end if
+    write(buf, '(i0)') n
+    body = body // " " // trim(buf)
     do i = 1, n
       write(buf, '(es25.16e3)') row%metrics(i)
       body = body // " " // trim(adjustl(buf))
@@ -293,6 +306,12 @@ contains
     call next_token(body, p, q)
     read(body(p:q), *, iostat=ios) row%status
     if (ios /= 0) return
+    p = q + 1
+    call next_token(body, p, q)
+    if (body(p:q) /= "-") then
+      if (q - p + 1 /= 16 .or. verify(body(p:q), "0123456789abcdefABCDEF") /= 0) return
+      row%environment = body(p:q)
+    end if
     p = q + 1
     call next_token(body, p, q)
     read(body(p:q), *, iostat=ios) n

@@ -1,5 +1,7 @@
 !> The summary of a sweep (netCDF-4): dimension `case`, the varied inputs,
-!> `status` and `failure`, and one variable per metric (docs/sweep.md).  The
+!> `status` and `failure`, one variable per metric, and `environment`: which
+!> runtime numerical environment (the `environments` attribute) computed each
+!> case (docs/sweep.md).  The
 !> rows come sorted by case id whatever the order or the ranks that ran them;
 !> the file is written under a temporary name and renamed (nc_writer).
 module airlaunch_sweep_summary
@@ -16,26 +18,32 @@ module airlaunch_sweep_summary
   use airlaunch_sweep_table, only: case_table
   use airlaunch_sweep_case, only: base_scenario
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
-  use airlaunch_sweep_journal, only: fnv1a
+  use airlaunch_sweep_journal, only: fnv1a, environment_len
+  use airlaunch_runtime_env, only: query_runtime_env, write_runtime_env
   implicit none
   private
   public :: write_summary
 
 contains
 
-  !> Write the summary of `rows` (one per case, rows(k)%id = k - 1) to `path`.
-  subroutine write_summary(path, def, table, base, rows, error)
+  !> Write the summary of `rows` (one per case, rows(k)%id = k - 1) to `path`;
+  !> env_tags(k) names the environment env_texts(k) (the journal's
+  !> environments.txt) that the rows' tags refer to.
+  subroutine write_summary(path, def, table, base, rows, env_tags, env_texts, error)
     character(len=*), intent(in) :: path                  !< summary file
     type(sweep_definition), intent(in) :: def             !< the sweep
     type(case_table), intent(in) :: table                 !< its cases
     type(base_scenario), intent(in) :: base               !< its base scenario
     type(sweep_row), intent(in) :: rows(:)                !< the rows, by id
+    character(len=16), intent(in) :: env_tags(:)          !< environment tags
+    character(len=environment_len), intent(in) :: env_texts(:) !< their environments
     type(error_type), allocatable, intent(inout) :: error !< set on failure
     type(nc_writer) :: w
     integer :: k, n, j
     integer, allocatable :: ibuf(:)
     real(dp), allocatable :: rbuf(:)
     integer :: maxlen
+    character(len=16), allocatable :: used(:)   !< the rows' distinct tags, in case order
 
     n = size(rows)
     if (any(rows%id /= [(k, k = 0, n - 1)])) then
@@ -87,6 +95,19 @@ contains
         end if
       end do
     end associate
+    ! the environment of each case: an index into the distinct ones (-1: the row has none)
+    allocate(used(0))
+    do k = 1, n
+      if (len_trim(rows(k)%environment) == 0) then
+        ibuf(k) = -1
+        cycle
+      end if
+      if (.not. any(used == rows(k)%environment)) used = [used, rows(k)%environment]
+      ibuf(k) = findloc(used, rows(k)%environment, dim=1) - 1
+    end do
+    call w%add_int_var_1d("environment", ["case"], ibuf, "1", "runtime numerical environment that computed " // &
+      "the case: its line in the global attribute environments (-1: not recorded)", error)
+    call w%add_text_att("/", "environments", environment_list(used, env_tags, env_texts), error)
     call w%add_text_att("/", "title", "airlaunch sweep summary: " // def%name, error)
     call w%add_text_att("/", "sweep_name", def%name, error)
     call w%add_text_att("/", "definition", def%path, error)
@@ -108,6 +129,8 @@ contains
     call w%add_text_att("/", "criteria", def%criteria, error)
     call w%add_text_att("/", "code_version", "airlaunch " // code_version, error)
     call w%add_text_att("/", "code_digest", code_digest, error)
+    ! the writer's own (rank 0's); the cases' are in `environment`
+    call write_runtime_env(w, query_runtime_env(with_mpi=.true.), error)
     call w%add_text_att("/", "created", creation_time(), error)
     call w%add_text_att("/", "comment", "one row per case, sorted by case id; NaN: event not reached or " // &
       "value not defined; metrics of failed cases are those up to the failure; invalid_input: the scenario " // &
@@ -118,6 +141,26 @@ contains
     end if
     call w%commit(error)
   end subroutine write_summary
+
+  !> "0: <environment>", one line per tag of `used` (its text from the
+  !> journal's, "unknown" for a tag it does not hold).
+  function environment_list(used, env_tags, env_texts) result(s)
+    character(len=16), intent(in) :: used(:)       !< tags, in the order of their index
+    character(len=16), intent(in) :: env_tags(:)   !< the journal's tags
+    character(len=environment_len), intent(in) :: env_texts(:) !< their environments
+    character(len=:), allocatable :: s
+    integer :: k, j
+    s = ""
+    do k = 1, size(used)
+      if (k > 1) s = s // new_line("a")
+      j = findloc(env_tags, used(k), dim=1)
+      if (j > 0) then
+        s = s // str(k - 1) // ": " // trim(env_texts(j))
+      else
+        s = s // str(k - 1) // ": unknown (tag " // used(k) // " is not in journal/environments.txt)"
+      end if
+    end do
+  end function environment_list
 
   !> The definition's &fixed, one "name = value" per line ('' for none).
   function fixed_text(def) result(s)

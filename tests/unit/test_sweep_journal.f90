@@ -3,7 +3,9 @@
 !> truncation of a line rejected (a kill mid-write never yields a wrong row),
 !> a torn last line closed before the next row, duplicates counted; a full
 !> device (/dev/full: every write(2) fails with ENOSPC) is an error at once for
-!> a whole file and for a journal row, and a large file is written in full.
+!> a whole file and for a journal row, and a large file is written in full;
+!> a row's runtime-environment tag reads back (none as none, a malformed one
+!> rejected), and the environments file keeps each environment once.
 program test_sweep_journal
   use, intrinsic :: iso_fortran_env, only: int64
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
@@ -26,6 +28,9 @@ program test_sweep_journal
   type(metric_set) :: launch_set, line_set
   real(dp) :: nan
   character(len=:), allocatable :: big, back_text
+  character(len=16), allocatable :: env_tags(:)
+  character(len=8) :: sum_text
+  character(len=environment_len), allocatable :: env_texts(:)
   interface
     integer(c_int) function c_symlink(target, linkpath) bind(C, name="symlink")
       import :: c_int, c_char
@@ -75,6 +80,19 @@ program test_sweep_journal
   end do
   call check(same, "every other metric identical bit for bit (-0, subnormal, +-huge, 0.1+0.2)")
   call check(back%message == row%message, "message kept whole")
+  call check(back%environment == "", "no environment tag: none read back")
+  row%environment = fnv1a("cpu_model=A; blas_core=Haswell")
+  line = format_row(row)
+  call parse_row(line, n_metrics, back, ok)
+  call check(ok .and. back%environment == row%environment .and. back%message == row%message, &
+    "an environment tag reads back (" // row%environment // "), the message with it")
+  k = index(line, row%environment)
+  line = line(:k+14) // "g" // line(k+16:)   ! not a hex digit (the checksum made to match)
+  line = line(10:)
+  write(sum_text, '(z8.8)') adler32(line)
+  call parse_row(sum_text // " " // line, n_metrics, back, ok)
+  call check(.not. ok, "a tag that is not 16 hex digits: rejected (checksum right)")
+  row%environment = ""
 
   call section("a cut or corrupted line is rejected")
   all_rejected = .true.
@@ -141,6 +159,23 @@ program test_sweep_journal
     // trim(itoa(bad)))
   call remove_journal(dir)
   call delete_file(dir // "/fingerprint.txt")
+
+  call section("environments: each once, read back")
+  ! three ranks, two of them alike; a second run adds a third environment
+  call record_environments(dir, [character(len=environment_len) :: "blas_core=Haswell", "blas_core=SkylakeX", &
+    "blas_core=Haswell"], error)
+  call check(.not. allocated(error), "recorded")
+  call read_environments(dir, env_tags, env_texts, error)
+  call check(size(env_tags) == 2, "two distinct environments of three ranks: " // trim(itoa(size(env_tags))))
+  call check(env_tags(1) == fnv1a("blas_core=Haswell") .and. env_texts(1) == "blas_core=Haswell" .and. &
+    env_tags(2) == fnv1a("blas_core=SkylakeX") .and. env_texts(2) == "blas_core=SkylakeX", &
+    "each line: the FNV-1a tag of its text, the text")
+  call record_environments(dir, [character(len=environment_len) :: "blas_core=SkylakeX", "blas_core=Zen"], error)
+  call read_environments(dir, env_tags, env_texts, error)
+  call check(size(env_tags) == 3 .and. env_texts(3) == "blas_core=Zen", "a later run adds only its new one")
+  call remove_journal(dir)
+  call read_environments(dir, env_tags, env_texts, error)
+  call check(.not. allocated(error) .and. size(env_tags) == 0, "--restart removes them with the journal")
 
   call section("fingerprint")
   call check_fingerprint(dir, "a = 1" // new_line("a"), error)
