@@ -154,12 +154,28 @@ def require_utf8_path(path, what) -> None:
                               "from, and write to, directories whose names are UTF-8)") from None
 
 
+def python_versions() -> dict:
+    """The Python, libraries and netCDF/HDF5 that compute and write the sweep's
+    Python files (table.nc, envelope.nc, verify.nc): their global attributes,
+    as the Fortran files name their runtime environment (docs/sweep.md)."""
+    import platform
+
+    import netCDF4
+
+    return {"python_version": platform.python_version(), "numpy_version": np.__version__,
+            "scipy_version": scipy.__version__, "xarray_version": xr.__version__,
+            "netcdf4_python_version": netCDF4.__version__, "netcdf_version": netCDF4.__netcdf4libversion__,
+            "hdf5_version": netCDF4.__hdf5libversion__}
+
+
 def write_atomic(ds: xr.Dataset, path) -> pathlib.Path:
     """Write a netCDF-4 file under a temporary name and rename it; on any
-    failure the temporary file is removed and the exception goes on."""
+    failure the temporary file is removed and the exception goes on.  The file
+    carries python_versions() (the caller's dataset is left as it is)."""
     path = pathlib.Path(path)
     require_utf8_path(path, "write the netCDF file")
     path.parent.mkdir(parents=True, exist_ok=True)
+    ds = ds.assign_attrs(python_versions())
     return files.write_atomic(path, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding(ds)))
 
 

@@ -210,3 +210,26 @@ def test_a_sweep_names_the_environment_of_every_case(tmp_path):
         if version:
             assert f"Open MPI v{version.group(1)}" in s.attrs["mpi_library"]
         assert s.attrs["blas_core"] == kernels[0]   # rank 0 wrote it
+
+
+def test_python_files_name_their_libraries(tmp_path):
+    """The sweep's Python steps write table.nc, envelope.nc and verify.nc
+    through one function: each file names the Python, NumPy, SciPy, xarray,
+    netCDF4-python and the netCDF-C and HDF5 libraries that wrote it, as
+    this Python reports them."""
+    import netCDF4
+    import numpy as np
+    import scipy
+
+    sys.path.insert(0, str(ROOT))
+    from postproc.sweep.table import write_atomic
+
+    ds = xr.Dataset({"x": ("case", np.arange(3.0), {"units": "1", "long_name": "x"})})
+    write_atomic(ds, tmp_path / "t.nc")
+    assert "numpy_version" not in ds.attrs   # the caller's dataset is left as it was
+    with xr.open_dataset(tmp_path / "t.nc") as back:
+        assert {k: back.attrs[k] for k in back.attrs if k.endswith("_version")} == {
+            "python_version": platform.python_version(), "numpy_version": np.__version__,
+            "scipy_version": scipy.__version__, "xarray_version": xr.__version__,
+            "netcdf4_python_version": netCDF4.__version__, "netcdf_version": netCDF4.__netcdf4libversion__,
+            "hdf5_version": netCDF4.__hdf5libversion__}
