@@ -144,7 +144,8 @@ def test_a_forced_kernel_is_named(tmp_path):
     """OPENBLAS_CORETYPE forced to two kernels this processor runs (Prescott:
     any x86-64; Sandybridge with AVX, Haswell with AVX2): each file names the
     one forced, which ctypes' openblas_get_corename of the same library
-    confirms; the two differ."""
+    confirms; the two differ.  (The paper scenario's bits differ between such
+    kernels: docs/validation.md, "Reproducing a result across machines".)"""
     attrs = run_drop(tmp_path)
     if attrs["blas_core"] == "unknown":
         pytest.skip("not OpenBLAS: no kernel to force")
@@ -163,7 +164,9 @@ def test_a_forced_kernel_is_named(tmp_path):
 
 def test_masked_libm_features_are_named(tmp_path):
     """GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA takes glibc's libm off its
-    FMA variants: the file says fma and avx2 are not usable."""
+    FMA variants (the paper scenario then takes 624 steps instead of 622 with
+    the Sandybridge kernel: docs/validation.md): the file says fma and avx2
+    are not usable."""
     libc, version = platform.libc_ver()
     _, _, flags = cpuinfo()
     if libc != "glibc" or platform.machine() != "x86_64" or not {"fma", "avx2"} <= flags:
