@@ -359,8 +359,9 @@ contains
     end if
   end subroutine end_check
 
-  !> Validate a canopy end: a point mass, drag areas 0 <= packed < open, a
-  !> filling time set when it deploys.
+  !> Validate a canopy end: a point mass, drag areas 0 <= packed < open (the
+  !> packed one only where the canopy deploys during the run: open from the
+  !> start it never uses it), a filling time set when it deploys.
   subroutine check_canopy(self, name, error)
     type(line_end), intent(in) :: self                     !< end with canopy_end
     character(len=*), intent(in) :: name                   !< which end, for the message
@@ -368,10 +369,10 @@ contains
     associate (c => self%canopy)
       if (self%kind /= end_point_mass) then
         call fatal_error(error, name // ": a canopy needs a point_mass end, not " // end_kind_name(self%kind))
-      else if (.not. (c%packed_drag_area >= 0.0_dp .and. c%packed_drag_area < c%drag_area .and. &
-          ieee_is_finite(c%drag_area))) then
+      else if (.not. (c%packed_drag_area >= 0.0_dp .and. ieee_is_finite(c%drag_area) .and. &
+          (c%packed_drag_area < c%drag_area .or. .not. self%inflating()))) then
         call fatal_error(error, name // ": the canopy's drag areas (packed " // str(c%packed_drag_area) // &
-          ", open " // str(c%drag_area) // " m^2) are not allowed: need 0 <= packed < open, finite")
+          ", open " // str(c%drag_area) // " m^2) are not allowed: need 0 <= packed < open (a canopy that deploys), finite")
       else if (.not. (c%added_mass_factor >= 0.0_dp .and. ieee_is_finite(c%added_mass_factor) .and. &
           c%cd0 > 0.0_dp .and. c%inflation_exponent >= 1.0_dp)) then
         call fatal_error(error, name // ": the canopy's added_mass_factor must be >= 0, cd0 > 0 and " // &

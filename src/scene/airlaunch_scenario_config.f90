@@ -694,6 +694,7 @@ contains
     integer :: u, ios
     logical :: present
     character(len=256) :: msg
+    character(len=:), allocatable :: given
     type(echo_buffer) :: buffer
     namelist /parachute/ mass, drag_area, cd0, deploy_time, fill_constant, inflation_exponent, &
       packed_drag_area, added_mass_factor
@@ -724,9 +725,15 @@ contains
     call require_nonnegative(f, "parachute", "packed_drag_area", packed_drag_area, "m^2", error)
     call require_nonnegative(f, "parachute", "added_mass_factor", added_mass_factor, "", error)
     if (allocated(error)) return
-    if (packed_drag_area >= drag_area) then
-      call fatal_error(error, f%path // ": &parachute: packed_drag_area = " // str(packed_drag_area) // &
-        " is not allowed (must be < drag_area = " // str(drag_area) // " m^2)")
+    ! the packed drag area is the canopy's before a deployment during the run:
+    ! a canopy open from the start never uses it (nor its default, 0.05 m^2,
+    ! which a drogue of a small payload does not exceed)
+    if (deploy_time >= 0.0_dp .and. packed_drag_area >= drag_area) then
+      given = ""
+      if (.not. f%is_set("parachute", "packed_drag_area")) given = " (the default)"
+      call fatal_error(error, f%path // ": &parachute: packed_drag_area = " // str(packed_drag_area) // given // &
+        " is not allowed (must be < drag_area = " // str(drag_area) // " m^2): the canopy deploys at " // &
+        "deploy_time = " // str(deploy_time) // " s, packed until then; give a smaller packed_drag_area")
       return
     end if
     c%mass = mass; c%drag_area = drag_area; c%cd0 = cd0; c%deploy_time = deploy_time
