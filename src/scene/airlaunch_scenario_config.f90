@@ -1273,11 +1273,18 @@ contains
       else if (r%diameter > min(b%width, b%height)) then
         call fatal_error(error, f%path // ": &rocket: diameter = " // str(r%diameter) // &
           " is not allowed (the bay is " // str(b%width) // " m wide and " // str(b%height) // " m high)")
-      else if (cfg%rocket%fin_count > 0 .and. 2*(r%diameter/2 + cfg%rocket%fin_semi_span)/sqrt(2.0_dp) > &
+      else if (cfg%rocket%fin_count == 4 .and. 2*(r%diameter/2 + cfg%rocket%fin_semi_span)/sqrt(2.0_dp) > &
           min(b%width, b%height)) then
         call fatal_error(error, f%path // ": &rocket: fin_semi_span = " // str(cfg%rocket%fin_semi_span) // &
           " is not allowed (fins in X span " // str(2*(r%diameter/2 + cfg%rocket%fin_semi_span)/sqrt(2.0_dp)) // &
           " m across, the bay is " // str(min(b%width, b%height)) // " m)")
+      else if (cfg%rocket%fin_count == 3 .and. .not. three_fins_fit(r%diameter/2 + cfg%rocket%fin_semi_span, &
+          b%width, b%height)) then
+        call fatal_error(error, f%path // ": &rocket: fin_semi_span = " // str(cfg%rocket%fin_semi_span) // &
+          " is not allowed (3 fins at 120 deg, their tips " // str(r%diameter/2 + cfg%rocket%fin_semi_span) // &
+          " m from the axis, fit the bay, " // str(b%width) // " m wide and " // str(b%height) // &
+          " m high, in no roll orientation: need fin_semi_span <= " // &
+          str(largest_three_fin_tip(b%width, b%height) - r%diameter/2) // " m)")
       else if (cfg%line%enabled .and. cfg%line%length <= nose_ahead - cfg%rocket%tie_down_from_nose) then
         call fatal_error(error, f%path // ": &line: length = " // str(cfg%line%length) // &
           " is not allowed (shorter than the " // str(nose_ahead - cfg%rocket%tie_down_from_nose) // &
@@ -1285,4 +1292,39 @@ contains
       end if
     end associate
   end subroutine check_geometry
+
+  !> Three fins at 120 deg with their tips at `rho` from the rocket's axis fit
+  !> a bay `width` wide and `height` high in some roll orientation.  Their tips
+  !> span an equilateral triangle whose width across a direction at d from
+  !> one of its sides' normals is sqrt(3) rho cos(d), d in [0, 30] deg, and
+  !> 90 deg further sqrt(3) rho cos(30 deg - d): they fit where both fit, i.e.
+  !> where the angles d_w = acos(width/(sqrt(3) rho)), d_h (height) that the
+  !> two need (0 when a side fits in any orientation) add up to at most 30 deg.
+  !> (The body's diameter is checked apart.)
+  pure logical function three_fins_fit(rho, width, height) result(fit)
+    real(dp), intent(in) :: rho, width, height   !< [m]
+    real(dp), parameter :: thirty_deg = 30.0_dp*deg2rad
+    real(dp) :: full
+    full = sqrt(3.0_dp)*rho
+    fit = acos(min(1.0_dp, width/full)) + acos(min(1.0_dp, height/full)) <= thirty_deg
+  end function three_fins_fit
+
+  !> The largest tip radius of three fins that fit the bay (three_fins_fit),
+  !> by bisection [m].
+  pure real(dp) function largest_three_fin_tip(width, height) result(rho)
+    real(dp), intent(in) :: width, height   !< [m]
+    real(dp) :: lo, hi
+    integer :: i
+    lo = 0.0_dp
+    hi = max(width, height)   ! 1.5 rho > either: no fit
+    do i = 1, 100
+      rho = 0.5_dp*(lo + hi)
+      if (three_fins_fit(rho, width, height)) then
+        lo = rho
+      else
+        hi = rho
+      end if
+    end do
+    rho = lo
+  end function largest_three_fin_tip
 end module airlaunch_scenario_config
