@@ -33,7 +33,7 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   implicit none
 
   !> The safety maxima taken over the integrators' steps (docs/output.md):
-  !> the largest segment tension, |aircraft pitch - trim|, |n - 1|.
+  !> the largest segment tension, |aircraft pitch - trim|, |n - n_trim|.
   !> (m_line_gap: minus the line's clearance from the empennage point, so that
   !> its smallest value is a maximum; tracked by the direct coupling only)
   integer, parameter :: m_tension = 1, m_pitch = 2, m_load = 3, m_line_gap = 4
@@ -51,6 +51,7 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
     type(rigidized_chain), pointer :: chain => null()
     type(rigidized_line), pointer :: line => null()
     real(dp) :: trim_deg = 0.0_dp                     !< the aircraft's trimmed pitch [deg]
+    real(dp) :: trim_load_factor = 1.0_dp             !< its load factor then, cos(trim pitch)
   contains
     procedure :: watches
     procedure :: values => metric_values
@@ -1086,6 +1087,10 @@ contains
     r%lobs%trk => r%trk
     r%dobs%trim_deg = res%trim_alpha_deg
     r%cobs%trim_deg = res%trim_alpha_deg
+    ! the trimmed level flight (no acceleration, pitch = alpha) loads the body's
+    ! y axis with g cos(alpha): the excursion is from that, not from 1 g
+    r%dobs%trim_load_factor = cos(res%trim_alpha_deg*deg2rad)
+    r%cobs%trim_load_factor = r%dobs%trim_load_factor
     r%dobs%estimated(m_load) = .true.
     r%cobs%estimated(m_load) = .true.
   end subroutine init_observers
@@ -1181,7 +1186,7 @@ contains
           ok = .not. allocated(eval_error)
           if (.not. ok) return
         end if
-        call aircraft_metrics(s%sep, self%trim_deg, only, q, estimate, self%dy(4:6))
+        call aircraft_metrics(s%sep, self%trim_deg, self%trim_load_factor, only, q, estimate, self%dy(4:6))
       end associate
     case (src_chain)
       associate(c => self%chain)
@@ -1191,7 +1196,7 @@ contains
           ok = .not. allocated(eval_error)
           if (.not. ok) return
         end if
-        call aircraft_metrics(c%sep, self%trim_deg, only, q, estimate, self%dy(4:6))
+        call aircraft_metrics(c%sep, self%trim_deg, self%trim_load_factor, only, q, estimate, self%dy(4:6))
       end associate
     case default
       associate(l => self%line)
@@ -1207,10 +1212,12 @@ contains
 
   !> The aircraft's pitch excursion |theta - theta_trim| [deg] and (unless
   !> only the pitch is asked for; needs sep%evaluate) its load factor
-  !> excursion |n - 1|, as record_milestones takes them from sample_launch.
-  subroutine aircraft_metrics(sep, trim_deg, only, q, estimate, a0)
+  !> excursion |n - n_trim| (n as sample_launch records it, n_trim =
+  !> cos(theta_trim) that of the trimmed level flight).
+  subroutine aircraft_metrics(sep, trim_deg, trim_load_factor, only, q, estimate, a0)
     type(separation_system), intent(in) :: sep
     real(dp), intent(in) :: trim_deg
+    real(dp), intent(in) :: trim_load_factor
     integer, intent(in) :: only
     real(dp), intent(inout) :: q(3)
     logical, intent(in) :: estimate   !< the acceleration a0 instead of sep%a0 (no evaluation)
@@ -1225,7 +1232,7 @@ contains
       else
         n = dot_product(b0%c(:, 2), sep%a0 + [0.0_dp, g0, 0.0_dp])/g0
       end if
-      q(m_load) = abs(n - 1.0_dp)
+      q(m_load) = abs(n - trim_load_factor)
     end associate
   end subroutine aircraft_metrics
 

@@ -47,11 +47,13 @@ GRAVITY_DROP = ROOT / "input" / "airlaunch_gravity_drop.nml"
 # settled line's force, branch aero-fixes: it moved by up to 8e-4; min_clearance_m is the
 # exact minimum, an event, since the twelfth session: 8.8150638 sampled at 0.02 s before;
 # rerun in the thirty-fourth session for the potential normal force at the ramp edge while
-# its centre is in the bay: it moved by up to 2.4e-3, the edge-pull time).
+# its centre is in the bay: it moved by up to 2.4e-3, the edge-pull time; the load-factor excursion
+# from the trimmed flight's n = cos(1.2174 deg) since the thirty-fifth session: |n - 1| + 1 - cos(alpha)
+# exactly, its maximum being at n > 1).
 REFERENCE = {"edge_time_s": 2.9952014, "separation_time_s": 3.8746231, "edge_pull_time_s": 3.6510727,
              "pitch_at_separation_deg": 15.027764, "pitch_rate_at_separation_deg_s": 19.408748,
              "pitch_max_time_s": 10.481423, "min_clearance_m": 8.7897492, "peak_line_tension_N": 78782.763,
-             "max_aircraft_pitch_excursion_deg": 1.0249325, "max_load_factor_excursion": 0.26602156}
+             "max_aircraft_pitch_excursion_deg": 1.0249325, "max_load_factor_excursion": 0.26624728}
 
 CONTRACT_VARS = ["phase", "aircraft_position", "aircraft_euler_deg", "aircraft_alpha_deg", "aircraft_pitch_rate_deg_s",
                  "elevator_deg", "aircraft_load_factor", "rocket_position", "rocket_velocity", "rocket_euler_deg",

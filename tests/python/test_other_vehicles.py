@@ -92,3 +92,30 @@ def test_three_fins_are_checked_against_the_bay_as_three(airlaunch_exe, tmp_path
     else:
         line = assert_input_error(res, f"&rocket: fin_semi_span = {span} is not allowed (3 fins at 120 deg", out)
         assert "need fin_semi_span <= 1.2512" in line
+
+
+# ---------------------------------------------------------------- the load factor's excursion
+
+GRAVITY_DROP = ROOT / "input" / "airlaunch_gravity_drop.nml"
+
+
+def test_load_factor_excursion_is_from_the_trimmed_flight(airlaunch_exe, tmp_path):
+    """The aircraft's load-factor excursion is taken from the trimmed flight, as
+    its pitch excursion is: a held-steady aircraft (dynamics = 'prescribed')
+    does not move, so both are zero.  The load factor along the body's y axis
+    of an aircraft in trimmed level flight at pitch theta is cos(theta), not 1
+    (the paper's 1.2 deg: 2.3e-4; this gravity drop's 7 deg: 7.5e-3, what the
+    excursion |n - 1| reported for an aircraft that never moved; a slow
+    airdrop trimmed at 15 deg would report 0.034).  Tolerance 1e-12: the
+    records show n = cos(7 deg) to rounding."""
+    nml = nml_variant(tmp_path, "held", base=GRAVITY_DROP, edits=[
+        (r"^  dynamics = 'free' .*$", "  dynamics = 'prescribed'"), (r"^  t_end = 12.0 .*$", "  t_end = 7.0")])
+    out = tmp_path / "held.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        n = ds["aircraft_load_factor"].values
+        assert np.abs(n - math.cos(math.radians(7.0))).max() < 1e-12
+        assert ds.attrs["max_aircraft_pitch_excursion_deg"] < 1e-12
+        assert ds.attrs["max_load_factor_excursion"] < 1e-12
+        assert ds.attrs["separation_time_s"] > 0   # the rocket did leave: the loads moved, the aircraft did not
