@@ -132,7 +132,7 @@ contains
       type(launch_loads) :: loads
       type(gust_field) :: gust
       type(line_params) :: lp
-      real(dp) :: radius, r_rocket(3), r_tie(3)
+      real(dp) :: radius, r_rocket(3), r_tie(3), exit_dir(3), deck_normal(3), edge(3)
       integer :: n, i, status
 
       radius = cfg%rocket%aero%diameter/2
@@ -149,9 +149,13 @@ contains
           sys%chute%fill_constant*sqrt(4*sys%chute%drag_area/(pi*sys%chute%cd0))/v0
       end if
 
+      ! --- the rail (aircraft axes): through the ramp edge, at &bay rail_angle
+      !     nose up to the body x axis; the rocket slides out along exit_dir
+      !     (aft, and down for a nose-up rail), its skin on the rail
+      call rail_geometry(cfg, exit_dir, deck_normal, edge)
       ! --- trim of the Case 0 system (aircraft + locked rocket + parachute pull)
-      r_rocket = [cfg%bay%ramp_edge_x + cfg%bay%l0, cfg%bay%floor_y + radius, 0.0_dp]
-      r_tie = r_rocket + [cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose, 0.0_dp, 0.0_dp]
+      r_rocket = edge - cfg%bay%l0*exit_dir + radius*deck_normal
+      r_tie = r_rocket - (cfg%rocket%aero%cg_from_nose - cfg%rocket%tie_down_from_nose)*exit_dir
       tp = trim_problem(aircraft_mass=cfg%aircraft%mass, rocket_mass=cfg%rocket%mass, r_rocket=r_rocket, &
         r_tie=r_tie, pull=-f_line(1), pull_y=f_line(2), density=air%density, speed=v0, &
         mode=cfg%flight%trim_mode, alpha_target=cfg%flight%trim_alpha)
@@ -186,8 +190,7 @@ contains
       call b0%set_attitude(quat_from_euler([0.0_dp, tr%alpha, 0.0_dp]))
       b1 = new_rigid_body("rocket", cfg%rocket%mass, diag(cfg%rocket%inertia), error)
       if (allocated(error)) return
-      geo = cut_joint_geometry(rail_direction=[-1.0_dp, 0.0_dp, 0.0_dp], &
-        floor_point=[0.0_dp, cfg%bay%floor_y, 0.0_dp], edge_point=[cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp], &
+      geo = cut_joint_geometry(rail_direction=exit_dir, floor_point=edge, edge_point=edge, &
         contact_point=[0.0_dp, -radius, 0.0_dp], nose_x=cfg%rocket%aero%cg_from_nose, &
         rocket_length=cfg%rocket%aero%length, rocket_radius=radius)
       jopt = cut_joint_options(mu_rail=cfg%bay%friction, mu_edge=cfg%bay%friction)
@@ -259,6 +262,22 @@ contains
       m(1, 1) = d(1); m(2, 2) = d(2); m(3, 3) = d(3)
     end function diag
   end subroutine setup_launch
+
+  !> The rail in the aircraft's axes: the exit direction (aft along the rail,
+  !> which &bay rail_angle_deg tilts nose up, so that it also descends), the
+  !> deck's normal (up, normal to it in the plane of symmetry) and the ramp
+  !> edge (ramp_edge_x, floor_y), which the rail line passes through.  The
+  !> zero angle gives the paper's rail, -x at y = floor_y, to the bit.
+  pure subroutine rail_geometry(cfg, exit_dir, deck_normal, edge)
+    type(scenario_config), intent(in) :: cfg
+    real(dp), intent(out) :: exit_dir(3), deck_normal(3), edge(3)
+    real(dp) :: c, s
+    c = cos(cfg%bay%rail_angle)
+    s = sin(cfg%bay%rail_angle)
+    exit_dir = [-c, -s, 0.0_dp]
+    deck_normal = [-s, c, 0.0_dp]
+    edge = [cfg%bay%ramp_edge_x, cfg%bay%floor_y, 0.0_dp]
+  end subroutine rail_geometry
 
   !> A segment whose strength the trimmed flight's steady tension (sys%tension,
   !> the settled line's) already reaches would part before the run starts: an

@@ -53,6 +53,11 @@ module airlaunch_scenario_config
   !> max_mach_points is an input error naming the count, not a read failure.
   integer, parameter :: max_table_read = max_list_items
 
+  !> Largest rail angle to the aircraft's body x axis, either way [deg]: a
+  !> cargo floor, not a launcher; the trimmed deck (trim angle + rail angle)
+  !> then stays well short of the vertical, where the joint's frame is undefined.
+  real(dp), parameter :: rail_angle_max_deg = 45.0_dp
+
   !> The ground's margin to the atmosphere model's floor [m].
   real(dp), parameter :: ground_margin_below = 1000.0_dp
 
@@ -90,6 +95,9 @@ module airlaunch_scenario_config
     character(len=16) :: edge_contact = "one_sided"  !< Case 2 contact: "one_sided" or "bilateral"
     real(dp) :: tail_x = -24.0_dp        !< empennage point (horizontal tail), aircraft axes [m]
     real(dp) :: tail_y = 6.0_dp
+    !> the rail's angle to the aircraft's body x axis, nose up (the rocket lies
+    !> on it nose up; the rail line passes through the ramp edge) [rad]
+    real(dp) :: rail_angle = 0.0_dp
   end type bay_config
 
   !> Rocket (payload).
@@ -356,6 +364,7 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, tail_x, tail_y
+    real(dp) :: rail_angle_deg
     character(len=16) :: edge_contact
     character(len=8) :: l0_from
     integer :: u, ios
@@ -363,16 +372,17 @@ contains
     character(len=256) :: msg
     type(echo_buffer) :: buffer
     namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, l0_from, &
-      edge_contact, tail_x, tail_y
-    type(nml_var), parameter :: vars(12) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), &
+      edge_contact, tail_x, tail_y, rail_angle_deg
+    type(nml_var), parameter :: vars(13) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), &
       nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
       nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
       nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real"), &
-      nml_var("l0_from", "string", 8), nml_var("edge_contact", "string", 16)]
+      nml_var("l0_from", "string", 8), nml_var("edge_contact", "string", 16), nml_var("rail_angle_deg", "real")]
     ramp_edge_x = c%ramp_edge_x; floor_y = c%floor_y; length = c%length; width = c%width
     height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0_given
     l0_from = c%l0_from
     edge_contact = c%edge_contact; tail_x = c%tail_x; tail_y = c%tail_y
+    rail_angle_deg = c%rail_angle*rad2deg
     call open_group(f, "bay", vars, u, present, error)
     if (allocated(error)) return
     if (present) then
@@ -391,10 +401,12 @@ contains
     call require_positive(f, "bay", "l0", l0, "m", error)
     call require_choice(f, "bay", "l0_from", l0_from, [character(len=8) :: "cg", "tail"], error)
     call require_choice(f, "bay", "edge_contact", edge_contact, [character(len=16) :: "one_sided", "bilateral"], error)
+    call require_range(f, "bay", "rail_angle_deg", rail_angle_deg, -rail_angle_max_deg, rail_angle_max_deg, &
+      "deg (positive nose up)", error)
     if (allocated(error)) return
     c = bay_config(ramp_edge_x=ramp_edge_x, floor_y=floor_y, length=length, width=width, height=height, &
       friction=friction, release_time=release_time, l0=l0, l0_from=l0_from, l0_given=l0, &
-      edge_contact=edge_contact, tail_x=tail_x, tail_y=tail_y)
+      edge_contact=edge_contact, tail_x=tail_x, tail_y=tail_y, rail_angle=rail_angle_deg*deg2rad)
     do while (buffer%another_try())
       write(buffer%lines, nml=bay, iostat=buffer%ios)
     end do

@@ -119,3 +119,96 @@ def test_load_factor_excursion_is_from_the_trimmed_flight(airlaunch_exe, tmp_pat
         assert ds.attrs["max_aircraft_pitch_excursion_deg"] < 1e-12
         assert ds.attrs["max_load_factor_excursion"] < 1e-12
         assert ds.attrs["separation_time_s"] > 0   # the rocket did leave: the loads moved, the aircraft did not
+
+
+# ---------------------------------------------------------------- a rail at an angle to the body
+
+G0 = 9.80665   # m/s^2, the code's standard gravity
+
+
+def rail_variant(tmp_path, name, alpha_deg, rail_deg, mu=0.05):
+    """The gravity drop with the aircraft held steady and the rocket's
+    aerodynamics off (as test_gravity_drop's ballistic fall: no coefficients,
+    no fins, a 1 cm diameter, which scales the slender-body force that has no
+    coefficient down by 2.6e4): trimmed at alpha_deg, the rail at rail_deg
+    nose up to the body, friction mu, tight tolerances."""
+    return nml_variant(tmp_path, name, base=GRAVITY_DROP, edits=[
+        (r"^  dynamics = 'free' .*$", "  dynamics = 'prescribed'"),
+        (r"^  trim_alpha_deg = 7.0 .*$", f"  trim_alpha_deg = {alpha_deg}"),
+        (r"^  friction = 0.005 .*$", f"  friction = {mu}\n  rail_angle_deg = {rail_deg}"),
+        (r"^  c_axial = 0.35$", "  c_axial = 0.0"), (r"^  c_dn = 1.2$", "  c_dn = 0.0"),
+        (r"^  diameter = 1.6 .*$", "  diameter = 0.01"),
+        (r"^  fin_count = 4 .*$", "  fin_count = 0"), (r"^  t_end = 12.0 .*$", "  t_end = 8.0"),
+        (r"^  output_dt = 0.02 .*$", "  output_dt = 0.05"), (r"^  rtol = 1.0e-6$", "  rtol = 1.0e-9"),
+        (r"^  atol = 1.0e-7 .*$", "  atol = 1.0e-10")])
+
+
+def test_a_rail_tilted_nose_up_is_a_steeper_deck(airlaunch_exe, tmp_path):
+    """&bay rail_angle_deg tilts the rail (and the rocket on it) nose up to the
+    aircraft's body axis, about the ramp edge.  References:
+    - the rocket's attitude in Case 0: pitched alpha + rail angle (4 + 3 deg),
+      its CG at edge - l0 e1 + R n in the aircraft's axes (e1 = -(cos 3, sin 3),
+      the exit direction; n the deck's normal): 1e-9 m, 1e-9 deg (rounding);
+    - the block on a plane (test_gravity_drop): the held aircraft at 4 deg
+      with the rail at 3 deg is a 7 deg deck, a = g (sin 7 - mu cos 7), the
+      edge sqrt(2 l0 / a) = 5.3132 s after the release, 1e-6 relative
+      (measured 1.3e-8);
+    - the same deck built the other way, the aircraft at 7 deg with a level
+      rail: the rocket meets the same rail, edge and gravity (the held
+      aircraft's own trim does not act), so the two runs are one motion, the
+      edge, the tipping over it and the separation: times within 1e-8 s,
+      the pitch at separation within 1e-7 deg (rtol 1e-9; measured 1.1e-10
+      s, 2.5e-10 s, 4.7e-9 deg; with the 1.6 m diameter the slender-body
+      force, read 0.67 m higher where the tilted rail's edge is, moved the
+      separation by 3.8e-6 s).
+    Before, the rail was hard-coded along -x (rail_angle_deg unknown)."""
+    mu = 0.05
+    runs = {}
+    for name, alpha, rail in (("tilted", 4.0, 3.0), ("level", 7.0, 0.0)):
+        out = tmp_path / f"{name}.nc"
+        res = run_airlaunch(airlaunch_exe, rail_variant(tmp_path, name, alpha, rail, mu), "--output", out)
+        assert res.returncode == 0, res.stderr
+        runs[name] = xr.open_dataset(out)
+    ds = runs["tilted"]
+    deck = math.radians(7.0)
+    a = G0 * (math.sin(deck) - mu * math.cos(deck))
+    assert ds.attrs["edge_time_s"] - ds.attrs["release_time_s"] == pytest.approx(math.sqrt(2 * 10.0 / a), rel=1e-6)
+    assert ds.attrs["separation_time_s"] > ds.attrs["edge_time_s"]
+    for key in ("edge_time_s", "separation_time_s"):
+        assert ds.attrs[key] == pytest.approx(runs["level"].attrs[key], abs=1e-8), key
+    assert ds.attrs["pitch_at_separation_deg"] == pytest.approx(runs["level"].attrs["pitch_at_separation_deg"],
+                                                                abs=1e-7)
+    # Case 0: the rocket lies on the tilted rail
+    k = 0
+    assert float(ds["rocket_euler_deg"].values[k, 1]) == pytest.approx(7.0, abs=1e-9)
+    alpha = math.radians(4.0)
+    c, s = math.cos(alpha), math.sin(alpha)
+    d = ds["rocket_position"].values[k] - ds["aircraft_position"].values[k]
+    rel = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])   # aircraft axes (pitch alpha)
+    r3 = math.radians(3.0)
+    e1, n = np.array([-math.cos(r3), -math.sin(r3)]), np.array([-math.sin(r3), math.cos(r3)])
+    expected = np.array([-13.0, -2.0]) - 10.0 * e1 + 0.005 * n
+    assert np.abs(rel - expected).max() < 1e-9
+    for d in runs.values():
+        d.close()
+
+
+def test_the_trim_places_the_rocket_on_the_tilted_rail(airlaunch_exe, tmp_path):
+    """The paper scenario with its rail at 3 deg nose up, stick fixed: the trim
+    must balance the aircraft with the rocket where the rail puts it (its
+    weight and the line's pull act there: the tie-down ~1 m higher than on a
+    level rail, 78 kN of pull), so that Case 0 starts and stays at rest.
+    Reference: the trimmed flight itself, no pitch rate over the 0.72 s of
+    Case 0 (1e-6 deg/s: the trim converges to 1e-10 of the weight and moment;
+    measured 4.2e-10; with the rocket placed as on a level rail in the trim,
+    the rest of the scene on the tilted one, it pitched at up to 0.76 deg/s)."""
+    nml = nml_variant(tmp_path, "paper_tilted", edits=[
+        (r"^  control = 'attitude_hold' .*$", "  control = 'stick_fixed'"), (r"^  t_end = 15.0 .*$", "  t_end = 1.0"),
+        (r"^  friction = 0.005 .*$", "  friction = 0.005\n  rail_angle_deg = 3.0")])
+    out = tmp_path / "tilted.nc"
+    res = run_airlaunch(airlaunch_exe, nml, "--output", out)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(out) as ds:
+        q = ds["aircraft_pitch_rate_deg_s"].values[ds["phase"].values == 0]
+        assert q.size > 30 and np.abs(q).max() < 1e-6, np.abs(q).max()
+        assert float(ds["rocket_euler_deg"].values[0, 1]) == pytest.approx(1.2174 + 3.0, abs=1e-9)
