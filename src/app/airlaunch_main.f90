@@ -300,7 +300,7 @@ contains
     character(len=:), allocatable :: s
     character(len=1), parameter :: nl = new_line("a")
     s = "trim: alpha " // fx(r%trim_alpha_deg, 4) // " deg, elevator " // fx(r%trim_elevator_deg, 3) // &
-      " deg, thrust " // fx(r%trim_thrust_n/1000, 1) // " kN" // nl // &
+      " deg, thrust " // force(r%trim_thrust_n, 1) // nl // &
       "release (Case 0->1):        " // at(r%release_time) // nl // &
       "edge (Case 1->2):           " // at(r%edge_time) // nl // &
       "separation (Case 2->3):     " // at(r%separation_time) // &
@@ -325,7 +325,7 @@ contains
     type(launch_result), intent(in) :: r
     character(len=:), allocatable :: s
     if (r%has_line) then
-      s = "peak line tension: " // fx(r%peak_tension/1000, 2) // " kN, first reached at " // &
+      s = "peak line tension: " // force(r%peak_tension, 2) // ", first reached at " // &
         at(r%peak_tension_time) // new_line("a") // line_clearance_note(r) // break_note(r)
     else
       s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
@@ -415,6 +415,20 @@ contains
       fx(t, 3) // " s)" // new_line("a")
   end function edge_note
 
+  !> A force [N] with its unit: in kN with d decimals from 1 kN up (the paper
+  !> scenario's 146.7 kN, 78.77 kN), in N with d decimals below (a small
+  !> vehicle's 18.3 N, which "0.0 kN" hid).
+  function force(newtons, d) result(s)
+    double precision, intent(in) :: newtons
+    integer, intent(in) :: d
+    character(len=:), allocatable :: s
+    if (abs(newtons) >= 1000.0d0) then
+      s = fx(newtons/1000, d) // " kN"
+    else
+      s = fx(newtons, d) // " N"
+    end if
+  end function force
+
   !> Fixed-point number with d decimals (exponent form beyond 1e12, "NaN", "Inf").
   function fx(x, d) result(s)
     double precision, intent(in) :: x
@@ -470,7 +484,7 @@ contains
       stop 3, quiet=.true.
     end if
     check_note = "trim: alpha " // fx(res%trim_alpha_deg, 4) // " deg, elevator " // &
-      fx(res%trim_elevator_deg, 3) // " deg, thrust " // fx(res%trim_thrust_n/1000, 1) // " kN"
+      fx(res%trim_elevator_deg, 3) // " deg, thrust " // force(res%trim_thrust_n, 1)
   end subroutine check_trim
 
   subroutine usage()
