@@ -288,6 +288,7 @@ contains
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, k_induced
     real(dp) :: cm0, cm_alpha, cm_q, cm_de, k_theta, k_q, delta_e_max_deg, cl_alpha_tail, cy_beta_fin
+    real(dp) :: cy_beta, croll_beta, croll_p, croll_r, cn_beta, cn_p, cn_r
     character(len=16) :: dynamics, control
     integer :: u, ios
     logical :: present
@@ -295,15 +296,17 @@ contains
     type(echo_buffer) :: buffer
     namelist /aircraft/ mass, ixx, iyy, izz, wing_area, span, chord, cl0, cl_alpha, cl_de, cd0, &
       k_induced, cm0, cm_alpha, cm_q, cm_de, dynamics, control, k_theta, k_q, delta_e_max_deg, &
-      cl_alpha_tail, cy_beta_fin
-    type(nml_var), parameter :: vars(23) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
+      cl_alpha_tail, cy_beta_fin, cy_beta, croll_beta, croll_p, croll_r, cn_beta, cn_p, cn_r
+    type(nml_var), parameter :: vars(30) = [nml_var("mass", "real"), nml_var("ixx", "real"), &
       nml_var("iyy", "real"), nml_var("izz", "real"), nml_var("wing_area", "real"), nml_var("span", "real"), &
       nml_var("chord", "real"), nml_var("cl0", "real"), nml_var("cl_alpha", "real"), nml_var("cl_de", "real"), &
       nml_var("cd0", "real"), nml_var("k_induced", "real"), nml_var("cm0", "real"), &
       nml_var("cm_alpha", "real"), nml_var("cm_q", "real"), nml_var("cm_de", "real"), &
       nml_var("dynamics", "string", 16), nml_var("control", "string", 16), nml_var("k_theta", "real"), &
       nml_var("k_q", "real"), nml_var("delta_e_max_deg", "real"), &
-      nml_var("cl_alpha_tail", "real"), nml_var("cy_beta_fin", "real")]
+      nml_var("cl_alpha_tail", "real"), nml_var("cy_beta_fin", "real"), nml_var("cy_beta", "real"), &
+      nml_var("croll_beta", "real"), nml_var("croll_p", "real"), nml_var("croll_r", "real"), &
+      nml_var("cn_beta", "real"), nml_var("cn_p", "real"), nml_var("cn_r", "real")]
     associate(a => c%aero)
       mass = c%mass; ixx = c%inertia(1); iyy = c%inertia(2); izz = c%inertia(3)
       wing_area = a%wing_area; span = a%span; chord = a%chord; cl0 = a%cl0; cl_alpha = a%cl_alpha
@@ -311,6 +314,8 @@ contains
       cm_q = a%cm_q; cm_de = a%cm_de; dynamics = c%dynamics; control = c%control
       k_theta = a%k_theta; k_q = a%k_q; delta_e_max_deg = a%delta_e_max*rad2deg
       cl_alpha_tail = a%cl_alpha_tail; cy_beta_fin = a%cy_beta_fin
+      cy_beta = a%cy_beta; croll_beta = a%croll_beta; croll_p = a%croll_p; croll_r = a%croll_r
+      cn_beta = a%cn_beta; cn_p = a%cn_p; cn_r = a%cn_r
     end associate
     call open_group(f, "aircraft", vars, u, present, error)
     if (allocated(error)) return
@@ -344,6 +349,16 @@ contains
     call require_range(f, "aircraft", "cl_alpha_tail", cl_alpha_tail, 0.0_dp, cl_alpha, &
       "1/rad: the tail's share of cl_alpha", error)
     call require_range(f, "aircraft", "cy_beta_fin", cy_beta_fin, -10.0_dp, 0.0_dp, "1/rad", error)
+    ! lateral-directional derivatives: the damping ones <= 0 (a rate that fed
+    ! itself would be a model error), the others of either sign (C_l_beta > 0
+    ! is anhedral, C_n_beta < 0 a directionally unstable airframe)
+    call require_range(f, "aircraft", "cy_beta", cy_beta, -10.0_dp, 0.0_dp, "1/rad", error)
+    call require_range(f, "aircraft", "croll_beta", croll_beta, -10.0_dp, 10.0_dp, "1/rad", error)
+    call require_range(f, "aircraft", "croll_p", croll_p, -10.0_dp, 0.0_dp, "1/rad (roll damping)", error)
+    call require_range(f, "aircraft", "croll_r", croll_r, -10.0_dp, 10.0_dp, "1/rad", error)
+    call require_range(f, "aircraft", "cn_beta", cn_beta, -10.0_dp, 10.0_dp, "1/rad", error)
+    call require_range(f, "aircraft", "cn_p", cn_p, -10.0_dp, 10.0_dp, "1/rad", error)
+    call require_range(f, "aircraft", "cn_r", cn_r, -10.0_dp, 0.0_dp, "1/rad (yaw damping)", error)
     if (allocated(error)) return
     c%mass = mass; c%inertia = [ixx, iyy, izz]; c%dynamics = dynamics; c%control = control
     c%aero%wing_area = wing_area; c%aero%span = span; c%aero%chord = chord; c%aero%cl0 = cl0
@@ -351,6 +366,8 @@ contains
     c%aero%cm0 = cm0; c%aero%cm_alpha = cm_alpha; c%aero%cm_q = cm_q; c%aero%cm_de = cm_de
     c%aero%k_theta = k_theta; c%aero%k_q = k_q; c%aero%delta_e_max = delta_e_max_deg*deg2rad
     c%aero%cl_alpha_tail = cl_alpha_tail; c%aero%cy_beta_fin = cy_beta_fin
+    c%aero%cy_beta = cy_beta; c%aero%croll_beta = croll_beta; c%aero%croll_p = croll_p
+    c%aero%croll_r = croll_r; c%aero%cn_beta = cn_beta; c%aero%cn_p = cn_p; c%aero%cn_r = cn_r
     c%aero%attitude_hold = control == "attitude_hold"
     do while (buffer%another_try())
       write(buffer%lines, nml=aircraft, iostat=buffer%ios)

@@ -64,7 +64,7 @@ BASE = """
   control = '{control}'
   k_theta = 8.0
   k_q = 2.0
-/
+{aircraft_extra}/
 &bay
   ramp_edge_x = -13.0
   floor_y = -2.0
@@ -156,7 +156,7 @@ def rot(t):
 
 def write(tmp_path, name, line=True, gust="", **kw):
     p = dict(t_end=1.0, dt=0.02, rtol="1.0e-9", atol="1.0e-10", alt=10000.0, mach=0.65, mode="calibrate",
-             cl0=0.0, cm0=0.0, control="attitude_hold", release=0.72)
+             cl0=0.0, cm0=0.0, control="attitude_hold", release=0.72, aircraft_extra="")
     p.update(kw)
     nml = tmp_path / f"{name}.nml"
     nml.write_text(BASE.format(**p) + (LINE if line else NO_LINE) + gust)
@@ -329,10 +329,17 @@ def test_gust_response_against_rigid_pitch_plane_reference(airlaunch_exe, tmp_pa
 
 # lateral-directional derivatives (model.md, "Carrier aircraft"), the fin's slope, span
 CYB, CLB, CLP, CLR, CNB, CNP, CNR, CYBF, SPAN = -0.96, -0.221, -0.45, 0.101, 0.150, -0.121, -0.30, -0.677, 51.0
+# another carrier's (&aircraft inputs since the thirty-fifth session; a business-jet-like set
+# of the same order, each term changed): cy_beta, croll_beta, croll_p, croll_r, cn_beta, cn_p, cn_r
+OTHER_LATERAL = {"cy_beta": -0.73, "croll_beta": -0.11, "croll_p": -0.60, "croll_r": 0.16, "cn_beta": 0.127,
+                 "cn_p": -0.008, "cn_r": -0.20}
 
 
-def aero3(rho, vb, om, cl0, cm0, vtail=None):
-    """Body force (without thrust) and moment, six degrees of freedom, stick fixed at zero elevator."""
+def aero3(rho, vb, om, cl0, cm0, vtail=None, lat=None):
+    """Body force (without thrust) and moment, six degrees of freedom, stick fixed at zero elevator;
+    `lat`: the lateral-directional derivatives by their input names (None: the defaults)."""
+    CYB, CLB, CLP, CLR, CNB, CNP, CNR = (globals()[k] for k in ("CYB", "CLB", "CLP", "CLR", "CNB", "CNP", "CNR")) \
+        if lat is None else (lat[k] for k in ("cy_beta", "croll_beta", "croll_p", "croll_r", "cn_beta", "cn_p", "cn_r"))
     v = np.linalg.norm(vb)
     qbar = 0.5 * rho * v * v
     alpha = math.atan2(-vb[1], vb[0])
@@ -361,16 +368,20 @@ def euler_matrix(e):
     return ry @ rz @ rx, rz, rx
 
 
+@pytest.mark.parametrize("lat", [None, OTHER_LATERAL], ids=["747", "other"])
 @pytest.mark.parametrize("pen", [True, False])
-def test_lateral_gust_against_rigid_body_reference(airlaunch_exe, tmp_path, pen):
+def test_lateral_gust_against_rigid_body_reference(airlaunch_exe, tmp_path, pen, lat):
     """A 1 m/s lateral gust (to the right, H = 60 m), stick fixed, no line: the
     aircraft and the locked rocket as one rigid body in six degrees of freedom
     (its inertia tensor with the rocket's offset, Euler angles integrated by
     Eqs. (49)-(50), far from their singularity), the fin's lagged side force
     with penetration.  Tolerance 1e-5 of the yaw and roll ranges (measured
-    1.3e-6); a 1 % change of the fin's slope C_Ybeta,f fails it."""
+    1.3e-6); a 1 % change of the fin's slope C_Ybeta,f fails it.  With another
+    carrier's lateral derivatives given in &aircraft (OTHER_LATERAL; they were
+    the 747's, hard-coded, before the thirty-fifth session) the same."""
+    extra = "".join(f"  {k} = {v}\n" for k, v in (lat or {}).items())
     d = run(airlaunch_exe, tmp_path, "lat", line=False, gust=GUST.format(pen=str(pen).lower()).replace(
-        "vertical", "lateral"), t_end=3.0, dt=0.005, control="stick_fixed", release=2.99)
+        "vertical", "lateral"), t_end=3.0, dt=0.005, control="stick_fixed", release=2.99, aircraft_extra=extra)
     d = d.sel(time=slice(0.0, 2.985))
     rho0, a = us76(10000.0)
     v0 = 0.65 * a
@@ -397,7 +408,7 @@ def test_lateral_gust_against_rigid_body_reference(airlaunch_exe, tmp_path, pen)
         va = vs + np.cross(c @ om, arm)
         vb = c.T @ (va - [0.0, 0.0, gust(ra[0])])
         vt = c.T @ (va - [0.0, 0.0, gust((ra + c @ [*R_TAIL, 0.0])[0])]) if pen else None
-        f, mo = aero3(us76(10000.0 + ra[1])[0], vb, om, cl0, cm0, vt)
+        f, mo = aero3(us76(10000.0 + ra[1])[0], vb, om, cl0, cm0, vt, lat)
         f = f + [thrust, 0.0, 0.0]
         mo = mo + np.cross(-rs, f)
         a_mat = np.column_stack([rx.T @ rz.T @ [0.0, 1.0, 0.0], rx.T @ [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
