@@ -119,7 +119,14 @@ contains
     s_ref = pi*p%diameter**2/4
     x_nose = p%cg_from_nose
     x_tail = p%cg_from_nose - p%length
-    exposed = max(0.0_dp, min(1.0_dp, (x_shield - x_tail)/p%length))
+    ! an edge a length or more ahead of the nose leaves all of it out (the
+    ! quotient below >= 2): taken so, x_shield = huge (free flight) cannot
+    ! overflow it for a rocket under 1 m long
+    if (x_shield >= x_nose + p%length) then
+      exposed = 1.0_dp
+    else
+      exposed = max(0.0_dp, min(1.0_dp, (x_shield - x_tail)/p%length))
+    end if
     if (exposed <= 0.0_dp) return
     penetrating = present(gust) .and. present(r_cg) .and. present(c)
     if (penetrating) penetrating = gust%active
@@ -272,6 +279,11 @@ contains
     end if
     cr = p%fin_root_chord; ct = p%fin_tip_chord; xr = p%fin_sweep
     s_e = (p%cg_from_nose - p%fin_root_le_from_nose) - x_shield   ! the edge, aft of the root's leading edge
+    ! an edge ahead of the fins (s_e <= 0: all out) or aft of them (s_e >=
+    ! their extent max(c_r, x_r + c_t): all in) gives the same e, front and
+    ! chords wherever it is; held within +-extent, free flight's x_shield =
+    ! huge cannot overflow s_e / x_r below (a sweep under 1 m did)
+    s_e = min(max(cr, xr + ct), max(-max(cr, xr + ct), s_e))
     ! the kinks of the exposed chord: where the edge meets the leading edge
     ! (x_r e = s_e) and the trailing edge (c_r + (x_r + c_t - c_r) e = s_e)
     e = [0.0_dp, 1.0_dp, 1.0_dp, 1.0_dp]

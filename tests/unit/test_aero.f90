@@ -12,6 +12,7 @@ program test_aero
   use airlaunch_trim
   use airlaunch_atmosphere
   use testing
+  use, intrinsic :: ieee_exceptions, only: ieee_overflow, ieee_get_flag, ieee_set_flag
   implicit none
   type(aircraft_aero) :: ac
   type(aircraft_aero_out) :: o
@@ -302,6 +303,58 @@ program test_aero
     call check_close(m(3)/f(2), x_cp, "the fin force acts at the exposed part's centre", rel=1e-12_dp)
     call check_close(rk%cg_from_nose - x_cp, 16.5_dp + 1.5_dp + 0.5_dp/4, &
       "a quarter of the root chord out: its centre at the strip's quarter chord", rel=1e-14_dp)
+  end block
+  call section("fins of a smaller rocket far from the ramp edge: no overflow")
+  ! In free flight the scene passes x_shield = huge (nothing shields) and the
+  ! edge's distance in span fractions, s_e / x_r, overflowed for a sweep under
+  ! 1 m (and (s_e - c_r)/(x_r + c_t - c_r) for a chord difference under 1 m):
+  ! harmless in the release build (-inf, clipped to 0), fatal in the checked
+  ! build, which traps overflows - the paper's fins (x_r = 1 m, x_r + c_t - c_r
+  ! = 0) never reached it, their quarter-scale copy did.  Reference: all out,
+  ! the share 1 and Barrowman's centre of pressure; all in, the share 0; and
+  ! no overflow raised.
+  block
+    real(dp) :: share, x_cp, cr, ct, xr, barrowman
+    logical :: overflow
+    integer :: j
+    real(dp), parameter :: planforms(3, 2) = reshape([0.5_dp, 0.25_dp, 0.25_dp, 0.5_dp, 0.3_dp, 0.1_dp], [3, 2])
+    do j = 1, 2
+      rk = rocket_aero(length=4.625_dp, diameter=0.4_dp, cg_from_nose=2.3125_dp)
+      cr = planforms(1, j); ct = planforms(2, j); xr = planforms(3, j)
+      rk%fin_root_chord = cr; rk%fin_tip_chord = ct; rk%fin_sweep = xr
+      rk%fin_root_le_from_nose = rk%length - cr
+      barrowman = rk%fin_root_le_from_nose + xr*(cr + 2*ct)/(3*(cr + ct)) + (cr + ct - cr*ct/(cr + ct))/6
+      rk%x_fin_from_nose = barrowman
+      call ieee_set_flag(ieee_overflow, .false.)
+      call fin_exposure(rk, huge(1.0_dp), share, x_cp)
+      call ieee_get_flag(ieee_overflow, overflow)
+      call check(.not. overflow, "planform " // str(j) // ", all out (x_shield = huge): no overflow")
+      call check_close(share, 1.0_dp, "planform " // str(j) // ", all out: share 1", rel=1e-15_dp)
+      call check_close(rk%cg_from_nose - x_cp, barrowman, "planform " // str(j) // ", all out: Barrowman's centre", &
+        rel=1e-14_dp)
+      call ieee_set_flag(ieee_overflow, .false.)
+      call fin_exposure(rk, -huge(1.0_dp), share, x_cp)
+      call ieee_get_flag(ieee_overflow, overflow)
+      call check(.not. overflow, "planform " // str(j) // ", all in (x_shield = -huge): no overflow")
+      call check_close(share, 0.0_dp, "planform " // str(j) // ", all in: share 0", abs=0.0_dp)
+    end do
+    ! the whole rocket's loads likewise: the exposed length's share,
+    ! (x_shield - x_tail)/length, overflowed for a rocket under 1 m long (a
+    ! 1:20 model of the paper's, 0.925 m).  Reference: the loads with the edge
+    ! one length ahead of the nose, all out as well, bit for bit.
+    block
+      real(dp) :: f_far(3), m_far(3)
+      rk = rocket_aero(length=0.925_dp, diameter=0.08_dp, cg_from_nose=0.4625_dp, cp_pot_from_nose=0.1_dp)
+      call ieee_set_flag(ieee_overflow, .false.)
+      call rocket_aero_eval(rk, 1.0_dp, 300.0_dp, [40.0_dp, -3.0_dp, 1.0_dp], [0.0_dp, 0.2_dp, 0.5_dp], &
+        huge(1.0_dp), f, m)
+      call ieee_get_flag(ieee_overflow, overflow)
+      call check(.not. overflow, "a 0.925 m rocket, all out (x_shield = huge): no overflow")
+      call rocket_aero_eval(rk, 1.0_dp, 300.0_dp, [40.0_dp, -3.0_dp, 1.0_dp], [0.0_dp, 0.2_dp, 0.5_dp], &
+        rk%cg_from_nose + rk%length, f_far, m_far)
+      call check(all(f == f_far) .and. all(m == m_far), "a 0.925 m rocket, all out: the loads of an edge " // &
+        "one length ahead of the nose, bit for bit")
+    end block
   end block
   rk = rocket_aero()
 
