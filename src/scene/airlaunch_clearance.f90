@@ -38,7 +38,7 @@ contains
     p = aircraft%point_position(geom%point)
     a = rocket%point_position(geom%nose)
     b = rocket%point_position(geom%aft)
-    s = nearest(p, a, b)
+    s = segment_fraction(p, a, b)
     q_body = geom%nose + s*(geom%aft - geom%nose)
     d = p - rocket%point_position(q_body)
     rate = 0.0_dp
@@ -49,16 +49,16 @@ contains
   !> Distance of p from the segment [a, b].
   pure real(dp) function segment_distance(p, a, b) result(dist)
     real(dp), intent(in) :: p(3), a(3), b(3)
-    dist = norm2(p - (a + nearest(p, a, b)*(b - a)))
+    dist = norm2(p - (a + segment_fraction(p, a, b)*(b - a)))
   end function segment_distance
 
   !> The parameter s in [0, 1] of the point of [a, b] nearest to p (0 if the
   !> segment is a point, e.g. a geometry left unset).
-  pure real(dp) function nearest(p, a, b) result(s)
+  pure real(dp) function segment_fraction(p, a, b) result(s)
     real(dp), intent(in) :: p(3), a(3), b(3)
     real(dp) :: ab2
     s = 0.0_dp
     ab2 = dot_product(b - a, b - a)
     if (ab2 > 0.0_dp) s = max(0.0_dp, min(1.0_dp, dot_product(p - a, b - a)/ab2))
-  end function nearest
+  end function segment_fraction
 end module airlaunch_clearance
