@@ -39,8 +39,8 @@ def plot_drop(ds, fig):
 
 def _phase_lines(ax, ds):
     ground = f"ground ({ds.attrs.get('ground_body', '')} {ds.attrs.get('ground_point', '')})"
-    for key, label in (("release_time_s", "release"), ("edge_time_s", "Case 1->2"),
-                       ("separation_time_s", "separation"), ("ground_time_s", ground)):
+    for key, label in (("release_time_s", "release (Case 0->1)"), ("edge_time_s", "edge (Case 1->2)"),
+                       ("separation_time_s", "separation (Case 2->3)"), ("ground_time_s", ground)):
         t = float(ds.attrs.get(key, -1.0))
         if t >= 0:
             ax.axvline(t, color="0.5", ls="--", lw=0.8)
@@ -65,10 +65,18 @@ def plot_airlaunch(ds, fig):
     if "rocket_nose_elevation_deg" in ds:
         ax1.plot(t, ds["rocket_nose_elevation_deg"], ":", label="nose elevation [deg]")
     ax1.plot(t, ds["rocket_pitch_rate_deg_s"], label="pitch rate [deg/s]")
+    t_max = float(ds.attrs.get("pitch_max_time_s", -1.0))
+    if t_max >= 0 and "pitch_max_deg" in ds.attrs:
+        # the milestone, an event of the integration: between two records
+        p_max = float(ds.attrs["pitch_max_deg"])
+        ax1.plot([t_max], [p_max], "kv", ms=6, label=f"first pitch maximum {p_max:.1f} deg at {t_max:.2f} s")
     ax1.set_xlabel("time [s]")
+    ax1.set_ylabel("pitch [deg], pitch rate [deg/s]")
     ax1.set_title("rocket pitch (Fig. 9)")
     ax1.grid(True)
-    ax1.legend(fontsize=7)
+    lo, hi = ax1.get_ylim()
+    ax1.set_ylim(lo, hi + 0.25 * (hi - lo))        # room for the legend above the curves
+    ax1.legend(fontsize=7, loc="upper right")
     _phase_lines(ax1, ds)
     ax2 = fig.add_subplot(1, 3, 2, projection="3d")
     for name, style in (("aircraft", "-"), ("rocket", "-"), ("parachute", "--")):
@@ -79,7 +87,7 @@ def plot_airlaunch(ds, fig):
     ax2.set_xlabel("x forward [m]")
     ax2.set_ylabel("z right [m]")
     ax2.set_zlabel("y up [m]")
-    ax2.set_title("3-D track (Fig. 10)")
+    ax2.set_title("3-D track of the CGs (Fig. 10)")
     # equal-ish scaling of the lateral axis (the scenario is symmetric: z ~ 0),
     # reversed: the plot's axes (x, z, y) would otherwise draw the right-handed
     # frame (x forward, y up, z right) mirrored, a drift to the right on the left
@@ -96,11 +104,21 @@ def plot_airlaunch(ds, fig):
     if ground is not None:
         ax3.axhline(ground, color="0.4", lw=1.5)
         ax3.text(ax3.get_xlim()[0], ground, f" ground ({ground:g} m)", va="bottom", fontsize=7, color="0.3")
-    ax3.set_xlabel("x [m]")
-    ax3.set_ylabel("altitude y [m]")
-    ax3.set_title("2-D track (Fig. 11)")
+    ax3.set_xlabel("x forward [m]")
+    ax3.set_ylabel("altitude y up [m]")
+    ax3.set_title("2-D track of the CGs, side view (Fig. 11)")
     ax3.grid(True)
     ax3.legend(fontsize=7)
+
+
+def _end_names(ds):
+    """'end a (fixed)', 'end b (canopy)': each end with its kind from the resolved
+    input the file records (`&line_scene a_kind`, `b_kind`), or without it."""
+    names = []
+    for end in "ab":
+        found = re.search(rf"\b{end}_KIND\s*=\s*[\"']([^\"']*)", str(ds.attrs.get("input_namelist", "")), re.I)
+        names.append(f"end {end} ({found.group(1).strip()})" if found else f"end {end}")
+    return names
 
 
 def plot_line(ds, fig):
@@ -109,20 +127,21 @@ def plot_line(ds, fig):
     platform and canopy - with the touchdown marked."""
     pos = ds["line_node_position"]
     speeds = "line_end_velocity" in ds
+    ends = _end_names(ds)
     ax1 = fig.add_subplot(1, 3 if speeds else 2, 1)
     for k in np.linspace(0, ds.sizes["time"] - 1, 6).astype(int):
         p = pos.isel(time=k)
         ax1.plot(p.sel(xyz=0), p.sel(xyz=1), ".-", ms=2, label=f"t = {float(ds['time'][k]):.2f} s")
-    ax1.set_xlabel("x [m]")
-    ax1.set_ylabel("y [m]")
-    ax1.set_title("line shape")
+    ax1.set_xlabel("x forward [m]")
+    ax1.set_ylabel("y up [m]")
+    ax1.set_title("line shape (nodes) at six records")
     ax1.axis("equal")
     ax1.grid(True)
     ax1.legend(fontsize=7)
     ax2 = fig.add_subplot(1, 3 if speeds else 2, 2)
     ten = ds["line_end_tension"]
     for k in range(ten.shape[-1]):
-        ax2.plot(ds["time"], ten.isel({ten.dims[-1]: k}), label=f"end {'ab'[k] if k < 2 else k}")
+        ax2.plot(ds["time"], ten.isel({ten.dims[-1]: k}), label=ends[k] if k < 2 else f"end {k}")
     if "line_tension" in ds:
         # a snatch's largest load is often inside the line, not at an end
         seg = ds["line_tension"]
@@ -131,7 +150,7 @@ def plot_line(ds, fig):
     if t_peak >= 0 and "peak_tension_N" in ds.attrs:
         # the peak over every step: between two records it can be far above them
         peak = float(ds.attrs["peak_tension_N"])
-        ax2.plot([t_peak], [peak], "kv", ms=6, label=f"peak (every step) {peak:.4g} N at {t_peak:.4g} s")
+        ax2.plot([t_peak], [peak], "kv", ms=6, label=f"peak (every step) {peak / 1e3:.4g} kN at {t_peak:.4g} s")
     ax2.set_xlabel("time [s]")
     ax2.set_ylabel("tension [N]")
     ax2.set_title("end tensions (records) and the peak")
@@ -141,18 +160,18 @@ def plot_line(ds, fig):
         return
     ax3 = fig.add_subplot(1, 3, 3)
     vel = ds["line_end_velocity"]
-    for k, name in enumerate("ab"):
+    for k in range(2):
         v = vel.isel(end=k)
-        ax3.plot(ds["time"], np.sqrt((v ** 2).sum("xyz")), label=f"end {name}: speed")
-        ax3.plot(ds["time"], -v.sel(xyz=1), ":", label=f"end {name}: descent rate")
+        ax3.plot(ds["time"], np.sqrt((v ** 2).sum("xyz")), label=f"{ends[k]}: speed")
+        ax3.plot(ds["time"], -v.sel(xyz=1), ":", label=f"{ends[k]}: descent rate")
     t_ground = float(ds.attrs.get("ground_time_s", -1.0))
     if t_ground >= 0:
         ax3.axvline(t_ground, color="0.5", ls="--", lw=0.8)
         ax3.text(t_ground, ax3.get_ylim()[1], f" touchdown {float(ds.attrs['ground_speed_m_s']):.2f} m/s",
                  rotation=90, va="top", fontsize=7, color="0.3")
     ax3.set_xlabel("time [s]")
-    ax3.set_ylabel("[m/s]")
-    ax3.set_title("end speeds")
+    ax3.set_ylabel("speed, descent rate (-v_y) [m/s]")
+    ax3.set_title("end speeds (earth frame)")
     ax3.grid(True)
     ax3.legend(fontsize=7)
 
@@ -222,7 +241,11 @@ def main(argv):
             return fail(f"{path}: variable {name} is missing (an output written with trajectory = .false., or "
                         "not of this version of airlaunch?)")
         fig.suptitle(f"{ds.attrs.get('title', scene)} ({ds.attrs.get('status', '')})")
-        fig.tight_layout()
+        footer = "; ".join(str(ds.attrs[k]) for k in ("frames", "code_version") if k in ds.attrs)
+        if footer:
+            # the axes' convention (a right-handed earth frame, y up) and the code that ran
+            fig.text(0.5, 0.005, footer, ha="center", va="bottom", fontsize=7, color="0.3")
+        fig.tight_layout(rect=(0, 0.03 if footer else 0, 1, 1))
         return save_figure(fig, out)
 
 
