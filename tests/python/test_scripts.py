@@ -48,3 +48,16 @@ def test_airlaunch_names_itself_once(airlaunch_exe):
     assert res.returncode == 2
     assert "airlaunch: error: no scenario file given" in res.stderr
     assert "airlaunch: error: airlaunch:" not in res.stderr
+
+
+def test_figures_help_lists_every_figure_and_misuse_is_exit_2():
+    """scripts/figures --help (or --list) names every file of docs/figures with its command,
+    without building or running anything; an unknown figure or option is exit 2 before either."""
+    res = run(ROOT / "scripts" / "figures", "--help")
+    assert res.returncode == 0 and res.stderr == "", res.stderr
+    figures = [p.stem for p in (ROOT / "docs" / "figures").glob("*.png")]
+    assert figures and all(f"  {name} " in res.stdout for name in figures), res.stdout
+    for args, message in ((("--only", "no_such_figure"), "no figure no_such_figure"),
+                          (("--no-such-option",), "unknown argument --no-such-option")):
+        res = run(ROOT / "scripts" / "figures", *args)
+        assert res.returncode == 2 and message in res.stderr, (res.returncode, res.stderr)
