@@ -38,7 +38,7 @@ program airlaunch
   use airlaunch_blas_threads, only: use_one_blas_thread
   use airlaunch_path, only: file_lock, lock_held_elsewhere, ignore_file_size_signal, command_argument
   use airlaunch_interrupt, only: catch_interrupts
-  use airlaunch_sweep_files, only: write_bytes
+  use airlaunch_sweep_files, only: write_line
   use airlaunch_runtime_env, only: runtime_env, query_runtime_env
   implicit none
   type(nml_file) :: f
@@ -222,14 +222,7 @@ contains
   subroutine say(text, newline)
     character(len=*), intent(in) :: text
     logical, intent(in), optional :: newline
-    logical :: nl
-    nl = .true.
-    if (present(newline)) nl = newline
-    if (nl) then
-      call write_bytes(1, text // new_line("a"), stdout_error)
-    else
-      call write_bytes(1, text, stdout_error)
-    end if
+    call write_line(1, text, stdout_error, newline)
   end subroutine say
 
   !> A line that did not reach the standard output: one line on stderr saying

@@ -23,7 +23,7 @@ program airlaunch_sweep
   use airlaunch_strings, only: str, fixed, escaped
   use airlaunch_version, only: code_version, code_digest, sundials_build
   use airlaunch_sweep_definition, only: sweep_definition
-  use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_bytes, make_temp_file
+  use airlaunch_sweep_files, only: delete_file, remove_case_files, lock_file, write_line, make_temp_file
   use airlaunch_path, only: ignore_file_size_signal, path_kind, kind_regular, command_argument
   use airlaunch_sweep_case, only: run_case, run_trajectory, case_namelist
   use airlaunch_sweep_row, only: sweep_row, status_ok, status_failed, status_invalid
@@ -548,14 +548,7 @@ contains
   subroutine say(text, newline)
     character(len=*), intent(in) :: text
     logical, intent(in), optional :: newline
-    logical :: nl
-    nl = .true.
-    if (present(newline)) nl = newline
-    if (nl) then
-      call write_bytes(1, text // new_line("a"), stdout_error)
-    else
-      call write_bytes(1, text, stdout_error)
-    end if
+    call write_line(1, text, stdout_error, newline)
   end subroutine say
 
   !> "1 h 02 min", "3 min 07 s", "12 s"; "?" if unknown.

@@ -88,21 +88,21 @@ static openblas_query openblas_entry(const char *name) {
   return strcmp(name, "openblas_get_corename") == 0 ? openblas_get_corename : openblas_get_config;
 }
 
-void airlaunch_env_blas_library(char *buf, int len) { object_of(dgemm_, buf, len); }
+static void env_blas_library(char *buf, int len) { object_of(dgemm_, buf, len); }
 
-void airlaunch_env_lapack_library(char *buf, int len) { object_of(dgetrf_, buf, len); }
+static void env_lapack_library(char *buf, int len) { object_of(dgetrf_, buf, len); }
 
-void airlaunch_env_blas_core(char *buf, int len) {
+static void env_blas_core(char *buf, int len) {
   openblas_query entry = openblas_entry("openblas_get_corename");
   copy_out(entry != NULL ? entry() : "unknown", buf, len);
 }
 
-void airlaunch_env_blas_config(char *buf, int len) {
+static void env_blas_config(char *buf, int len) {
   openblas_query entry = openblas_entry("openblas_get_config");
   copy_out(entry != NULL ? entry() : "unknown", buf, len);
 }
 
-void airlaunch_env_lapack_version(char *buf, int len) {
+static void env_lapack_version(char *buf, int len) {
   int major = 0, minor = 0, patch = 0;
   char text[64];
   if (ilaver_ == NULL) {
@@ -114,7 +114,7 @@ void airlaunch_env_lapack_version(char *buf, int len) {
   copy_out(text, buf, len);
 }
 
-void airlaunch_env_sundials_version(char *buf, int len) {
+static void env_sundials_version(char *buf, int len) {
   char text[64];
   if (SUNDIALSGetVersion(text, (int)sizeof text) != 0) {
     copy_out("unknown", buf, len);
@@ -125,7 +125,7 @@ void airlaunch_env_sundials_version(char *buf, int len) {
 
 /* The first "model name" of /proc/cpuinfo (x86 and some ARM kernels write
    it); "unknown" without it.  Read to that line only. */
-void airlaunch_env_cpu_model(char *buf, int len) {
+static void env_cpu_model(char *buf, int len) {
   FILE *f = fopen("/proc/cpuinfo", "r");
   char line[512];
   copy_out("unknown", buf, len);
@@ -149,7 +149,7 @@ void airlaunch_env_cpu_model(char *buf, int len) {
 /* The processor's vendor and the features by which libgfortran's MATMUL (and
    OpenBLAS, unless forced) choose their code: "AMD avx512f avx2 fma avx
    sse4_2"; "unknown" off x86-64. */
-void airlaunch_env_cpu_features(char *buf, int len) {
+static void env_cpu_features(char *buf, int len) {
 #if defined(__x86_64__) && defined(__GNUC__)
   char text[160];
   __builtin_cpu_init();
@@ -172,7 +172,7 @@ void airlaunch_env_cpu_features(char *buf, int len) {
    FMA4, AVX or SSE2 ones otherwise): "glibc 2.36 (usable: fma avx2 avx)".
    GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA removes the first two (and
    changes the paper scenario's bits: docs/validation.md). */
-void airlaunch_env_libm(char *buf, int len) {
+static void env_libm(char *buf, int len) {
   char text[160];
 #if defined(__GLIBC__)
   snprintf(text, sizeof text, "glibc %s", gnu_get_libc_version());
@@ -188,4 +188,19 @@ void airlaunch_env_libm(char *buf, int len) {
   }
 #endif
   copy_out(text, buf, len);
+}
+
+/* The one entry point of the Fortran side (airlaunch_runtime_env's
+   query_runtime_env): value `which` of its env_names, 1 cpu_model ...
+   9 sundials_version, into buf(1:len), NUL-ended ("unknown" for another). */
+void airlaunch_env_query(int which, char *buf, int len) {
+  typedef void (*query)(char *, int);
+  static const query queries[] = {env_cpu_model,      env_cpu_features,   env_blas_library,
+                                  env_blas_core,      env_blas_config,    env_lapack_library,
+                                  env_lapack_version, env_libm,           env_sundials_version};
+  if (which < 1 || which > (int)(sizeof queries / sizeof queries[0])) {
+    copy_out("unknown", buf, len);
+    return;
+  }
+  queries[which - 1](buf, len);
 }

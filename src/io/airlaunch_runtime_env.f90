@@ -40,71 +40,16 @@ module airlaunch_runtime_env
     procedure :: report => env_report
   end type runtime_env
 
-  abstract interface
-    !> A query of airlaunch_runtime_env.c: its answer into buf(1:len), NUL-ended.
-    subroutine c_query(buf, len) bind(C)
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine c_query
-  end interface
-
   interface
-    subroutine env_cpu_model(buf, len) bind(C, name="airlaunch_env_cpu_model")
+    !> Value `which` (1 ... 9, the order of env_names) of
+    !> airlaunch_runtime_env.c into buf(1:len), NUL-ended.
+    subroutine env_query(which, buf, len) bind(C, name="airlaunch_env_query")
       import :: c_char, c_int
       implicit none
+      integer(c_int), value, intent(in) :: which
       character(kind=c_char), intent(out) :: buf(*)
       integer(c_int), value, intent(in) :: len
-    end subroutine env_cpu_model
-    subroutine env_cpu_features(buf, len) bind(C, name="airlaunch_env_cpu_features")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_cpu_features
-    subroutine env_blas_library(buf, len) bind(C, name="airlaunch_env_blas_library")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_blas_library
-    subroutine env_blas_core(buf, len) bind(C, name="airlaunch_env_blas_core")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_blas_core
-    subroutine env_blas_config(buf, len) bind(C, name="airlaunch_env_blas_config")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_blas_config
-    subroutine env_lapack_library(buf, len) bind(C, name="airlaunch_env_lapack_library")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_lapack_library
-    subroutine env_lapack_version(buf, len) bind(C, name="airlaunch_env_lapack_version")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_lapack_version
-    subroutine env_libm(buf, len) bind(C, name="airlaunch_env_libm")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_libm
-    subroutine env_sundials_version(buf, len) bind(C, name="airlaunch_env_sundials_version")
-      import :: c_char, c_int
-      implicit none
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_int), value, intent(in) :: len
-    end subroutine env_sundials_version
+    end subroutine env_query
   end interface
 
 contains
@@ -115,15 +60,10 @@ contains
   function query_runtime_env(with_mpi) result(env)
     logical, intent(in), optional :: with_mpi   !< add mpi_library (default: no)
     type(runtime_env) :: env
-    env%values(1) = from_c(env_cpu_model)
-    env%values(2) = from_c(env_cpu_features)
-    env%values(3) = from_c(env_blas_library)
-    env%values(4) = from_c(env_blas_core)
-    env%values(5) = from_c(env_blas_config)
-    env%values(6) = from_c(env_lapack_library)
-    env%values(7) = from_c(env_lapack_version)
-    env%values(8) = from_c(env_libm)
-    env%values(9) = from_c(env_sundials_version)
+    integer :: k
+    do k = 1, 9
+      env%values(k) = from_c(k)
+    end do
     env%values(10) = hdf5_version()
     if (present(with_mpi)) then
       if (with_mpi) then
@@ -133,14 +73,15 @@ contains
     end if
   end function query_runtime_env
 
-  !> A C query's answer as Fortran text (blank-padded; "unknown" if empty).
-  function from_c(query) result(text)
-    procedure(c_query) :: query
+  !> Value `which` of the C queries as Fortran text (blank-padded; "unknown"
+  !> if empty).
+  function from_c(which) result(text)
+    integer, intent(in) :: which   !< 1 ... 9, the order of env_names
     character(len=value_len) :: text
     character(kind=c_char) :: buf(value_len + 1)
     integer :: i
     buf = c_null_char
-    call query(buf, int(size(buf), c_int))
+    call env_query(int(which, c_int), buf, int(size(buf), c_int))
     text = ""
     do i = 1, value_len
       if (buf(i) == c_null_char) exit

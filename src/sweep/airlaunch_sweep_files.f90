@@ -11,7 +11,7 @@ module airlaunch_sweep_files
   implicit none
   private
   public :: read_text_file, write_text_file, replace_text_file, make_dir, file_exists, delete_file, rename_file
-  public :: open_for_writing, write_bytes, close_file, remove_case_files, lock_file, make_temp_file
+  public :: open_for_writing, write_bytes, write_line, close_file, remove_case_files, lock_file, make_temp_file
 
   !> Length of the C library's message buffer.
   integer, parameter :: msg_len = 256
@@ -149,6 +149,25 @@ contains
     if (c_file_write(int(fd, c_int), text, int(len(text), c_long), msg, int(msg_len, c_int)) /= 0) &
       call fatal_error(error, c_message(msg))
   end subroutine write_bytes
+
+  !> Write `text` and a new line to `fd` (`text` as it is with newline =
+  !> .false.: it ends its own lines); the programs' printing by write(2), which
+  !> reports what gfortran's buffered unit 6 drops (a full disk, a closed
+  !> descriptor).
+  subroutine write_line(fd, text, error, newline)
+    integer, intent(in) :: fd                             !< 1: the standard output
+    character(len=*), intent(in) :: text                  !< the line
+    type(error_type), allocatable, intent(inout) :: error !< set if a byte is not written (kept: the first)
+    logical, intent(in), optional :: newline              !< add the new line (default: yes)
+    logical :: nl
+    nl = .true.
+    if (present(newline)) nl = newline
+    if (nl) then
+      call write_bytes(fd, text // new_line("a"), error)
+    else
+      call write_bytes(fd, text, error)
+    end if
+  end subroutine write_line
 
   !> A new empty file of a unique name in `dir`: prefix, six random
   !> characters, suffix (mkstemps; created exclusively, mode 0600).
