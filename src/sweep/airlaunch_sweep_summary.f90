@@ -42,8 +42,10 @@ contains
     integer :: k, n, j
     integer, allocatable :: ibuf(:)
     real(dp), allocatable :: rbuf(:)
-    integer :: maxlen
     character(len=16), allocatable :: used(:)   !< the rows' distinct tags, in case order
+    integer, allocatable :: ends(:)
+    integer :: total
+    character(len=:), allocatable :: messages
 
     n = size(rows)
     if (any(rows%id /= [(k, k = 0, n - 1)])) then
@@ -71,18 +73,21 @@ contains
     call w%add_int_var_1d("status", ["case"], ibuf, "1", "case status", error)
     call w%add_int_att("status", "flag_values", [status_ok, status_failed, status_invalid], error)
     call w%add_text_att("status", "flag_meanings", "ok failed invalid_input", error)
-    maxlen = 1
+    ! the messages one after the other (no array padded to the longest: n times its length)
+    allocate(ends(n))
+    total = 0
     do k = 1, n
-      if (allocated(rows(k)%message)) maxlen = max(maxlen, len(rows(k)%message))
+      if (allocated(rows(k)%message)) total = total + len_trim(rows(k)%message)
+      ends(k) = total
     end do
-    block
-      character(len=maxlen) :: messages(n)
-      do k = 1, n
-        messages(k) = ""
-        if (allocated(rows(k)%message)) messages(k) = rows(k)%message
-      end do
-      call w%add_string_var_1d("failure", "case", messages, "failure message (empty if status = ok)", error)
-    end block
+    allocate(character(len=total) :: messages)
+    total = 0
+    do k = 1, n
+      if (ends(k) > total) messages(total+1:ends(k)) = rows(k)%message
+      total = ends(k)
+    end do
+    call w%add_ragged_string_var_1d("failure", "case", messages, ends, "failure message (empty if status = ok)", &
+      error)
     associate(m => base%metrics)
       do k = 1, m%size()
         rbuf = [(rows(j)%metrics(k), j = 1, n)]
