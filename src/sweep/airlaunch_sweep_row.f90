@@ -288,7 +288,7 @@ contains
     integer, intent(in) :: n_want           !< metrics of the sweep's scene
     type(sweep_row), intent(out) :: row     !< the row (if ok)
     logical, intent(out) :: ok              !< the line is a complete row
-    integer :: p, q, i, ios, n
+    integer :: p, q, i, ios, n, first
     integer(i8) :: sum_want
     character(len=:), allocatable :: body
     ok = .false.
@@ -298,32 +298,41 @@ contains
     if (ios /= 0) return
     body = line(10:len_trim(line))
     if (adler32(body) /= sum_want) return
+    ! one list-directed read for the id and status, one for the count and one
+    ! for the metrics: a read statement per value cost 25 us a row, the most of a resume's or
+    ! a summary's journal reading (50 000 rows: 2.5 s, read twice)
     p = 1
-    call next_token(body, p, q)
-    read(body(p:q), *, iostat=ios) row%id
+    do i = 1, 2
+      call next_token(body, p, q)
+      if (q < p) return
+      p = q + 1
+    end do
+    read(body(1:q), *, iostat=ios) row%id, row%status
     if (ios /= 0) return
-    p = q + 1
+    ! the environment's tag (airlaunch_sweep_journal's environments.txt)
     call next_token(body, p, q)
-    read(body(p:q), *, iostat=ios) row%status
-    if (ios /= 0) return
-    p = q + 1
-    call next_token(body, p, q)
+    if (q < p) return
     if (body(p:q) /= "-") then
       if (q - p + 1 /= 16 .or. verify(body(p:q), "0123456789abcdefABCDEF") /= 0) return
       row%environment = body(p:q)
     end if
     p = q + 1
     call next_token(body, p, q)
+    if (q < p) return
     read(body(p:q), *, iostat=ios) n
     if (ios /= 0 .or. n /= n_want) return
+    p = q + 1
     allocate(row%metrics(n))
+    first = q + 1
     do i = 1, n
-      p = q + 1
       call next_token(body, p, q)
       if (q < p) return
-      read(body(p:q), *, iostat=ios) row%metrics(i)
-      if (ios /= 0) return
+      p = q + 1
     end do
+    if (n > 0) then
+      read(body(first:q), *, iostat=ios) row%metrics
+      if (ios /= 0) return
+    end if
     row%message = ""
     if (q + 2 <= len(body)) row%message = body(q+2:)
     ok = row%id >= 0 .and. row%status >= status_ok .and. row%status <= status_invalid
