@@ -204,8 +204,8 @@ def choose_bandwidth(points, passed, candidates=None, max_points=2000):
     return best
 
 
-#: Most kernel weights held at once by pass_probability_map: grid points times
-#: cases per chunk (a few float64 arrays of this size: about 100 MB).
+#: Most kernel factors held at once by pass_probability_map: grid levels times
+#: cases per chunk (two float64 arrays of this size: about 64 MB).
 MAP_CHUNK_ELEMENTS = 4_000_000
 
 
@@ -217,10 +217,13 @@ def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None, chunk_elements
     The 0.5 level of prob is the estimated boundary of the safe region; when
     other inputs vary too, it is the boundary of the probability averaged over them.
 
-    The grid is evaluated in chunks of grid points, each against every case, so
-    the memory is about 3 x 8 x chunk_elements bytes (not n_grid^2 x n x 16: 18 GB
-    at 1e5 cases); each grid point's value is the same sum over all cases as in
-    one piece.
+    The Gaussian kernel of the plane is the product of one per axis,
+    exp(-(dx^2 + dy^2) / 2h^2) = exp(-dx^2 / 2h^2) exp(-dy^2 / 2h^2), so the
+    sums over the cases at every grid point are two matrix products of the
+    per-axis factors (n_grid x n each): 2 n_grid n exponentials, not
+    n_grid^2 n (81 times fewer: 50 000 cases took 2.7 s per pair of inputs).
+    The cases are taken in chunks of chunk_elements / n_grid, so the memory is
+    about 2 x 8 x chunk_elements bytes whatever their number.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -230,19 +233,20 @@ def pass_probability_map(x, y, passed, n_grid=81, bandwidth=None, chunk_elements
     pts = np.stack([_normalise(x, lo[0], hi[0]), _normalise(y, lo[1], hi[1])], axis=1)
     h = bandwidth if bandwidth is not None else choose_bandwidth(pts, passed)
     u = np.linspace(0.0, 1.0, n_grid)
-    gu, gv = np.meshgrid(u, u)
-    grid = np.stack([gu.ravel(), gv.ravel()], axis=1)
     yv = passed.astype(float)
-    prob = np.empty(len(grid))
-    step = max(1, int(chunk_elements) // max(1, len(pts)))
-    for start in range(0, len(grid), step):
-        g = grid[start:start + step]
-        d2 = (g[:, None, 0] - pts[None, :, 0]) ** 2 + (g[:, None, 1] - pts[None, :, 1]) ** 2
-        w = np.exp(-0.5 * d2 / h**2)
-        prob[start:start + step] = (w @ yv) / np.maximum(w.sum(axis=1), 1e-300)
+    num = np.zeros((n_grid, n_grid))   # [j, i]: sum of kernel x pass at (u[i], u[j])
+    den = np.zeros((n_grid, n_grid))   # [j, i]: sum of kernel
+    step = max(1, int(chunk_elements) // n_grid)
+    for start in range(0, len(pts), step):
+        p = pts[start:start + step]
+        kx = np.exp(-0.5 * (u[:, None] - p[None, :, 0]) ** 2 / h**2)   # [i, case]
+        ky = np.exp(-0.5 * (u[:, None] - p[None, :, 1]) ** 2 / h**2)   # [j, case]
+        num += (ky * yv[start:start + step]) @ kx.T
+        den += ky @ kx.T
+    prob = num / np.maximum(den, 1e-300)
     gx = lo[0] + u * (hi[0] - lo[0])
     gy = lo[1] + u * (hi[1] - lo[1])
-    return gx, gy, prob.reshape(n_grid, n_grid), h
+    return gx, gy, prob, h
 
 
 def worst_cases(env: xr.Dataset, k=10):
