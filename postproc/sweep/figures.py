@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import itertools
+import math
 import pathlib
 import textwrap
 
@@ -20,6 +21,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.collections import PathCollection  # noqa: E402
 
 from .envelope import envelope_name, pass_probability_map, worst_case_table  # noqa: E402
 from .sensitivity import by_importance, significant  # noqa: E402
@@ -27,6 +29,45 @@ from .files import write_atomic  # noqa: E402
 from .stamp import FIGURE_FILES  # noqa: E402
 
 PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
+
+#: Largest fraction of a panel that its markers may cover together (discs of
+#: area pi/4 s): past it the points merge into one colour (20 000 cases hid the
+#: P(pass) shading, and the failures, drawn last, looked many times as many as
+#: they were).  Smaller sweeps keep the markers' own sizes.
+MARKER_COVER = 0.3
+#: The smallest marker size (points^2): still a dot at 110 dpi.
+MIN_MARKER_SIZE = 0.25
+#: Up to this many cases in a panel its legend goes where it hides the fewest
+#: (matplotlib's loc="best": a search over every point, 0.8 s a panel at 50 000
+#: cases); with more it goes to the upper right corner.
+LEGEND_BEST_MAX_CASES = 5000
+
+
+def fit_markers(fig):
+    """After the layout: shrink each panel's scatter markers (by one factor)
+    so that together, as discs of area pi/4 s, they cover at most
+    MARKER_COVER of the panel, none below MIN_MARKER_SIZE.  The legends keep
+    the markers' full sizes (their handles were made before)."""
+    width, height = fig.get_size_inches() * 72.0
+    for ax in fig.axes:
+        dots = [c for c in ax.collections if isinstance(c, PathCollection) and len(c.get_offsets())]
+        if not dots:
+            continue
+        pos = ax.get_position()
+        area = pos.width * width * pos.height * height
+        sizes = [np.broadcast_to(c.get_sizes(), (len(c.get_offsets()),)) for c in dots]
+        total = math.pi / 4.0 * sum(float(np.sum(v)) for v in sizes)
+        smallest = min(float(np.min(v)) for v in sizes)
+        scale = min(1.0, max(MIN_MARKER_SIZE / smallest, MARKER_COVER * area / total))
+        if scale < 1.0:
+            for c in dots:
+                c.set_sizes(c.get_sizes() * scale)
+
+
+def case_legend(ax, n):
+    """The panel's legend, placed by matplotlib's search up to
+    LEGEND_BEST_MAX_CASES cases, else in the upper right corner."""
+    ax.legend(fontsize=7, loc="best" if n <= LEGEND_BEST_MAX_CASES else "upper right")
 
 
 def _label(env, name):
@@ -116,7 +157,7 @@ def _draw_passfail(fig, axes, env, pairs, criterion, ok, passed):
             ax.set_xlabel(_label(env, a))
             ax.set_xlim(*_padded(x))
             ax.set_yticks([])
-            ax.legend(fontsize=7, loc="best")
+            case_legend(ax, len(x))
             continue
         y = env[b].values
         if np.ptp(x) > 0 and np.ptp(y) > 0:
@@ -139,11 +180,12 @@ def _draw_passfail(fig, axes, env, pairs, criterion, ok, passed):
         ax.set_ylabel(_label(env, b))
         ax.set_xlim(*_padded(x))
         ax.set_ylim(*_padded(y))
-        ax.legend(fontsize=7, loc="best")
+        case_legend(ax, len(x))
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
     name = envelope_name(str(env.attrs.get("scene", "airlaunch")))
     title_over_panels(fig, f"{name} ({criterion}): {int(passed.sum())} of {passed.size} cases pass")
+    fit_markers(fig)
 
 
 def margins(env, path):
@@ -170,6 +212,7 @@ def margins(env, path):
                 ax.tick_params(labelsize=7)
         title_over_panels(fig, "margins against each input (>= 0 passes; cases not computed, or whose metric "
                                "is NaN, have no margin and are not drawn)")
+        fit_markers(fig)
         fig.savefig(path, dpi=110, format="png")
     finally:
         plt.close(fig)   # also when drawing or writing fails
