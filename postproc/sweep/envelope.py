@@ -180,16 +180,27 @@ def _normalise(v, lo, hi):
     return (v - lo) / (hi - lo) if hi > lo else np.zeros_like(v)
 
 
+def bandwidth_subset(n, max_points=2000):
+    """Indices (ascending) of the cases the bandwidth is chosen on: all n, or
+    max_points of them drawn at random without replacement, with a fixed seed
+    (the same sweep draws the same map).  Every k-th case instead aliased with
+    the designs' own order: a scrambled Sobol sweep of 2^17 cases (k = 66) kept
+    its second input in one half of its range, of 2^18 two inputs; a grid of
+    4500 cases whose last input has 3 levels (k = 3), that input at one level."""
+    if n <= max_points:
+        return np.arange(n)
+    return np.sort(np.random.default_rng(0).choice(n, size=max_points, replace=False))
+
+
 def choose_bandwidth(points, passed, candidates=None, max_points=2000):
     """Bandwidth (in normalised units) maximising the leave-one-out Bernoulli
-    likelihood (on an evenly strided subset of at most max_points points)."""
+    likelihood (on a random subset of at most max_points points, bandwidth_subset)."""
     if candidates is None:
         # from about the mean spacing of the points (below it the estimate
         # follows single points) to half the box (nearly flat)
         candidates = np.geomspace(max(0.6 / math.sqrt(len(points)), 0.01), 0.5, 14)
-    if len(points) > max_points:
-        step = int(math.ceil(len(points) / max_points))
-        points, passed = points[::step], passed[::step]
+    keep = bandwidth_subset(len(points), max_points)
+    points, passed = points[keep], passed[keep]
     d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
     y = passed.astype(float)
     best, best_ll = candidates[0], -np.inf

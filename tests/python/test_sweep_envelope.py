@@ -375,3 +375,28 @@ def test_the_figures_record_knows_a_file_by_its_stat_or_its_bytes(tmp_path):
     assert not stamp.unchanged(f, record, "summary")
     # without the stat (a record of before), the bytes decide
     assert stamp.unchanged(f, {"summary_sha256": stamp.sha256(f)}, "summary")
+
+
+@pytest.mark.parametrize("design", ["sobol 2^17", "sobol 2^18", "grid 1500 x 3"])
+def test_bandwidth_subset_spans_every_input(design):
+    """The bandwidth is chosen on at most 2000 cases.  Every k-th case (the
+    earlier subset) aliased with the design's order: a scrambled Sobol sweep of
+    2^17 cases (k = 66) kept its second input in [0.5, 1), of 2^18 (k = 132)
+    its first in [0, 0.5) too; a grid whose last input has 3 levels (k = 3)
+    kept that input at one level.  The random subset spans every input: both
+    halves of each Sobol input hold 40-60 % of it (binomial sd 1.1 %), and the
+    grid's last input keeps its 3 levels."""
+    from postproc.sweep.envelope import bandwidth_subset
+
+    if design.startswith("sobol"):
+        m = int(design.split("^")[1])
+        u = qmc.Sobol(3, scramble=True, rng=5).random_base2(m)
+        keep = bandwidth_subset(len(u))
+        assert len(keep) == 2000 and len(np.unique(keep)) == 2000
+        low_half = (u[keep] < 0.5).mean(axis=0)
+        assert np.all((low_half > 0.4) & (low_half < 0.6)), f"share of each input below 0.5: {low_half}"
+    else:
+        levels = np.tile(np.arange(3), 1500)   # the last input varies fastest
+        keep = bandwidth_subset(len(levels))
+        assert set(levels[keep]) == {0, 1, 2}
+    assert np.array_equal(bandwidth_subset(1500), np.arange(1500))   # a small sweep: every case
