@@ -13,7 +13,7 @@ module airlaunch_launch_history
   use airlaunch_cut_joint, only: phase_free, phase_name
   use airlaunch_strings, only: str
   use airlaunch_launch_loads, only: launch_loads
-  use airlaunch_clearance, only: clearance_geometry, clearance, segment_distance
+  use airlaunch_clearance, only: clearance_geometry, clearance, segment_distance, set_fins
   use airlaunch_atmosphere, only: isa, air_state
   use airlaunch_gust, only: air_relative_velocity
   implicit none
@@ -184,15 +184,19 @@ contains
     end select
   end function sample_launch
 
-  !> The empennage point (aircraft axes) and the rocket's axis (rocket axes) of
+  !> The tail (aircraft axes: the empennage point and the tailplane's half
+  !> span) and the rocket's surface (rocket axes: its axis, radius and fins) of
   !> the clearance milestone.
   pure function clearance_geometry_of(cfg) result(geom)
     type(scenario_config), intent(in) :: cfg
     type(clearance_geometry) :: geom
     geom%point = [cfg%bay%tail_x, cfg%bay%tail_y, 0.0_dp]
+    geom%half_span = cfg%bay%tail_half_span
     geom%nose = [cfg%rocket%aero%cg_from_nose, 0.0_dp, 0.0_dp]
     geom%aft = [cfg%rocket%aero%cg_from_nose - cfg%rocket%aero%length, 0.0_dp, 0.0_dp]
     geom%radius = cfg%rocket%aero%diameter/2
+    call set_fins(geom, cfg%rocket%fin_count, cfg%rocket%aero%cg_from_nose - cfg%rocket%fin_root_le_from_nose, &
+      cfg%rocket%fin_root_chord, cfg%rocket%fin_tip_chord, cfg%rocket%fin_sweep, cfg%rocket%fin_semi_span)
   end function clearance_geometry_of
 
   !> Euler pitch rate of the rocket (body 1 of `sep`) [rad/s], free of the
@@ -391,7 +395,8 @@ contains
       call w%add_var_1d("lock_force_N", ["time"], self%lock(1:nrec), "N", &
         "Case 0: force of the lock (tie-down) on the rocket along the exit direction (0 after release)", werr)
       call w%add_var_1d("clearance_m", ["time"], self%clearance(1:nrec), "m", &
-        "distance from the rocket's surface to the aircraft's empennage (&bay tail_x, tail_y)", werr)
+        "distance from the rocket's surface (body cylinder and fins) to the aircraft's horizontal tail " // &
+        "(&bay tail_x, tail_y, tail_half_span)", werr)
       call w%add_var_1d("edge_clearance_m", ["time"], self%edge_clearance(1:nrec), "m", &
         "distance from the rocket's surface to the ramp edge after separation (0 before)", werr)
       call w%add_var_1d("constraint_residual_m", ["time"], self%residual(1:nrec), "m", &

@@ -95,6 +95,7 @@ module airlaunch_scenario_config
     character(len=16) :: edge_contact = "one_sided"  !< Case 2 contact: "one_sided" or "bilateral"
     real(dp) :: tail_x = -24.0_dp        !< empennage point (horizontal tail), aircraft axes [m]
     real(dp) :: tail_y = 6.0_dp
+    real(dp) :: tail_half_span = 0.0_dp  !< the horizontal tail's half span across z, for the clearance [m]
     !> the rail's angle to the aircraft's body x axis, nose up (the rocket lies
     !> on it nose up; the rail line passes through the ramp edge) [rad]
     real(dp) :: rail_angle = 0.0_dp
@@ -381,7 +382,7 @@ contains
     character(len=:), allocatable, intent(inout) :: echo
     type(error_type), allocatable, intent(inout) :: error
     real(dp) :: ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, tail_x, tail_y
-    real(dp) :: rail_angle_deg
+    real(dp) :: rail_angle_deg, tail_half_span
     character(len=16) :: edge_contact
     character(len=8) :: l0_from
     integer :: u, ios
@@ -389,8 +390,9 @@ contains
     character(len=256) :: msg
     type(echo_buffer) :: buffer
     namelist /bay/ ramp_edge_x, floor_y, length, width, height, friction, release_time, l0, l0_from, &
-      edge_contact, tail_x, tail_y, rail_angle_deg
-    type(nml_var), parameter :: vars(13) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), &
+      edge_contact, tail_x, tail_y, tail_half_span, rail_angle_deg
+    type(nml_var), parameter :: vars(14) = [nml_var("tail_x", "real"), nml_var("tail_y", "real"), &
+      nml_var("tail_half_span", "real"), &
       nml_var("ramp_edge_x", "real"), nml_var("floor_y", "real"), &
       nml_var("length", "real"), nml_var("width", "real"), nml_var("height", "real"), &
       nml_var("friction", "real"), nml_var("release_time", "real"), nml_var("l0", "real"), &
@@ -399,6 +401,7 @@ contains
     height = c%height; friction = c%friction; release_time = c%release_time; l0 = c%l0_given
     l0_from = c%l0_from
     edge_contact = c%edge_contact; tail_x = c%tail_x; tail_y = c%tail_y
+    tail_half_span = c%tail_half_span
     rail_angle_deg = c%rail_angle*rad2deg
     call open_group(f, "bay", vars, u, present, error)
     if (allocated(error)) return
@@ -415,6 +418,7 @@ contains
     call require_positive(f, "bay", "height", height, "m", error)
     call require_range(f, "bay", "friction", friction, 0.0_dp, 1.0_dp, "", error)
     call require_nonnegative(f, "bay", "release_time", release_time, "s", error)
+    call require_range(f, "bay", "tail_half_span", tail_half_span, 0.0_dp, 100.0_dp, "m", error)
     call require_positive(f, "bay", "l0", l0, "m", error)
     call require_choice(f, "bay", "l0_from", l0_from, [character(len=8) :: "cg", "tail"], error)
     call require_choice(f, "bay", "edge_contact", edge_contact, [character(len=16) :: "one_sided", "bilateral"], error)
@@ -423,7 +427,8 @@ contains
     if (allocated(error)) return
     c = bay_config(ramp_edge_x=ramp_edge_x, floor_y=floor_y, length=length, width=width, height=height, &
       friction=friction, release_time=release_time, l0=l0, l0_from=l0_from, l0_given=l0, &
-      edge_contact=edge_contact, tail_x=tail_x, tail_y=tail_y, rail_angle=rail_angle_deg*deg2rad)
+      edge_contact=edge_contact, tail_x=tail_x, tail_y=tail_y, &
+      tail_half_span=tail_half_span, rail_angle=rail_angle_deg*deg2rad)
     do while (buffer%another_try())
       write(buffer%lines, nml=bay, iostat=buffer%ios)
     end do
