@@ -26,6 +26,7 @@ from matplotlib.collections import PathCollection  # noqa: E402
 from .envelope import envelope_name, pass_probability_map, worst_case_table  # noqa: E402
 from .sensitivity import by_importance, significant  # noqa: E402
 from .files import write_atomic  # noqa: E402
+from .labels import input_label, margin_label  # noqa: E402
 from .stamp import FIGURE_FILES  # noqa: E402
 
 PASS_COLOUR, FAIL_COLOUR, NC_COLOUR = "#2a9d3a", "#d62728", "0.3"
@@ -71,8 +72,10 @@ def case_legend(ax, n):
 
 
 def _label(env, name):
-    units = env[name].attrs.get("units", "1")
-    return f"{name} [{units}]" if units not in ("", "1") else name
+    """A varied input's axis label: its readable name and the unit docs/input.md
+    gives it (labels.py); an input the table lacks keeps its raw name and the
+    units its &input declared."""
+    return input_label(name, env[name].attrs.get("units", "1"))
 
 
 def _padded(v, frac=0.03):
@@ -206,7 +209,7 @@ def margins(env, path):
                 ax.scatter(x[~p], m[~p], s=6, c=FAIL_COLOUR, edgecolors="none")
                 ax.axhline(0.0, color="k", lw=0.8)
                 if j == 0:
-                    ax.set_ylabel(f"{c}\nmargin [{units[c]}]", fontsize=8)
+                    ax.set_ylabel(margin_label(c, str(units[c])), fontsize=8)
                 if i == len(crit) - 1:
                     ax.set_xlabel(_label(env, name), fontsize=8)
                 ax.tick_params(labelsize=7)
@@ -266,7 +269,8 @@ def sensitivity(env, path):
                         fontsize=7)
             ax.axvline(0.0, color="k", lw=0.8)
             ax.set_yticks(yy)
-            ax.set_yticklabels([inputs[j] for j in order], fontsize=7)
+            ax.set_yticklabels([_label(env, inputs[j]) if inputs[j] in env else input_label(inputs[j])
+                                for j in order], fontsize=7)
             ax.set_xlim(-1.3, 1.3)
             ax.set_title(f"{c} (rank R$^2$ = {float(env['rank_r2'].sel(criterion=c)):.2f})", fontsize=9)
             ax.tick_params(axis="x", labelsize=7)
