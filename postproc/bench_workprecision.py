@@ -146,6 +146,19 @@ def speedup_over_paper(rows):
     return out
 
 
+#: The legends' type size (points): 6 pt was too small to read on the page.
+LEGEND_FONTSIZE = 8
+
+
+def outside_legend(ax, ncol=1):
+    """The panel's legend at LEGEND_FONTSIZE below the axes (under the x label):
+    at a legible size the 16 entries of the paper's figure would cover curves
+    inside the axes, wherever placed.  The figure is saved with
+    bbox_inches="tight", which takes the legend in."""
+    return ax.legend(fontsize=LEGEND_FONTSIZE, ncol=ncol, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                     frameon=False)
+
+
 def draw(rows, couplings, ns, default, path):
     """The figure: one curve per scheme and N (colour: N, line and marker: scheme)."""
     try:
@@ -171,7 +184,7 @@ def draw(rows, couplings, ns, default, path):
         ax.set_title("paper scenario: work-precision (tolerance ladder along each curve)\n"
                      + ", ".join(meaning.get(c, c) for c in couplings))
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6, ncol=3)
+        outside_legend(ax, ncol=3)
         pathlib.Path(path).parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=110, bbox_inches="tight")
         print(f"figure: {path}")

@@ -46,7 +46,7 @@ import time
 import numpy as np
 
 from bench_moordyn import C, EA, L, M, RHO, RTOLS_125, T_END, damping
-from bench_workprecision import pareto, wall_at_error
+from bench_workprecision import outside_legend, pareto, wall_at_error
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXE = pathlib.Path(os.environ.get("AIRLAUNCH_EXE", ROOT / "build" / "release" / "bin" / "airlaunch"))
@@ -189,7 +189,7 @@ def figure(all_rows, path, mass="lumped"):
         ax.set_xlabel("wall time per run [s] (one core, whole process)")
         ax.set_ylabel("end-mass position error [m]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6)
+        outside_legend(ax, ncol=2)
     pathlib.Path(path).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110, bbox_inches="tight")
     print(f"figure: {path}")
