@@ -121,14 +121,101 @@ def _end_names(ds):
     return names
 
 
+#: The zoom on a line's tension peak spans this many seconds either side of it.
+PEAK_ZOOM_HALF_WIDTH = 2.0
+#: A peak gets its zoom when the zoom's span is at most this fraction of the run
+#: (on a shorter run the whole-run panel already shows the peak's shape) ...
+PEAK_ZOOM_MAX_SPAN_FRACTION = 0.2
+#: ... and the peak is at least this many times the median of the largest
+#: tension outside the zoom (a sharp peak, not a plateau).
+PEAK_ZOOM_MIN_RATIO = 2.0
+
+
+def _largest_tension(ds):
+    """The largest tension over the line at each record: every segment where the
+    file has them (`line_tension`), else both ends."""
+    ten = ds["line_tension"] if "line_tension" in ds else ds["line_end_tension"]
+    return np.asarray(ten.max(ten.dims[-1]).values, dtype=float)
+
+
+def tension_peak(ds):
+    """(time [s], value [N]) of the run's largest line tension: the file's
+    `peak_tension_N` / `peak_tension_time_s` (over every step, also between
+    records) where it has them, else the largest recorded tension; None for a
+    run without records."""
+    t = np.asarray(ds["time"].values, dtype=float)
+    largest = _largest_tension(ds)
+    if t.size == 0 or not np.isfinite(largest).any():
+        return None
+    k = int(np.nanargmax(largest))
+    t_peak, peak = float(t[k]), float(largest[k])
+    if float(ds.attrs.get("peak_tension_time_s", -1.0)) >= 0 and "peak_tension_N" in ds.attrs \
+            and float(ds.attrs["peak_tension_N"]) >= peak:
+        t_peak, peak = float(ds.attrs["peak_tension_time_s"]), float(ds.attrs["peak_tension_N"])
+    return t_peak, peak
+
+
+def sharp_peak(ds):
+    """The (time, value) of tension_peak when it deserves a zoom (a peak that
+    the whole run's axis squeezes to a line: a heavy airdrop's opening shock,
+    1.28 s into a 200 s descent), else None."""
+    found = tension_peak(ds)
+    if found is None:
+        return None
+    t_peak, peak = found
+    t = np.asarray(ds["time"].values, dtype=float)
+    if 2.0 * PEAK_ZOOM_HALF_WIDTH > PEAK_ZOOM_MAX_SPAN_FRACTION * (t[-1] - t[0]):
+        return None
+    outside = _largest_tension(ds)[np.abs(t - t_peak) > PEAK_ZOOM_HALF_WIDTH]
+    outside = outside[np.isfinite(outside)]
+    if outside.size == 0 or peak <= 0 or peak < PEAK_ZOOM_MIN_RATIO * max(float(np.median(np.abs(outside))), 0.0):
+        return None
+    return t_peak, peak
+
+
+def _peak_zoom(ax, ds, ends, t_peak, peak):
+    """The tensions of the records within PEAK_ZOOM_HALF_WIDTH of the peak
+    (points marked: the shock's shape at the output cadence) and the peak,
+    labelled with its value."""
+    t = ds["time"]
+    near = (np.abs(t - t_peak) <= PEAK_ZOOM_HALF_WIDTH).values
+    ten = ds["line_end_tension"]
+    for k in range(ten.shape[-1]):
+        ax.plot(t[near], ten.isel({ten.dims[-1]: k})[near], ".-", ms=3,
+                label=ends[k] if k < 2 else f"end {k}")
+    if "line_tension" in ds:
+        seg = ds["line_tension"]
+        ax.plot(t[near], seg.max(seg.dims[-1])[near], ":", color="0.3", lw=0.8, label="largest segment")
+    text = f"peak {peak / 1e3:.4g} kN at {t_peak:.4g} s"
+    ax.plot([t_peak], [peak], "kv", ms=6)
+    ax.annotate(text, (t_peak, peak), xytext=(6, -2), textcoords="offset points", fontsize=8, va="top",
+                gid="peak_label")
+    ax.set_xlim(max(t_peak - PEAK_ZOOM_HALF_WIDTH, float(t[0])), min(t_peak + PEAK_ZOOM_HALF_WIDTH, float(t[-1])))
+    ax.set_ylim(0.0, 1.12 * peak)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("tension [N]")
+    ax.set_title(f"zoom: \u00b1{PEAK_ZOOM_HALF_WIDTH:g} s around the peak tension")
+    ax.set_label("tension_peak_zoom")
+    ax.grid(True)
+    ax.legend(fontsize=7, loc="lower right")
+
+
 def plot_line(ds, fig):
-    """Standalone line: the line's shape at a few times, its end tensions and,
+    """Standalone line: the line's shape at a few times, its end tensions, a
+    zoom on a sharp tension peak (an airdrop's opening shock: sharp_peak) and,
     where the file has them (version 0.2.0 on), its ends' speeds - an airdrop's
     platform and canopy - with the touchdown marked."""
     pos = ds["line_node_position"]
     speeds = "line_end_velocity" in ds
     ends = _end_names(ds)
-    ax1 = fig.add_subplot(1, 3 if speeds else 2, 1)
+    zoom = sharp_peak(ds)
+    npanel = 2 + (zoom is not None) + speeds
+    nrow, ncol = (2, 2) if npanel == 4 else (1, npanel)
+    if zoom is not None:
+        width, height = fig.get_size_inches()
+        # the panels keep their heights; four go on two rows (on one, each was 4.9 in wide)
+        fig.set_size_inches(width * ncol / (npanel - 1) if nrow == 1 else width, height * nrow)
+    ax1 = fig.add_subplot(nrow, ncol, 1)
     for k in np.linspace(0, ds.sizes["time"] - 1, 6).astype(int):
         p = pos.isel(time=k)
         ax1.plot(p.sel(xyz=0), p.sel(xyz=1), ".-", ms=2, label=f"t = {float(ds['time'][k]):.2f} s")
@@ -138,7 +225,7 @@ def plot_line(ds, fig):
     ax1.axis("equal")
     ax1.grid(True)
     ax1.legend(fontsize=7)
-    ax2 = fig.add_subplot(1, 3 if speeds else 2, 2)
+    ax2 = fig.add_subplot(nrow, ncol, 2)
     ten = ds["line_end_tension"]
     for k in range(ten.shape[-1]):
         ax2.plot(ds["time"], ten.isel({ten.dims[-1]: k}), label=ends[k] if k < 2 else f"end {k}")
@@ -156,9 +243,11 @@ def plot_line(ds, fig):
     ax2.set_title("end tensions (records) and the peak")
     ax2.grid(True)
     ax2.legend(fontsize=7)
+    if zoom is not None:
+        _peak_zoom(fig.add_subplot(nrow, ncol, 3), ds, ends, *zoom)
     if not speeds:
         return
-    ax3 = fig.add_subplot(1, 3, 3)
+    ax3 = fig.add_subplot(nrow, ncol, npanel)
     vel = ds["line_end_velocity"]
     for k in range(2):
         v = vel.isel(end=k)
