@@ -70,6 +70,7 @@ INPUT_LABELS = {
     "bay%l0": ("rocket distance ahead of ramp edge l0", "m"),
     "bay%tail_x": ("empennage point x", "m"),
     "bay%tail_y": ("empennage point y", "m"),
+    "bay%tail_half_span": ("tailplane half span", "m"),
     "bay%rail_angle_deg": ("rail angle", "deg"),
     # &rocket
     "rocket%mass": ("rocket mass", "kg"),
