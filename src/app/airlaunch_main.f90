@@ -303,6 +303,7 @@ contains
       separation_note(r) // &
       "first rocket pitch maximum: " // pitch_max_note(r) // nl // &
       "minimum rocket-empennage clearance after separation: " // clearance_note(r%min_clearance) // nl // &
+      exit_clearance_note(r) // &
       tension_note(r) // &
       "largest aircraft pitch excursion: " // fx(r%max_aircraft_pitch_excursion_deg, 3) // " deg, " // &
       "load factor excursion " // fx(r%max_load_factor_excursion, 3) // nl // &
@@ -324,6 +325,19 @@ contains
       s = "peak line tension: none (no line: &line enabled = .false.)" // new_line("a")
     end if
   end function tension_note
+
+  !> The rocket's smallest clearance from the empennage over the whole exit
+  !> (from the release on: every integrator step, refined between them).
+  function exit_clearance_note(r) result(s)
+    type(launch_result), intent(in) :: r
+    character(len=:), allocatable :: s
+    if (r%min_exit_clearance < huge(r%min_exit_clearance)) then
+      s = fx(r%min_exit_clearance, 2) // " m at " // fx(r%min_exit_clearance_time, 2) // " s"
+    else
+      s = "none (not released)"
+    end if
+    s = "minimum rocket-empennage clearance over the exit (from the release): " // s // new_line("a")
+  end function exit_clearance_note
 
   !> The line's smallest distance from the empennage point (over the direct
   !> coupling's steps and the rigidized coupling's line sub-steps).

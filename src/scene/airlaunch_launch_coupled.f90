@@ -35,8 +35,14 @@ submodule (airlaunch_launch_scene) airlaunch_launch_coupled
   !> The safety maxima taken over the integrators' steps (docs/output.md):
   !> the largest segment tension, |aircraft pitch - trim|, |n - n_trim|.
   !> (m_line_gap: minus the line's clearance from the empennage point, so that
-  !> its smallest value is a maximum; tracked by the direct coupling only)
-  integer, parameter :: m_tension = 1, m_pitch = 2, m_load = 3, m_line_gap = 4
+  !> its smallest value is a maximum; tracked by the direct coupling only;
+  !> m_exit_gap: minus the rocket's clearance from the empennage (the records'
+  !> `clearance`), from the release on, in the direct coupling and the
+  !> rigidized coupling's chain: min_exit_clearance_m)
+  integer, parameter :: m_tension = 1, m_pitch = 2, m_load = 3, m_line_gap = 4, m_exit_gap = 5
+  !> the trackers that stop_when_final waits for (not m_exit_gap: its minimum
+  !> after the separation is the records' min_clearance, already waited for)
+  integer, parameter :: n_final = m_line_gap
   !> Which integrator an observer watches: the direct system (all three), the
   !> rigidized coupling's chain (pitch and load factor) or its line (tension).
   integer, parameter :: src_direct = 1, src_chain = 2, src_line = 3
@@ -943,7 +949,7 @@ contains
     if (r%dsys%may_still_part()) return
     if (r%dsys%gust_watch) return
     if (t < max(res%pitch_max_time, res%separation_time) + 1.0_dp) return
-    stop_now = t >= max(r%last_record_of_extremum, maxval(r%trk%t_best)) + 1.0_dp
+    stop_now = t >= max(r%last_record_of_extremum, maxval(r%trk(1:n_final)%t_best)) + 1.0_dp
   end function stop_now
 
   ! ------------------------------------------------------------ records
@@ -1076,7 +1082,7 @@ contains
     type(coupled_run), intent(inout) :: r
     type(launch_result), intent(in) :: res
     real(dp), intent(in) :: band
-    allocate(r%trk(4))
+    allocate(r%trk(m_exit_gap))
     r%trk%band = band
     r%dobs%source = src_direct
     r%dobs%dsys => r%dsys
@@ -1132,17 +1138,29 @@ contains
     ! (with the chain's empennage point) both offer the line's clearance
     if (res%has_line .and. r%trk(m_line_gap)%t_best >= 0.0_dp) &
       res%min_line_clearance = min(res%min_line_clearance, -r%trk(m_line_gap)%best)
+    ! the rocket's clearance over the whole exit: every step from the release on
+    if (r%trk(m_exit_gap)%t_best >= 0.0_dp) then
+      res%min_exit_clearance = -r%trk(m_exit_gap)%best
+      res%min_exit_clearance_time = r%trk(m_exit_gap)%t_best
+    end if
   end subroutine take_maxima
 
-  !> Whether the observer's integrator carries metric m.
+  !> Whether the observer's integrator carries metric m (the rocket's
+  !> clearance from the release on: the phase is constant over a sequence of
+  !> steps, which ends at each event).
   logical function watches(self, m)
     class(metric_observer), intent(in) :: self
     integer, intent(in) :: m
     select case (self%source)
     case (src_direct)
-      watches = (m /= m_tension .and. m /= m_line_gap) .or. self%dsys%has_line
+      if (m == m_exit_gap) then
+        watches = self%dsys%sep%phase /= phase_preparation
+      else
+        watches = (m /= m_tension .and. m /= m_line_gap) .or. self%dsys%has_line
+      end if
     case (src_chain)
-      watches = m == m_pitch .or. m == m_load
+      watches = m == m_pitch .or. m == m_load .or. &
+        (m == m_exit_gap .and. self%chain%sep%phase /= phase_preparation)
     case default
       ! (the line's sub-steps: its tension, and its clearance from the empennage
       ! point interpolated between the chain's samples like the tie-down's)
@@ -1171,12 +1189,17 @@ contains
     select case (self%source)
     case (src_direct)
       associate(s => self%dsys)
-        if (only == m_pitch) then
+        if (only == m_exit_gap) then
+          call s%load_bodies(t, self%y)
+          q(m_exit_gap) = -clearance(s%clr, s%sep%bodies(0), s%sep%bodies(1))
+          return
+        else if (only == m_pitch) then
           call s%load_bodies(t, self%y)
         else
           call s%prepare(t, self%y, status)
           ok = status == 0
           if (.not. ok) return
+          q(m_exit_gap) = -clearance(s%clr, s%sep%bodies(0), s%sep%bodies(1))
           if (s%has_line) then
             q(m_tension) = maxval(s%tension)
             q(m_line_gap) = -s%line_clearance()
@@ -1191,6 +1214,8 @@ contains
     case (src_chain)
       associate(c => self%chain)
         call c%prepare(t, self%y)
+        q(m_exit_gap) = -clearance(c%clr, c%sep%bodies(0), c%sep%bodies(1))
+        if (only == m_exit_gap) return
         if (only /= m_pitch .and. .not. estimate) then
           call c%sep%evaluate(t, c%yabs, eval_error)
           ok = .not. allocated(eval_error)

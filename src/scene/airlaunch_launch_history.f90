@@ -39,6 +39,10 @@ module airlaunch_launch_history
     !> smallest distance from the aircraft's empennage point to the line [m]
     !> (huge: no line, or a run that failed before its first step)
     real(dp) :: min_line_clearance = huge(1.0_dp)
+    !> smallest rocket-empennage clearance from the release on (every step of
+    !> the integrators, refined between them) [m] and its time [s] (huge, -1:
+    !> no step after the release)
+    real(dp) :: min_exit_clearance = huge(1.0_dp), min_exit_clearance_time = -1.0_dp
     real(dp) :: max_aircraft_pitch_excursion_deg = 0.0_dp, max_load_factor_excursion = 0.0_dp
     real(dp) :: max_constraint_residual = 0.0_dp
     real(dp) :: line_break_time = -1.0_dp    !< the line first parted [s] (-1: it did not)
@@ -475,6 +479,9 @@ contains
     call w%add_real_att("/", "nose_elevation_at_pitch_max_deg", &
       merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), error)
     call w%add_real_att("/", "min_clearance_m", merge(res%min_clearance, -1.0_dp, res%min_clearance < huge(1.0_dp)), error)
+    call w%add_real_att("/", "min_exit_clearance_m", &
+      merge(res%min_exit_clearance, -1.0_dp, res%min_exit_clearance < huge(1.0_dp)), error)
+    call w%add_real_att("/", "min_exit_clearance_time_s", res%min_exit_clearance_time, error)
     call w%add_text_att("/", "line_enabled", trim(merge("true ", "false", res%has_line)), error)
     if (res%has_line) then
       call w%add_real_att("/", "min_line_clearance_m", &
