@@ -162,6 +162,7 @@ VECTOR_COMPONENTS = ("x", "y", "z")
 #: name and unit.
 METRIC_LABELS = {
     "min_clearance_m": ("min. rocket–empennage clearance", "m"),
+    "min_exit_clearance_m": ("min. rocket–empennage clearance over the exit", "m"),
     "min_line_clearance_m": ("min. line–empennage clearance", "m"),
     "peak_line_tension_N": ("peak line tension", "N"),
     "peak_line_tension_time_s": ("time of peak line tension", "s"),

@@ -125,7 +125,8 @@ def refine_namelist(resolved: str, segments: int, tolerance: float) -> tuple:
 
 #: Summary variables whose single-run attribute is −1 when the event did not
 #: happen or the value was not tracked (docs/output.md); NaN in a summary.
-SENTINEL_MINUS_ONE = ("min_clearance_m", "min_line_clearance_m", "pitch_max_time_s", "peak_line_tension_time_s",
+SENTINEL_MINUS_ONE = ("min_clearance_m", "min_exit_clearance_m", "min_line_clearance_m", "pitch_max_time_s",
+                      "peak_line_tension_time_s",
                       "line_break_time_s", "line_recoil_speed_m_s", "ground_time_s", "ground_speed_m_s")
 #: A line-scene summary variable and the attribute of a single run it comes from.
 LINE_SCENE_ATTRIBUTES = {"peak_line_tension_N": "peak_tension_N", "peak_line_tension_time_s": "peak_tension_time_s"}

@@ -27,14 +27,15 @@ module airlaunch_sweep_row
   integer, parameter :: status_invalid = 2  !< the case's input was rejected by the scenario reader
   character(len=16), parameter :: status_names(0:2) = [character(len=16) :: "ok", "failed", "invalid_input"]
 
-  integer, parameter :: n_metrics = 33
+  integer, parameter :: n_metrics = 34
   !> Summary variables of the airlaunch scene (the single run's milestone attribute names).
   character(len=40), parameter :: metric_names(n_metrics) = [character(len=40) :: &
     "trim_alpha_deg", "trim_elevator_deg", "trim_thrust_N", &
     "release_time_s", "edge_time_s", "separation_time_s", "early_separation", "edge_pull_time_s", &
     "pitch_at_separation_deg", "pitch_rate_at_separation_deg_s", &
     "pitch_max_time_s", "pitch_max_deg", "nose_elevation_at_pitch_max_deg", &
-    "min_clearance_m", "min_line_clearance_m", "peak_line_tension_N", "peak_line_tension_time_s", &
+    "min_clearance_m", "min_exit_clearance_m", "min_line_clearance_m", "peak_line_tension_N", &
+    "peak_line_tension_time_s", &
     "line_break_time_s", "line_breaks", "line_break_segment", "max_aircraft_pitch_excursion_deg", &
     "max_load_factor_excursion", &
     "max_constraint_residual_m", "ground_time_s", "ground_speed_m_s", &
@@ -42,7 +43,7 @@ module airlaunch_sweep_row
     "wall_time_s"]
   character(len=12), parameter :: metric_units(n_metrics) = [character(len=12) :: &
     "degree", "degree", "N", "s", "s", "s", "1", "s", "degree", "degree s-1", "s", "degree", "degree", &
-    "m", "m", "N", "s", "s", "1", "1", "degree", "1", "m", "s", "m s-1", "s", "1", "1", "1", "1", "1", "1", "s"]
+    "m", "m", "m", "N", "s", "s", "1", "1", "degree", "1", "m", "s", "m s-1", "s", "1", "1", "1", "1", "1", "1", "s"]
   character(len=120), parameter :: metric_long_names(n_metrics) = [character(len=120) :: &
     "trim angle of attack (Case 0)", "trim elevator deflection", "trim thrust", &
     "release: Case 0 -> 1 (NaN: not reached)", "rocket CG at the ramp edge: Case 1 -> 2 (NaN: not reached)", &
@@ -52,6 +53,7 @@ module airlaunch_sweep_row
     "time of the first rocket pitch maximum after separation (the firing moment; NaN: not reached)", &
     "rocket Euler pitch at its first maximum", "rocket nose elevation at the first pitch maximum", &
     "minimum distance from the rocket's surface to the empennage point after separation (NaN: not separated)", &
+    "minimum rocket-empennage clearance over the exit, from the release on, every step (NaN: not released)", &
     "minimum distance from the empennage point to the line over every step (NaN: no line)", &
     "peak line tension (NaN: the scene has no line)", "time of the peak line tension (NaN: no line)", &
     "the line first parted (&line breaking_strength or break_time; NaN: it did not, or no line)", &
@@ -66,7 +68,7 @@ module airlaunch_sweep_row
     "Newton convergence failures", "error-test failures", "wall time of the case on its rank"]
   logical, parameter :: metric_is_integer(n_metrics) = [.false., .false., .false., .false., .false., .false., &
     .true., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., &
-    .true., .true., .false., .false., .false., .false., .false., .false., .true., .true., .true., .true., .true., &
+    .false., .true., .true., .false., .false., .false., .false., .false., .false., .true., .true., .true., .true., .true., &
     .true., .false.]
 
   !> Summary variables of the line scene (scene = 'line': docs/line.md §4;
@@ -189,6 +191,7 @@ contains
       defined(res%pitch_max_time), merge(res%pitch_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%nose_elevation_at_max_deg, nan, res%pitch_max_time >= 0.0_dp), &
       merge(res%min_clearance, nan, res%min_clearance < huge(1.0_dp)), &
+      merge(res%min_exit_clearance, nan, res%min_exit_clearance < huge(1.0_dp)), &
       merge(res%min_line_clearance, nan, res%min_line_clearance >= 0.0_dp .and. &
         res%min_line_clearance < huge(1.0_dp)), &
       merge(res%peak_tension, nan, res%has_line), merge(defined(res%peak_tension_time), nan, res%has_line), &

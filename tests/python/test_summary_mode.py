@@ -66,7 +66,8 @@ def test_summary_rows_are_the_single_runs_milestones(tmp_path, variant):
                 assert row == alone, (variant, case, name, row, alone)
             compared += 1
     # every milestone of the row, the record-only ones among them
-    for name in ("min_clearance_m", "max_constraint_residual_m", "max_load_factor_excursion",
+    for name in ("min_clearance_m", "min_exit_clearance_m", "max_constraint_residual_m",
+                 "max_load_factor_excursion",
                  "peak_line_tension_N", "pitch_max_time_s"):
         assert name in summary.data_vars and name in attrs, name
     assert compared >= 2 * 20, compared
