@@ -19,11 +19,11 @@ import f90nml
 
 DESIGNS = ("lhs", "sobol", "grid")
 DISTRIBUTIONS = ("uniform", "normal", "truncnorm", "list")
-#: the airlaunch scene's five, then the line scene's own, then the touchdown speed of
+#: the airlaunch scene's six, then the line scene's own, then the touchdown speed of
 #: both (airlaunch-sweep checks that worst_by is one of the base scene's summary variables)
-WORST_BY = ("min_clearance_m", "min_line_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg",
-            "max_load_factor_excursion", "max_end_tension_a_N", "max_end_tension_b_N", "line_recoil_speed_m_s",
-            "final_tip_speed_m_s", "ground_speed_m_s")
+WORST_BY = ("min_clearance_m", "min_line_clearance_m", "min_exit_clearance_m", "peak_line_tension_N",
+            "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", "max_end_tension_a_N",
+            "max_end_tension_b_N", "line_recoil_speed_m_s", "final_tip_speed_m_s", "ground_speed_m_s")
 
 SWEEP_VARS = ("name", "base", "output_dir", "design", "n_cases", "seed", "t_end", "keep_failed",
               "keep_worst", "worst_by", "keep_ids", "criteria", "progress_interval")

@@ -32,8 +32,8 @@ module airlaunch_sweep_definition
   !> that it is one of the base scene's)
   !> (ground_speed_m_s, the touchdown speed, is both scenes' and comes last:
   !> a scene's default is its first)
-  character(len=40), parameter :: worst_by_names(10) = [character(len=40) :: "min_clearance_m", &
-    "min_line_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
+  character(len=40), parameter :: worst_by_names(11) = [character(len=40) :: "min_clearance_m", &
+    "min_line_clearance_m", "min_exit_clearance_m", "peak_line_tension_N", "max_aircraft_pitch_excursion_deg", "max_load_factor_excursion", &
     "max_end_tension_a_N", "max_end_tension_b_N", "line_recoil_speed_m_s", "final_tip_speed_m_s", "ground_speed_m_s"]
 
   !> One varied input.

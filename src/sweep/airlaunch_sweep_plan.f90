@@ -110,7 +110,8 @@ contains
     if (def%keep_worst > 0) then
       m = metrics%index(def%worst_by)
       ! smaller clearances are worse; larger loads, excursions and speeds are worse
-      clearance = def%worst_by == "min_clearance_m" .or. def%worst_by == "min_line_clearance_m"
+      clearance = def%worst_by == "min_clearance_m" .or. def%worst_by == "min_line_clearance_m" .or. &
+        def%worst_by == "min_exit_clearance_m"
       sgn = merge(1.0_dp, -1.0_dp, clearance)
       do k = 1, size(rows)
         key(k) = huge(1.0_dp)

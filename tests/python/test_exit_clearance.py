@@ -72,3 +72,40 @@ def test_gravity_drop_exit_clearance_matches_records(airlaunch_exe, tmp_path):
     """No line: the direct coupling alone."""
     ds, _ = run_dense(airlaunch_exe, tmp_path, "drop", base=DROP)
     check_against_records(ds)
+
+
+def test_a_sweep_keeps_the_smallest_exit_clearances(tmp_path):
+    """worst_by = 'min_exit_clearance_m' keeps the cases of the smallest
+    clearance over the exit (smaller is worse, as the other clearances): the
+    empennage point lowered from 7 to 4.5 m above the floor's level brings it
+    nearer the rocket tipping over the ramp edge, so the kept case is the
+    summary's argmin (a ranking of the wrong sign keeps its argmax; before the
+    metric was one of worst_by's, the definition was refused)."""
+    from test_sweep_support import make_table, run_sweep
+
+    definition = tmp_path / "exit.nml"
+    definition.write_text(f"""&sweep
+  name = 'exit'
+  base = '{ROOT / "input" / "airlaunch_paper.nml"}'
+  output_dir = 'out'
+  design = 'grid'
+  t_end = 5.0
+  keep_worst = 1
+  worst_by = 'min_exit_clearance_m'
+/
+&input name = 'bay%tail_y', distribution = 'list', values = 7.0, 4.5, 6.0, 5.0, units = 'm' /
+""")
+    make_table(definition, tmp_path)
+    res = run_sweep(definition, tmp_path, None)
+    assert res.returncode == 0, res.stderr
+    with xr.open_dataset(tmp_path / "out" / "summary.nc") as s:
+        exit_gap = s["min_exit_clearance_m"].values
+        tail_y = s["bay%tail_y"].values
+    assert np.isfinite(exit_gap).all()
+    # lower tail, smaller clearance: the four cases are ordered by the input
+    order = np.argsort(tail_y)
+    assert (np.diff(exit_gap[order]) > 0).all(), (tail_y, exit_gap)
+    kept = sorted(int(p.stem.split("_")[1]) for p in (tmp_path / "out" / "trajectories").glob("case_*.nc"))
+    assert kept == [int(np.argmin(exit_gap))]
+    with xr.open_dataset(tmp_path / "out" / "trajectories" / f"case_{kept[0]:06d}.nc") as ds:
+        assert ds.attrs["min_exit_clearance_m"] == exit_gap[kept[0]]
