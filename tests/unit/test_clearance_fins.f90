@@ -149,6 +149,7 @@ program test_clearance_fins
   h = 1.0e-5_dp
   worst_over = 0.0_dp
   n_fin_nearest = 0; n_body_nearest = 0
+  it = 0   ! instants with a kink within h (the nearest piece changes there)
   do k = 0, 60
     t = 0.05_dp*k + 0.0123_dp
     call move(t + h)
@@ -161,22 +162,15 @@ program test_clearance_fins
     else
       n_body_nearest = n_body_nearest + 1
     end if
-    if (abs(clearance_rate(geom, ac, rk) - fd) > 1.0e-4_dp) cycle   ! a kink within h (counted below)
+    if (abs(clearance_rate(geom, ac, rk) - fd) > 1.0e-4_dp) then
+      it = it + 1   ! a kink within h: the difference straddles two pieces
+      cycle
+    end if
     worst_over = max(worst_over, abs(clearance_rate(geom, ac, rk) - fd))
   end do
   call check(n_fin_nearest > 10 .and. n_body_nearest > 10, "the motion has both pieces nearest (fins at " // &
     str(n_fin_nearest) // ", the body at " // str(n_body_nearest) // " of 61 instants)")
   call check_close(worst_over, 0.0_dp, "largest |rate - central difference| [m/s]", abs=1.0e-7_dp)
-  it = 0
-  do k = 0, 60
-    t = 0.05_dp*k + 0.0123_dp
-    call move(t + h)
-    fd = clearance(geom, ac, rk)
-    call move(t - h)
-    fd = (fd - clearance(geom, ac, rk))/(2*h)
-    call move(t)
-    if (abs(clearance_rate(geom, ac, rk) - fd) > 1.0e-4_dp) it = it + 1
-  end do
   call check(it <= 2, "instants with a kink within 1e-5 s: " // str(it) // " (at most 2 expected)")
 
   call section("kinks: the rate jumps down where the nearest piece changes; minima are rising zeros")
