@@ -19,7 +19,7 @@
 !> over was approaching faster): a kink is never a local minimum, so every
 !> minimum is a rising zero of the rate of one piece.
 module airlaunch_clearance
-  use airlaunch_kinds, only: dp
+  use airlaunch_kinds, only: dp, pi
   use airlaunch_rigid_body, only: rigid_body
   implicit none
   private
@@ -52,7 +52,6 @@ contains
     type(clearance_geometry), intent(inout) :: geom
     integer, intent(in) :: count
     real(dp), intent(in) :: root_le_x, root_chord, tip_chord, sweep, semi_span
-    real(dp), parameter :: pi = acos(-1.0_dp)
     real(dp) :: phi0
     integer :: k
     geom%fin_count = 0
@@ -97,29 +96,29 @@ contains
     type(clearance_geometry), intent(in) :: geom
     type(rigid_body), intent(in) :: aircraft, rocket
     real(dp), intent(out) :: c, pa(3), qr(3)
-    real(dp) :: p(3), a(3), b(3), e1(3), e2(3), s, t, x1(3), x2(3), y1(3), y2(3), d, qu, qw
+    real(dp) :: a(3), b(3), e1(3), e2(3), s, t, x1(3), x2(3), y1(3), y2(3), d, qu, qw
     integer :: k
     a = rocket%point_position(geom%nose)
     b = rocket%point_position(geom%aft)
-    ! the body: the point's (the tail's) distance from the axis, less the radius
+    ! the tail's ends, earth frame (one point without a span)
+    e1 = aircraft%point_position(geom%point - [0.0_dp, 0.0_dp, geom%half_span])
+    e2 = aircraft%point_position(geom%point + [0.0_dp, 0.0_dp, geom%half_span])
+    ! the body: the tail's distance from the axis, less the radius
     if (geom%half_span > 0.0_dp) then
-      e1 = aircraft%point_position(geom%point - [0.0_dp, 0.0_dp, geom%half_span])
-      e2 = aircraft%point_position(geom%point + [0.0_dp, 0.0_dp, geom%half_span])
       call segment_segment(e1, e2, a, b, t, s)
       c = norm2(e1 + t*(e2 - e1) - (a + s*(b - a))) - geom%radius
     else
       t = 0.5_dp
-      p = aircraft%point_position(geom%point)
-      s = segment_fraction(p, a, b)
-      c = norm2(p - (a + s*(b - a))) - geom%radius
+      s = segment_fraction(e1, a, b)
+      c = norm2(e1 - (a + s*(b - a))) - geom%radius
     end if
     pa = geom%point + [0.0_dp, 0.0_dp, (2*t - 1)*geom%half_span]
     qr = geom%nose + s*(geom%aft - geom%nose)
     if (geom%fin_count == 0) return
     ! the fins: the tail's ends in rocket axes, then in each fin's plane
     ! (along the axis, along the span, normal to the fin)
-    y1 = in_rocket_axes(aircraft%point_position(geom%point - [0.0_dp, 0.0_dp, geom%half_span]), rocket)
-    y2 = in_rocket_axes(aircraft%point_position(geom%point + [0.0_dp, 0.0_dp, geom%half_span]), rocket)
+    y1 = in_rocket_axes(e1, rocket)
+    y2 = in_rocket_axes(e2, rocket)
     do k = 1, geom%fin_count
       x1 = in_fin_plane(y1, geom%roll(:, k))
       x2 = in_fin_plane(y2, geom%roll(:, k))
